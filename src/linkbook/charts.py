@@ -1,0 +1,180 @@
+"""XY scatter charts: the mechanism drawing, the sweep charts and the pump family.
+
+Geometry is drawn with equal scales: both axes get the same span, fixed from the evaluated
+workbook (every joint over the whole sweep plus a margin), and a square plot area. Excel and
+LibreOffice would otherwise pick each axis range on its own and distort the mechanism.
+"""
+from __future__ import annotations
+
+import math
+
+from openpyxl.chart import Reference, ScatterChart, Series
+from openpyxl.chart.axis import ChartLines
+from openpyxl.chart.layout import Layout, ManualLayout
+from openpyxl.utils import column_index_from_string
+
+from .model import LENGTH, Model, header
+from .templates import Template
+from .workbook import CHARTS, GRID, MECH, SWEEP, Built
+
+LINE_EMU = 22000          # 1.7 pt
+DRAWING_CM = 15.0
+
+
+def _series(ws, x_col: str, y_col: str, rows: tuple[int, int], title: str,
+            *, markers: bool = False, width: int = LINE_EMU) -> Series:
+    x = Reference(ws, min_col=column_index_from_string(x_col), min_row=rows[0], max_row=rows[1])
+    y = Reference(ws, min_col=column_index_from_string(y_col), min_row=rows[0], max_row=rows[1])
+    s = Series(y, x, title=title)
+    s.smooth = False
+    s.marker.symbol = "circle" if markers else "none"
+    if markers:
+        s.marker.size = 7
+    s.graphicalProperties.line.width = width
+    return s
+
+
+def _chart(title: str, x_title: str, y_title: str) -> ScatterChart:
+    c = ScatterChart()
+    c.title = title
+    c.style = 2
+    c.scatterStyle = "lineMarker"
+    c.x_axis.title = x_title
+    c.y_axis.title = y_title
+    c.x_axis.delete = False      # openpyxl hides axes unless told otherwise
+    c.y_axis.delete = False
+    c.x_axis.majorGridlines = ChartLines()
+    c.y_axis.majorGridlines = ChartLines()
+    c.x_axis.majorTickMark = c.y_axis.majorTickMark = "out"
+    c.legend.position = "b"
+    return c
+
+
+def _nice_step(span: float) -> float:
+    """A 1-2-5 grid step giving about 6 divisions."""
+    raw = span / 6
+    power = 10 ** math.floor(math.log10(raw))
+    return next(m * power for m in (1, 2, 2.5, 5, 10) if m * power >= raw)
+
+
+def _equal_axes(chart: ScatterChart, xs: list[float], ys: list[float], size_cm: float) -> None:
+    """Same span on both axes, centred on the data, and a square plot area."""
+    xs = [v for v in xs if isinstance(v, float) and math.isfinite(v)]
+    ys = [v for v in ys if isinstance(v, float) and math.isfinite(v)]
+    if not xs or not ys:
+        return
+    span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-9) * 1.12
+    step = _nice_step(span)
+    cx, cy = (max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2
+    half = math.ceil(span / 2 / step) * step
+    for axis, centre in ((chart.x_axis, cx), (chart.y_axis, cy)):
+        low = math.floor((centre - half) / step) * step
+        axis.scaling.min = low
+        axis.scaling.max = low + 2 * half + step
+        axis.majorUnit = step
+    chart.width = chart.height = size_cm
+    chart.plot_area.layout = Layout(ManualLayout(layoutTarget="inner", xMode="edge",
+                                                 yMode="edge", x=0.16, y=0.11, w=0.72, h=0.72))
+
+
+def _angle_axis(chart: ScatterChart, t: Template) -> None:
+    chart.x_axis.scaling.min = t.sweep.start
+    chart.x_axis.scaling.max = t.sweep.stop
+    chart.x_axis.majorUnit = 30 if t.sweep.stop - t.sweep.start >= 180 else None
+
+
+def _column(values: dict, sheet: str, letter: str, rows: tuple[int, int]) -> list:
+    return [values.get((sheet, f"{letter}{r}")) for r in range(rows[0], rows[1] + 1)]
+
+
+def add_charts(built: Built, t: Template, model: Model, values: dict) -> None:
+    wb, meta = built.workbook, built.meta
+    _drawing(wb, t, model, meta, values)
+    _sweep_charts(wb, t, model, meta, values)
+    if "grid" in meta:
+        _family_chart(wb, t, model, meta)
+
+
+def _drawing(wb, t, model: Model, meta: dict, values: dict) -> None:
+    ws = wb[MECH]
+    pos, sweep = meta["position"], meta["sweep"]
+    rows = tuple(sweep["rows"])
+    chart = _chart(f"{t.title} at the current {t.mechanism.input_symbol}",
+                   f"x [{t.length_unit}]", f"y [{t.length_unit}]")
+    for i, link in enumerate(pos["drawing"], start=1):
+        names = "".join(link["joints"][:-1] if link["joints"][0] == link["joints"][-1]
+                        else link["joints"])
+        chart.series.append(_series(ws, "N", "O", tuple(link["rows"]), f"link {i}: {names}",
+                                    markers=True, width=38000))
+    if model.path:
+        x_key, y_key = model.path
+        chart.series.append(_series(wb[SWEEP], sweep["columns"][x_key], sweep["columns"][y_key],
+                                    rows, f"path of {y_key[1:]}", width=12700))
+    xs, ys = [], []
+    for joint in model.joints:
+        for key, out in ((joint.x, xs), (joint.y, ys)):
+            column = key.strip("{}")
+            if key == f"{{{column}}}" and column in sweep["columns"]:
+                out += _column(values, SWEEP, sweep["columns"][column], rows)
+            else:
+                cell = pos["joints"][joint.name][0 if out is xs else 1]
+                out.append(values.get((MECH, cell)))
+    _equal_axes(chart, xs, ys, DRAWING_CM)
+    ws.add_chart(chart, "Q5")
+
+
+def _sweep_charts(wb, t, model: Model, meta: dict, values: dict) -> None:
+    ws_data, ws = wb[SWEEP], wb[CHARTS]
+    sweep = meta["sweep"]
+    rows = tuple(sweep["rows"])
+    letters = sweep["columns"]
+    ws["A1"] = f"{t.title}: charts (data on sheet {SWEEP})"
+    anchor_row = 3
+    for spec in model.charts:
+        chart = _chart(spec.title, _axis_title(spec.x_title, model, spec.x, t),
+                       _axis_title(spec.y_title, model, spec.ys[0], t))
+        for key in spec.ys:
+            chart.series.append(_series(ws_data, letters[spec.x], letters[key], rows,
+                                        _series_title(model, key)))
+        if spec.equal_axes:
+            _equal_axes(chart, _column(values, SWEEP, letters[spec.x], rows),
+                        _column(values, SWEEP, letters[spec.ys[0]], rows), 14)
+        else:
+            chart.width, chart.height = 18, 10
+            if spec.x.endswith("_deg"):
+                _angle_axis(chart, t)
+        ws.add_chart(chart, f"A{anchor_row}")
+        anchor_row += 30 if spec.equal_axes else 21
+
+
+def _series_title(model: Model, key: str) -> str:
+    base = key[:-4] if key.endswith("_deg") else key
+    return model.get(base).symbol if base in {q.key for q in model.quantities} else key
+
+
+def _axis_title(text: str, model: Model, key: str, t: Template) -> str:
+    if "[" in text:
+        return text
+    base = key[:-4] if key.endswith("_deg") else key
+    try:
+        q = model.get(base)
+    except KeyError:
+        return text
+    return header(text, "deg" if key.endswith("_deg") else q.unit, t.length_unit)
+
+
+def _family_chart(wb, t, model: Model, meta: dict) -> None:
+    grid = meta["grid"]
+    ws = wb[GRID]
+    param, out = grid["param"], grid["key"]
+    q = model.get(out)
+    chart = _chart(f"{q.symbol} over a crank turn, one curve per {param}",
+                   f"{t.mechanism.input_symbol} [deg]", header(q.symbol, LENGTH, t.length_unit))
+    rows = tuple(grid["rows"])
+    for letter, value in zip(grid["columns"], t.grid_values):
+        chart.series.append(_series(ws, "A", letter, rows, f"{param} = {value:g} {t.length_unit}"))
+    chart.width, chart.height = 20, 12
+    _angle_axis(chart, t)
+    col = len(grid["columns"]) + 3
+    from openpyxl.utils import get_column_letter
+    ws.add_chart(chart, f"{get_column_letter(col)}4")

@@ -1,0 +1,113 @@
+"""The `linkbook` command."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from . import __version__, templates
+from .templates import InputError
+
+EPILOG = """examples:
+  linkbook list
+  linkbook build fourbar                        # writes fourbar.xlsx here
+  linkbook build fourbar --set a2=40 --branch crossed -o crossed.xlsx
+  linkbook build slider-crank --step 1          # one row per degree
+  linkbook build pump --set s1=20,50,100        # the grid's adjustments s1
+  linkbook build my-linkage.toml                # a copy of a template with your numbers
+  linkbook build --all --outdir output          # every bundled template
+
+KEY in --set is the parameter's symbol as `linkbook list -v` shows it (a2, gamma3, ...).
+Lengths are in the template's unit, angles in degrees. Exit status: 0 done, 2 bad input."""
+
+
+def _parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(
+        prog="linkbook",
+        description="Turn a planar mechanism into an Excel workbook of live formulas: named "
+                    "inputs, one row of RADIANS/ATAN2/ACOS steps per crank angle, the current "
+                    "position drawn as a chart, and #N/A wherever the loop cannot close.",
+        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--version", action="version", version=f"linkbook {__version__}")
+    sub = ap.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    ls = sub.add_parser("list", help="the bundled templates, one line each")
+    ls.add_argument("-v", "--verbose", action="store_true",
+                    help="also list each template's parameters and defaults")
+
+    b = sub.add_parser("build", help="write a workbook from a template",
+                       description="Write a workbook from a bundled template (by name) or a "
+                                   "TOML file of your own.",
+                       epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    b.add_argument("template", nargs="?", metavar="NAME_OR_TOML",
+                   help="a bundled template name (see `linkbook list`) or a .toml file")
+    b.add_argument("-o", "--output", metavar="OUT.xlsx",
+                   help="where to write (default: NAME.xlsx in the current folder)")
+    b.add_argument("--set", dest="assignments", action="append", default=[],
+                   metavar="KEY=VALUE", help="change a parameter, e.g. --set a2=40 (repeatable); "
+                                             "a grid parameter takes a list: --set s1=20,50,100")
+    b.add_argument("--step", type=str, metavar="DEG", help="input-angle step in degrees")
+    b.add_argument("--branch", choices=("open", "crossed"),
+                   help="assembly branch of the main loop")
+    b.add_argument("--all", action="store_true", help="build every bundled template")
+    b.add_argument("--outdir", metavar="DIR", default=None,
+                   help="folder for --all (default: output)")
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "list":
+            return _list(args.verbose)
+        if args.command == "build":
+            return _build(args)
+    except InputError as exc:
+        print(f"linkbook: error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def _list(verbose: bool) -> int:
+    for path in templates.bundled():
+        t = templates.load(str(path))
+        print(f"{t.name:24} {t.mechanism.name:22} {t.title}")
+        if verbose:
+            for p in t.parameters:
+                print(f"    {p.symbol:12} = {p.value:<10g} {p.unit:4} {p.label}")
+    return 0
+
+
+def _build(args) -> int:
+    if args.all:
+        if args.template or args.output or args.assignments or args.step or args.branch:
+            raise InputError("--all", "builds the bundled templates as they are; give no "
+                                      "template, -o, --set, --step or --branch with it")
+        outdir = Path(args.outdir or "output")
+        outdir.mkdir(parents=True, exist_ok=True)
+        from .build import build_file
+        for path in templates.bundled():
+            t = templates.load(str(path))
+            out = outdir / f"{t.name}.xlsx"
+            build_file(t, out)
+            print(f"wrote {out}")
+        return 0
+    if not args.template:
+        raise InputError("build", "give a template name or .toml file, or --all")
+    if args.outdir:
+        raise InputError("--outdir", "goes with --all; use -o for one workbook")
+    t = templates.with_overrides(templates.load(args.template), args.assignments,
+                                 args.step, args.branch)
+    out = Path(args.output or f"{t.name}.xlsx")
+    if out.suffix.lower() != ".xlsx":
+        raise InputError("-o", f"must name an .xlsx file (got {str(out)!r})")
+    if not out.parent.is_dir():
+        raise InputError("-o", f"folder {str(out.parent)!r} does not exist")
+    from .build import build_file
+    build_file(t, out)
+    print(f"wrote {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,180 @@
+"""The symbolic model of a mechanism's position analysis, and the one place that turns it into
+Excel formula text.
+
+A model is an ordered list of quantities. Each quantity's formula is Excel text in which `{key}`
+stands for another quantity or a parameter. Where a formula lands decides what `{key}` becomes:
+
+- a parameter or a constant -> its workbook-scoped defined name (`a_2`);
+- a column quantity -> the cell that holds it in the same block (a same-row cell in the sweep table,
+  a fixed cell in the current-position block), or, for a self-contained grid cell, its own formula
+  inlined in parentheses;
+- an alias (a short expression that never gets a cell of its own, like `A = a2·e^{iθ12}`)
+  -> always inlined.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Callable, Iterable
+
+PLACEHOLDER = re.compile(r"\{(\w+)\}")
+
+# Roles a quantity can play.
+COLUMN = "column"      # one cell per row of the sweep, shown with its header
+ALIAS = "alias"        # inlined wherever it is used
+CONSTANT = "constant"  # one cell in the inputs block, with a defined name (depends on parameters only)
+
+# Units a quantity can have. LENGTH is replaced by the template's length unit when shown.
+LENGTH, RAD, DEG, RATIO = "length", "rad", "deg", "-"
+
+
+@dataclass(frozen=True)
+class Quantity:
+    key: str            # ASCII id shared with the reference solver: "theta13"
+    symbol: str         # what a reader sees: "θ13"
+    unit: str           # LENGTH, RAD, DEG or RATIO
+    formula: str        # Excel expression with {key} placeholders (no leading '=')
+    role: str = COLUMN
+    label: str = ""     # a few words for a reader: "rocker angle, B0→B"
+    in_degrees: bool = False   # an output angle: also shown in degrees at the table's right
+    wrap_360: bool = False     # show that degree value in [0, 360)
+
+
+@dataclass(frozen=True)
+class Joint:
+    """A point of the mechanism drawing; x and y are expressions like formulas."""
+    name: str
+    x: str
+    y: str
+
+
+@dataclass(frozen=True)
+class Chart:
+    """An XY chart of sweep columns (keys of quantities; `_deg` suffix = the degree column)."""
+    title: str
+    x: str
+    ys: tuple[str, ...]
+    x_title: str
+    y_title: str
+    equal_axes: bool = False
+
+
+@dataclass
+class Model:
+    """What the workbook writer needs: quantities in evaluation order, drawing and charts."""
+    quantities: list[Quantity] = field(default_factory=list)
+    joints: list[Joint] = field(default_factory=list)
+    links: list[tuple[str, ...]] = field(default_factory=list)   # polylines through joint names
+    charts: list[Chart] = field(default_factory=list)
+    path: tuple[str, str] | None = None    # (x key, y key) of a traced point drawn on the mechanism
+
+    def add(self, *quantities: Quantity) -> None:
+        known = {q.key for q in self.quantities}
+        for q in quantities:
+            if q.key in known:
+                raise ValueError(f"quantity {q.key!r} defined twice")
+            known.add(q.key)
+            self.quantities.append(q)
+
+    def get(self, key: str) -> Quantity:
+        for q in self.quantities:
+            if q.key == key:
+                return q
+        raise KeyError(key)
+
+    def of_role(self, role: str) -> list[Quantity]:
+        return [q for q in self.quantities if q.role == role]
+
+
+def references(formula: str) -> list[str]:
+    """The keys a formula mentions, in order of first use."""
+    return list(dict.fromkeys(PLACEHOLDER.findall(formula)))
+
+
+def render(formula: str, resolve: Callable[[str], str]) -> str:
+    """Replace every {key} by the text `resolve(key)` gives for it."""
+    return PLACEHOLDER.sub(lambda m: resolve(m.group(1)), formula)
+
+
+_SIMPLE = re.compile(r"^(\$?[A-Za-z_][\w.]*\$?\d*|[\d.]+(E[+-]?\d+)?|'[^']+'!\$?[A-Z]+\$?\d+)$")
+
+
+def parenthesize(text: str) -> str:
+    """Wrap an inlined expression unless it is a single name, reference or number."""
+    if _SIMPLE.match(text) or _one_group(text):
+        return text
+    return f"({text})"
+
+
+_CALL = re.compile(r"^[A-Z][A-Z0-9.]*(?=\()")
+
+
+def _one_group(text: str) -> bool:
+    """True for '(a+b)' or 'COS(a+b)': one bracket group or call spanning the whole text."""
+    call = _CALL.match(text)
+    start = call.end() if call else 0
+    if not text[start:].startswith("("):
+        return False
+    depth = 0
+    for i in range(start, len(text)):
+        depth += text[i] == "("
+        depth -= text[i] == ")"
+        if depth == 0:
+            return i == len(text) - 1
+    return False
+
+
+class Resolver:
+    """Turns a key into formula text for one place in the workbook.
+
+    `names` maps parameters and constants to defined names; `cells` maps keys that have a cell in
+    this block to its reference. Anything else that is an alias or a column is inlined.
+    """
+
+    def __init__(self, model: Model, names: dict[str, str], cells: dict[str, str]):
+        self.model = model
+        self.names = names
+        self.cells = cells
+        self._by_key = {q.key: q for q in model.quantities}
+
+    def __call__(self, key: str) -> str:
+        if key in self.cells:
+            return self.cells[key]
+        if key in self.names:
+            return self.names[key]
+        q = self._by_key.get(key)
+        if q is None:
+            raise KeyError(f"formula refers to unknown symbol {{{key}}}")
+        return parenthesize(render(q.formula, self))
+
+    def formula(self, key: str) -> str:
+        """The cell formula (with '=') of quantity `key` in this block."""
+        return "=" + render(self._by_key[key].formula, self)
+
+
+def dependencies(model: Model, key: str) -> set[str]:
+    """Every key that `key` needs, directly or through other quantities."""
+    by_key = {q.key: q for q in model.quantities}
+    seen: set[str] = set()
+    stack = list(references(by_key[key].formula))
+    while stack:
+        k = stack.pop()
+        if k in seen:
+            continue
+        seen.add(k)
+        if k in by_key:
+            stack.extend(references(by_key[k].formula))
+    return seen
+
+
+def unit_text(unit: str, length_unit: str) -> str:
+    return length_unit if unit == LENGTH else unit
+
+
+def header(symbol: str, unit: str, length_unit: str) -> str:
+    """`θ13 [deg]`: every header is the symbol and its unit in brackets."""
+    return f"{symbol} [{unit_text(unit, length_unit)}]"
+
+
+def keys_in_order(quantities: Iterable[Quantity]) -> list[str]:
+    return [q.key for q in quantities]

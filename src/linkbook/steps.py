@@ -1,0 +1,125 @@
+"""The textbook's step types: each solves one triangle of a loop and adds named quantities.
+
+A mechanism is an ordered list of these steps (see mechanisms.py). Formulas are Excel text with
+{key} placeholders; model.render resolves them. Guards: an ACOS/ASIN whose argument leaves [-1, 1]
+means the loop cannot close, so it becomes #N/A (never #NUM!, never a clamped wrong number), and
+#N/A then propagates to every cell that depends on it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .model import ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Model, Quantity
+
+
+@dataclass(frozen=True)
+class Sym:
+    """The key, printed symbol and a short description of one quantity a step adds."""
+    key: str
+    symbol: str
+    label: str = ""
+    deg: bool = False      # an output angle: also shown in degrees
+    wrap: bool = False     # show that degree value in [0°, 360°)
+
+
+def _q(sym: Sym, unit: str, formula: str) -> Quantity:
+    return Quantity(sym.key, sym.symbol, unit, formula, label=sym.label, in_degrees=sym.deg,
+                    wrap_360=sym.wrap)
+
+
+def acos_or_na(arg: str) -> str:
+    return f"IFERROR(ACOS({arg}),NA())"
+
+
+def asin_or_na(arg: str) -> str:
+    return f"IFERROR(ASIN({arg}),NA())"
+
+
+def input_angle(model: Model, key: str, symbol: str) -> None:
+    """The input angle in radians, from its degree value `{key}_deg` (a constant or an input cell)."""
+    model.add(Quantity(key, symbol, RAD, f"RADIANS({{{key}_deg}})", label="input angle"))
+
+
+def point(model: Model, name: str, x: str, y: str, *, shown: bool = True, label: str = "") -> None:
+    """Coordinates xName, yName of a joint: columns (its trajectory), or inlined where used."""
+    role = COLUMN if shown else ALIAS
+    model.add(Quantity(f"x{name}", f"x{name}", LENGTH, x, role, label or f"x of {name}"),
+              Quantity(f"y{name}", f"y{name}", LENGTH, y, role, label or f"y of {name}"))
+
+
+def polar(model: Model, dx: str, dy: str, x: Sym, y: Sym, length: Sym, angle: Sym) -> None:
+    """A vector from its components: the calculator's rectangular-to-polar conversion."""
+    model.add(
+        _q(x, LENGTH, dx),
+        _q(y, LENGTH, dy),
+        _q(length, LENGTH, f"SQRT({{{x.key}}}^2+{{{y.key}}}^2)"),
+        _q(angle, RAD, f"ATAN2({{{x.key}}},{{{y.key}}})"),  # Excel's ATAN2 takes x first
+    )
+
+
+def triangle(model: Model, *, side: str, angle: str, p: str, q: str, branch: str,
+             psi: Sym, q_angle: Sym, q_offset: str = "", mu: Sym | None = None,
+             p_interior: Sym | None = None, p_angle: Sym | None = None) -> None:
+    """Raven's step: R joined to P by a link {p} and to Q by a link {q}; |QP| = {side} and
+    angle(Q→P) = {angle} are known.
+
+    ψ = ∠PQR, μ = ∠QRP and the angle at P by the cosine theorem; angle(Q→R) = ϕ − branch·ψ
+    (+ q_offset, for a mechanism that measures its link from another direction); angle(P→R) is
+    angle(Q→R) − branch·μ, or angle(Q→P) + π + branch·∠QPR when the angle at P is the one shown.
+    """
+    def cosine_rule(adjacent1: str, adjacent2: str, opposite: str) -> str:
+        return acos_or_na(f"({{{adjacent1}}}^2+{{{adjacent2}}}^2-{{{opposite}}}^2)"
+                          f"/(2*{{{adjacent1}}}*{{{adjacent2}}})")
+
+    model.add(_q(psi, RAD, cosine_rule(q, side, p)))
+    if mu is not None:
+        model.add(_q(mu, RAD, cosine_rule(p, q, side)))
+    if p_interior is not None:
+        model.add(_q(p_interior, RAD, cosine_rule(p, side, q)))
+    model.add(_q(q_angle, RAD, f"{{{angle}}}-{{{branch}}}*{{{psi.key}}}{q_offset}"))
+    if p_angle is None:
+        return
+    if mu is not None and not q_offset:
+        model.add(_q(p_angle, RAD, f"{{{q_angle.key}}}-{{{branch}}}*{{{mu.key}}}"))
+    elif p_interior is not None:
+        model.add(_q(p_angle, RAD, f"{{{angle}}}+PI()+{{{branch}}}*{{{p_interior.key}}}"))
+    else:
+        raise ValueError("angle(P→R) needs μ (with an unshifted angle(Q→R)) or the angle at P")
+
+
+def slider(model: Model, *, pin_x: str, pin_y: str, line_y: str, length: str, branch: str,
+           angle: Sym, position: Sym) -> None:
+    """The slider-crank step: slider S on the line y = {line_y}, |S pin| = {length}.
+
+    angle = angle(S→pin): π − asin(…) on branch 1 (S right of the pin), asin(…) on branch −1,
+    written as π/2 + branch·(π/2 − asin(…)) so that the argument appears once.
+    """
+    model.add(
+        _q(angle, RAD, f"PI()/2+{{{branch}}}*(PI()/2-"
+                       + asin_or_na(f"({pin_y}-{{{line_y}}})/{{{length}}}") + ")"),
+        _q(position, LENGTH, f"{pin_x}-{{{length}}}*COS({{{angle.key}}})"),
+    )
+
+
+def offset_slide(model: Model, *, p: str, angle: str, offset: str, branch: str,
+                 psi: Sym, travel: Sym, link_angle: Sym, slide_angle: Sym) -> None:
+    """The inverted slider-crank step: the slide line sits at distance {offset} from the pivot.
+
+    The triangle pivot–foot–pin is right-angled at the foot: ψ = acos(offset/p), travel = p·sin ψ.
+    """
+    model.add(
+        _q(psi, RAD, acos_or_na(f"{{{offset}}}/{{{p}}}")),
+        _q(travel, LENGTH, f"{{{p}}}*SIN({{{psi.key}}})"),
+        _q(link_angle, RAD, f"{{{angle}}}-{{{branch}}}*{{{psi.key}}}"),
+        _q(slide_angle, RAD, f"{{{link_angle.key}}}+{{{branch}}}*PI()/2"),
+    )
+
+
+def column(model: Model, sym: Sym, unit: str, formula: str) -> None:
+    """Any other step: one named column."""
+    model.add(_q(sym, unit, formula))
+
+
+def constant(model: Model, sym: Sym, unit: str, formula: str) -> None:
+    """A quantity of the dimensions alone (γ of a coupler, a time ratio): one named cell."""
+    model.add(Quantity(sym.key, sym.symbol, unit, formula, CONSTANT, sym.label))

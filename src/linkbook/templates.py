@@ -1,0 +1,311 @@
+"""Templates: a mechanism's dimensions, sweep and presentation as data (templates/*.toml).
+
+Every value a user gives — in a TOML file or with --set/--step/--branch — is checked here, and a
+bad one raises InputError naming the field, before any file is touched.
+"""
+from __future__ import annotations
+
+import difflib
+import math
+import re
+import tomllib
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MECHANISMS, OFFSET_KIND,
+                         Mechanism)
+
+def _template_dir() -> Path:
+    """Installed: templates/ is packaged inside linkbook; from a checkout: the repo's templates/."""
+    here = Path(__file__).resolve().parent
+    packaged = here / "templates"
+    return packaged if packaged.is_dir() else here.parents[1] / "templates"
+
+
+TEMPLATE_DIR = _template_dir()
+EXCEL_MAX_ROWS = 1_048_576
+EXCEL_MAX_COLUMNS = 16_384
+BRANCH_WORDS = {"open": 1.0, "crossed": -1.0}
+
+
+class InputError(Exception):
+    """A bad value from the user: one line naming the field and the value."""
+
+    def __init__(self, field: str, message: str):
+        super().__init__(f"{field}: {message}")
+        self.field = field
+
+
+@dataclass(frozen=True)
+class Parameter:
+    symbol: str
+    kind: str
+    label: str
+    unit: str
+    name: str        # the workbook-scoped defined name of its cell
+    value: float
+
+
+@dataclass(frozen=True)
+class Sweep:
+    start: float
+    stop: float
+    step: float
+
+    def angles(self) -> list[float]:
+        count = int(math.floor((self.stop - self.start) / self.step + 1e-9)) + 1
+        return [round(self.start + i * self.step, 10) for i in range(count)]
+
+
+@dataclass(frozen=True)
+class Template:
+    name: str
+    title: str
+    source: str
+    description: str
+    mechanism: Mechanism
+    length_unit: str
+    parameters: tuple[Parameter, ...]
+    sweep: Sweep
+    position: float                      # the current-position input angle, degrees
+    grid_values: tuple[float, ...] = ()  # values of mechanism.grid's parameter across the grid
+    stroke_step: float = 1.0             # fine sweep under the grid, degrees
+
+    def values(self) -> dict[str, float]:
+        return {p.symbol: p.value for p in self.parameters}
+
+    def parameter(self, symbol: str) -> Parameter:
+        for p in self.parameters:
+            if p.symbol == symbol:
+                return p
+        raise KeyError(symbol)
+
+
+# ---------------------------------------------------------------- names
+_CELL_A1 = re.compile(r"^\$?[A-Za-z]{1,3}\$?\d+$")
+_CELL_R1C1 = re.compile(r"^[Rr](\d*|\[-?\d+\])[Cc](\d*|\[-?\d+\])$|^[RrCc]\d*$")
+_NAME_CHARS = re.compile(r"^[A-Za-z_\\][A-Za-z0-9_.]*$")
+
+
+def excel_name_problem(name: str) -> str | None:
+    """Why `name` cannot be an Excel defined name, or None when it can."""
+    if not name or len(name) > 255:
+        return "must have 1 to 255 characters"
+    if not _NAME_CHARS.match(name):
+        return "must start with a letter or _ and hold only letters, digits, _ and ."
+    if _CELL_A1.match(name) or _CELL_R1C1.match(name):
+        return "looks like a cell reference"
+    if name.upper() in {"TRUE", "FALSE"}:
+        return "is a reserved word"
+    return None
+
+
+def default_name(symbol: str) -> str:
+    """a2 -> a_2, gamma3 -> gamma_3: never a cell-like name such as A2 or B3."""
+    return re.sub(r"^([A-Za-z]+)(\d+)$", r"\1_\2", symbol)
+
+
+# ---------------------------------------------------------------- values
+def parse_number(field: str, text: object) -> float:
+    if isinstance(text, bool):
+        raise InputError(field, f"must be a number (got {text!r})")
+    try:
+        value = float(text)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InputError(field, f"must be a number (got {text!r})") from None
+    if not math.isfinite(value):
+        raise InputError(field, f"must be a finite number (got {text!r})")
+    return value
+
+
+def check_value(field: str, kind: str, raw: object) -> float:
+    """The parameter's value, checked for its kind."""
+    if kind == BRANCH_KIND:
+        if isinstance(raw, str) and raw.strip().lower() in BRANCH_WORDS:
+            return BRANCH_WORDS[raw.strip().lower()]
+        value = parse_number(field, raw)
+        if value not in (1.0, -1.0):
+            raise InputError(field, f"must be open (1) or crossed (-1) (got {raw!r})")
+        return value
+    value = parse_number(field, raw)
+    if kind == LENGTH_KIND and value <= 0:
+        raise InputError(field, f"must be a positive length (got {raw!r})")
+    if kind == ANGLE_KIND and not -360 <= value <= 360:
+        raise InputError(field, f"must be an angle from -360 to 360 degrees (got {raw!r})")
+    return value
+
+
+def parse_list(field: str, kind: str, text: object) -> tuple[float, ...]:
+    """'20,50,100' (command line) or [20, 50, 100] (TOML) -> checked values."""
+    items = text if isinstance(text, list) else str(text).split(",")
+    if not items or any(isinstance(i, str) and not i.strip() for i in items):
+        raise InputError(field, f"must be a comma-separated list of numbers (got {text!r})")
+    return tuple(check_value(field, kind, item) for item in items)
+
+
+# ---------------------------------------------------------------- loading
+def bundled() -> list[Path]:
+    return sorted(TEMPLATE_DIR.glob("*.toml"))
+
+
+def find(name_or_path: str) -> Path:
+    path = Path(name_or_path)
+    if path.suffix == ".toml" or path.exists():
+        if not path.is_file():
+            raise InputError("template", f"no such file {name_or_path!r}")
+        return path
+    candidate = TEMPLATE_DIR / f"{name_or_path}.toml"
+    if candidate.is_file():
+        return candidate
+    names = [p.stem for p in bundled()]
+    hint = difflib.get_close_matches(name_or_path, names, n=1)
+    more = f"; did you mean {hint[0]!r}?" if hint else f"; known: {', '.join(names)}"
+    raise InputError("template", f"unknown template {name_or_path!r}{more}")
+
+
+def load(name_or_path: str) -> Template:
+    path = find(name_or_path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(path.name, f"is not valid TOML ({exc})") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(path.name, f"cannot be read ({exc})") from None
+    return from_data(path.stem, data, origin=path.name)
+
+
+def _need(data: dict, key: str, origin: str, kind: type | tuple = str):
+    if key not in data:
+        raise InputError(f"{origin}: {key}", "is missing")
+    value = data[key]
+    if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
+        raise InputError(f"{origin}: {key}", f"has the wrong type (got {value!r})")
+    return value
+
+
+def from_data(name: str, data: dict, origin: str = "template") -> Template:
+    mech_name = _need(data, "mechanism", origin)
+    if mech_name not in MECHANISMS:
+        raise InputError(f"{origin}: mechanism",
+                         f"unknown mechanism {mech_name!r}; known: {', '.join(MECHANISMS)}")
+    mech = MECHANISMS[mech_name]
+    length_unit = _need(data, "length_unit", origin)
+    table = _need(data, "parameters", origin, dict)
+    unknown = [s for s in table if s not in mech.parameters]
+    if unknown:
+        raise InputError(f"{origin}: parameters.{unknown[0]}",
+                         f"is not a parameter of {mech_name}; it has {', '.join(mech.parameters)}")
+    params = []
+    for symbol, kind in mech.parameters.items():
+        field = f"{origin}: parameters.{symbol}"
+        if symbol not in table:
+            raise InputError(field, "is missing")
+        entry = table[symbol]
+        if not isinstance(entry, dict):
+            raise InputError(field, f"must be a table with label, unit, value (got {entry!r})")
+        label = _need(entry, "label", field)
+        unit = _need(entry, "unit", field)
+        name = entry.get("name", default_name(symbol))
+        problem = excel_name_problem(name) if isinstance(name, str) else "must be text"
+        if problem:
+            raise InputError(f"{field}.name", f"{name!r} {problem}")
+        if "value" not in entry:
+            raise InputError(f"{field}.value", "is missing")
+        value = (parse_list(f"{field}.value", kind, entry["value"])[0]
+                 if isinstance(entry["value"], list) else
+                 check_value(f"{field}.value", kind, entry["value"]))
+        params.append(Parameter(symbol, kind, label, unit, name, value))
+    _check_unique_names(params, origin)
+    sweep_data = _need(data, "sweep", origin, dict)
+    sweep = Sweep(*(parse_number(f"{origin}: sweep.{k}", _need(sweep_data, k, f"{origin}: sweep",
+                                                               (int, float)))
+                    for k in ("start", "stop", "step")))
+    position = parse_number(f"{origin}: sweep.position", sweep_data.get("position", sweep.start))
+    grid_values: tuple[float, ...] = ()
+    stroke_step = 1.0
+    if mech.grid:
+        grid_param = mech.grid[0]
+        grid = _need(data, "grid", origin, dict)
+        grid_values = parse_list(f"{origin}: grid.values", mech.parameters[grid_param],
+                                 _need(grid, "values", f"{origin}: grid", list))
+        stroke_step = parse_number(f"{origin}: grid.stroke_step", grid.get("stroke_step", 1.0))
+    template = Template(
+        name=name, title=_need(data, "title", origin), source=data.get("source", ""),
+        description=data.get("description", ""), mechanism=mech, length_unit=length_unit,
+        parameters=tuple(params), sweep=sweep, position=position, grid_values=grid_values,
+        stroke_step=stroke_step)
+    check_sweep(template)
+    return template
+
+
+def _check_unique_names(params: list[Parameter], origin: str) -> None:
+    seen: dict[str, str] = {}
+    for p in params:
+        other = seen.setdefault(p.name.upper(), p.symbol)
+        if other != p.symbol:
+            raise InputError(f"{origin}: parameters.{p.symbol}.name",
+                             f"{p.name!r} is already the name of {other}")
+
+
+def check_sweep(t: Template) -> None:
+    """Positive step, start < stop, and tables inside Excel's limits — before any work."""
+    s = t.sweep
+    if s.step <= 0:
+        raise InputError("step", f"must be a positive angle in degrees (got {s.step:g})")
+    if s.stop <= s.start:
+        raise InputError("sweep", f"stop must be greater than start (got {s.start:g}..{s.stop:g})")
+    rows = (s.stop - s.start) / s.step + 1
+    if rows > EXCEL_MAX_ROWS - 10:
+        raise InputError("step", f"{s.step:g} degrees gives {rows:,.0f} rows; Excel allows "
+                                 f"{EXCEL_MAX_ROWS:,} per sheet")
+    if t.mechanism.grid:
+        if t.stroke_step <= 0:
+            raise InputError("grid.stroke_step", f"must be positive (got {t.stroke_step:g})")
+        if len(t.grid_values) + 1 > EXCEL_MAX_COLUMNS:
+            raise InputError(t.mechanism.grid[0], f"{len(t.grid_values):,} grid columns; Excel "
+                                                  f"allows {EXCEL_MAX_COLUMNS:,}")
+        fine_rows = 360 / t.stroke_step + 1
+        if fine_rows > EXCEL_MAX_ROWS - 10:
+            raise InputError("grid.stroke_step", f"gives {fine_rows:,.0f} rows; Excel allows "
+                                                 f"{EXCEL_MAX_ROWS:,}")
+
+
+# ---------------------------------------------------------------- command-line overrides
+def parse_assignment(text: str) -> tuple[str, str]:
+    key, sep, value = text.partition("=")
+    if not sep or not key.strip():
+        raise InputError("--set", f"expects KEY=VALUE (got {text!r})")
+    return key.strip(), value.strip()
+
+
+def with_overrides(t: Template, assignments: list[str] = (), step: float | None = None,
+                   branch: str | None = None) -> Template:
+    """The template with --set KEY=VALUE, --step and --branch applied and checked."""
+    values = {p.symbol: p for p in t.parameters}
+    grid_values = t.grid_values
+    for text in assignments:
+        key, raw = parse_assignment(text)
+        if key not in values:
+            hint = difflib.get_close_matches(key, list(values), n=1)
+            more = f"; did you mean {hint[0]}?" if hint else f"; known: {', '.join(values)}"
+            raise InputError(f"--set {key}", f"unknown parameter{more}")
+        p = values[key]
+        field = f"--set {key}"
+        if t.mechanism.grid and key == t.mechanism.grid[0]:
+            grid_values = parse_list(field, p.kind, raw)
+            values[key] = replace(p, value=grid_values[0])
+        else:
+            values[key] = replace(p, value=check_value(field, p.kind, raw))
+    if branch is not None:
+        if "branch" not in values:
+            raise InputError("--branch", f"{t.name} has no assembly branch to choose")
+        if branch not in BRANCH_WORDS:
+            raise InputError("--branch", f"must be open or crossed (got {branch!r})")
+        values["branch"] = replace(values["branch"], value=BRANCH_WORDS[branch])
+    sweep = t.sweep
+    if step is not None:
+        sweep = replace(sweep, step=parse_number("--step", step))
+    out = replace(t, parameters=tuple(values[s] for s in values), sweep=sweep,
+                  grid_values=grid_values)
+    check_sweep(out)
+    return out

@@ -1,0 +1,419 @@
+"""Workbook layout: the one place that knows openpyxl and how a linkbook workbook looks.
+
+Sheets: Mechanism (inputs with defined names, derived constants, the current position and its
+drawing), Sweep (one row per input angle, one formula column per step), Charts, and for a mechanism
+with a grid (the pump) Grid and Stroke sweep. A hidden sheet `linkbook` records what was built and
+where each quantity lives, so `verify` can read an edited workbook back.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+from openpyxl import Workbook
+from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
+from openpyxl.utils import get_column_letter, quote_sheetname
+from openpyxl.workbook.defined_name import DefinedName
+from openpyxl.worksheet.datavalidation import DataValidation
+
+from . import __version__
+from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND
+from .model import (COLUMN, CONSTANT, DEG, LENGTH, RAD, Model, Resolver, header, render,
+                    unit_text)
+from .templates import Template
+
+MECH, SWEEP, CHARTS, GRID, STROKE, META = ("Mechanism", "Sweep", "Charts", "Grid",
+                                           "Stroke sweep", "linkbook")
+FORMAT_VERSION = 1
+ROW = "\x00"   # stands for the row number in a rendered sweep formula
+
+TITLE = Font(bold=True, size=14)
+BOLD = Font(bold=True)
+NOTE = Font(italic=True, color="595959")
+HEAD_FILL = PatternFill("solid", fgColor="DDEBF7")
+INPUT_FILL = PatternFill("solid", fgColor="FFF2CC")
+DERIVED_FILL = PatternFill("solid", fgColor="EDEDED")
+THIN = Side(style="thin", color="A6A6A6")
+BOX = Border(left=THIN, right=THIN, top=THIN, bottom=THIN)
+FORMATS = {LENGTH: "0.0000", RAD: "0.000000", DEG: "0.000", "-": "0.0000"}
+
+
+def number_format(unit: str) -> str:
+    return FORMATS.get(unit, "0.0000")
+
+
+@dataclass
+class Built:
+    """The workbook and the record of where everything is (stored in the hidden sheet)."""
+    workbook: Workbook
+    model: Model
+    meta: dict = field(default_factory=dict)
+
+
+def build(t: Template) -> Built:
+    model = t.mechanism.build()
+    wb = Workbook()
+    ws_mech = wb.active
+    ws_mech.title = MECH
+    ws_sweep = wb.create_sheet(SWEEP)
+    ws_charts = wb.create_sheet(CHARTS)
+    meta = {"format": FORMAT_VERSION, "linkbook": __version__, "template": t.name,
+            "mechanism": t.mechanism.name, "title": t.title, "length_unit": t.length_unit,
+            "input": t.mechanism.input_key}
+
+    names, meta["inputs"], meta["constants"], next_row = _inputs_block(wb, ws_mech, t, model)
+    meta["position"] = _position_block(wb, ws_mech, t, model, names)
+    meta["sweep"] = _sweep_table(ws_sweep, t, model, names)
+    if t.mechanism.grid:
+        meta["grid"] = _grid_sheet(wb.create_sheet(GRID), t, model, names)
+        meta["stroke"] = _stroke_sheet(wb.create_sheet(STROKE), t, model, names,
+                                       meta["grid"])
+        meta["grid"]["stroke_row"] = _stroke_row(wb[GRID], t, meta["grid"], meta["stroke"])
+    _write_meta(wb.create_sheet(META), meta)
+    return Built(wb, model, meta)
+
+
+# ---------------------------------------------------------------- cells and names
+def _define(wb: Workbook, name: str, sheet: str, cell: str) -> None:
+    col = "".join(ch for ch in cell if ch.isalpha())
+    row = "".join(ch for ch in cell if ch.isdigit())
+    wb.defined_names[name] = DefinedName(name, attr_text=f"{quote_sheetname(sheet)}!${col}${row}")
+
+
+def _text(ws, cell: str, value: str, font: Font | None = None) -> None:
+    """Text from a template or the command line stays text, even if it starts with '='."""
+    c = ws[cell]
+    c.value = value
+    c.data_type = "s"
+    if font:
+        c.font = font
+
+
+def _head(ws, row: int, col: int, value: str) -> None:
+    c = ws.cell(row, col)
+    c.value = value
+    c.data_type = "s"
+    c.font = BOLD
+    c.fill = HEAD_FILL
+    c.border = BOX
+    c.alignment = Alignment(horizontal="center", vertical="center", wrap_text=True)
+
+
+def _validation(kind: str, field_name: str) -> DataValidation:
+    if kind == BRANCH_KIND:
+        dv = DataValidation(type="list", formula1='"1,-1"', allow_blank=False)
+        dv.prompt = "1 = open branch, -1 = crossed branch"
+    elif kind == LENGTH_KIND:
+        dv = DataValidation(type="decimal", operator="greaterThan", formula1="0")
+        dv.prompt = "A length: a positive number"
+    elif kind == ANGLE_KIND:
+        dv = DataValidation(type="decimal", operator="between", formula1="-360", formula2="360")
+        dv.prompt = "An angle in degrees, from -360 to 360"
+    else:
+        dv = DataValidation(type="decimal", operator="between", formula1="-1E+300",
+                            formula2="1E+300")
+        dv.prompt = "A number (may be zero or negative)"
+    dv.promptTitle = field_name[:32]
+    dv.error = dv.prompt
+    dv.errorTitle = "linkbook"
+    dv.showInputMessage = dv.showErrorMessage = True
+    return dv
+
+
+# ---------------------------------------------------------------- Mechanism sheet
+def _inputs_block(wb, ws, t: Template, model: Model):
+    ws.column_dimensions["A"].width = 36
+    for col, width in zip("BCDE", (9, 12, 8, 14)):
+        ws.column_dimensions[col].width = width
+    _text(ws, "A1", t.title, TITLE)
+    _text(ws, "A2", t.source, NOTE)
+    _text(ws, "A3", "Yellow cells are inputs: change them and every formula, table and chart "
+                    "follows.", NOTE)
+    ws["A5"] = "Inputs"
+    ws["A5"].font = BOLD
+    for i, h in enumerate(("Quantity", "Symbol", "Value", "Unit", "Excel name"), start=1):
+        _head(ws, 6, i, h)
+    names: dict[str, str] = {}
+    inputs: dict[str, dict] = {}
+    row = 7
+    for p in t.parameters:
+        _text(ws, f"A{row}", p.label)
+        _text(ws, f"B{row}", p.symbol)
+        value = ws[f"C{row}"]
+        value.value = int(p.value) if p.kind == BRANCH_KIND else p.value
+        value.fill = INPUT_FILL
+        value.border = BOX
+        value.number_format = "0" if p.kind == BRANCH_KIND else "General"
+        _text(ws, f"D{row}", p.unit)
+        _text(ws, f"E{row}", p.name, NOTE)
+        dv = _validation(p.kind, p.label)
+        ws.add_data_validation(dv)
+        dv.add(f"C{row}")
+        _define(wb, p.name, MECH, f"C{row}")
+        names[p.symbol] = p.name
+        inputs[p.symbol] = {"cell": f"C{row}", "name": p.name, "kind": p.kind}
+        row += 1
+    constants: dict[str, dict] = {}
+    derived = model.of_role(CONSTANT)
+    if derived:
+        row += 1
+        ws[f"A{row}"] = "Derived from the inputs"
+        ws[f"A{row}"].font = BOLD
+        row += 1
+        resolve = Resolver(model, names, {})
+        for q in derived:
+            name = f"k_{q.key}"
+            _text(ws, f"A{row}", q.label)
+            _text(ws, f"B{row}", q.symbol)
+            c = ws[f"C{row}"]
+            c.value = resolve.formula(q.key)
+            c.fill = DERIVED_FILL
+            c.number_format = number_format(q.unit)
+            _text(ws, f"D{row}", unit_text(q.unit, t.length_unit))
+            _text(ws, f"E{row}", name, NOTE)
+            _define(wb, name, MECH, f"C{row}")
+            names[q.key] = name
+            constants[q.key] = {"cell": f"C{row}", "name": name, "unit": q.unit}
+            row += 1
+    return names, inputs, constants, row
+
+
+def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) -> dict:
+    """The textbook's spin-button row: one input angle drives every step and the drawing."""
+    mech = t.mechanism
+    for col, width in zip("GHIJ", (30, 8, 13, 7)):
+        ws.column_dimensions[col].width = width
+    ws["G5"] = "Current position"
+    ws["G5"].font = BOLD
+    for i, h in enumerate(("Quantity", "Symbol", "Value", "Unit"), start=7):
+        _head(ws, 6, i, h)
+    angle_name = f"{mech.input_key}_now"
+    _text(ws, "G7", "input angle (change it: the drawing moves)")
+    _text(ws, "H7", mech.input_symbol)
+    ws["I7"] = t.position
+    ws["I7"].fill = INPUT_FILL
+    ws["I7"].border = BOX
+    _text(ws, "J7", "deg")
+    dv = DataValidation(type="decimal", operator="between", formula1="-3600", formula2="3600")
+    dv.prompt = "The input angle in degrees"
+    dv.showInputMessage = True
+    ws.add_data_validation(dv)
+    dv.add("I7")
+    _define(wb, angle_name, MECH, "I7")
+    cells = {f"{mech.input_key}_deg": angle_name}
+    row = 8
+    for q in model.of_role(COLUMN):
+        cells[q.key] = f"I{row}"
+        row += 1
+    resolve = Resolver(model, names, cells)
+    for q in model.of_role(COLUMN):
+        r = int(cells[q.key][1:])
+        _text(ws, f"G{r}", q.label)
+        _text(ws, f"H{r}", q.symbol)
+        ws[f"I{r}"] = resolve.formula(q.key)
+        ws[f"I{r}"].number_format = number_format(q.unit)
+        _text(ws, f"J{r}", unit_text(q.unit, t.length_unit))
+    joints = _joints_table(ws, model, resolve)
+    return {"sheet": MECH, "input_cell": "I7", "input_name": angle_name,
+            "cells": {k: v for k, v in cells.items() if k != f"{mech.input_key}_deg"},
+            "joints": joints["cells"], "drawing": joints["drawing"]}
+
+
+def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
+    """Joint coordinates, then each link as a run of rows the drawing chart reads."""
+    for col, width in zip("LMNO", (8, 8, 11, 11)):
+        ws.column_dimensions[col].width = width
+    ws["L5"] = "Joints and links (drawing data)"
+    ws["L5"].font = BOLD
+    for i, h in enumerate(("Link", "Joint", "x", "y"), start=12):
+        _head(ws, 6, i, h)
+    cells: dict[str, list[str]] = {}
+    row = 7
+    for j in model.joints:
+        _text(ws, f"M{row}", j.name)
+        for col, expr in (("N", j.x), ("O", j.y)):
+            ws[f"{col}{row}"] = "=" + _render(expr, resolve)
+            ws[f"{col}{row}"].number_format = number_format(LENGTH)
+        cells[j.name] = [f"N{row}", f"O{row}"]
+        row += 1
+    drawing = []
+    row += 1
+    for i, link in enumerate(model.links, start=1):
+        first = row
+        for name in link:
+            _text(ws, f"L{row}", f"link {i}")
+            _text(ws, f"M{row}", name)
+            ws[f"N{row}"] = f"={cells[name][0]}"
+            ws[f"O{row}"] = f"={cells[name][1]}"
+            for col in "NO":
+                ws[f"{col}{row}"].number_format = number_format(LENGTH)
+            row += 1
+        drawing.append({"joints": list(link), "rows": [first, row - 1]})
+    return {"cells": cells, "drawing": drawing}
+
+
+def _render(expr: str, resolve: Resolver) -> str:
+    return render(expr, resolve)
+
+
+# ---------------------------------------------------------------- Sweep sheet
+def _sweep_columns(model: Model, input_key: str) -> list[tuple[str, object]]:
+    """(key, quantity) in table order: the input in degrees, the steps, then outputs in degrees."""
+    columns: list[tuple[str, object]] = [(f"{input_key}_deg", None)]
+    columns += [(q.key, q) for q in model.of_role(COLUMN)]
+    columns += [(f"{q.key}_deg", q) for q in model.of_role(COLUMN) if q.in_degrees]
+    return columns
+
+
+def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
+    mech = t.mechanism
+    angles = t.sweep.angles()
+    columns = _sweep_columns(model, mech.input_key)
+    letters = {key: get_column_letter(i) for i, (key, _) in enumerate(columns, start=1)}
+    _text(ws, "A1", f"{t.title}: one row per {mech.input_symbol}", TITLE)
+    _text(ws, "A2", "Formulas read the named inputs on sheet Mechanism; #N/A marks angles where "
+                    "the loop cannot close.", NOTE)
+    head_row, first = 4, 5
+    formulas: dict[str, str] = {}
+    resolve = Resolver(model, names, {k: f"{letters[k]}{ROW}" for k, _ in columns})
+    for i, (key, q) in enumerate(columns, start=1):
+        ws.column_dimensions[letters[key]].width = 12
+        if q is None:
+            _text(ws, f"{letters[key]}3", "input angle", NOTE)
+            _head(ws, head_row, i, f"{mech.input_symbol} [deg]")
+            continue
+        degree_column = key.endswith("_deg") and key != q.key
+        unit = DEG if degree_column else q.unit
+        _text(ws, f"{letters[key]}3", q.label, NOTE)
+        ws[f"{letters[key]}3"].alignment = Alignment(wrap_text=True, vertical="top")
+        _head(ws, head_row, i, header(q.symbol, unit, t.length_unit))
+        if degree_column:
+            ref = f"{letters[q.key]}{ROW}"
+            formulas[key] = f"=MOD(DEGREES({ref}),360)" if q.wrap_360 else f"=DEGREES({ref})"
+        else:
+            formulas[key] = resolve.formula(key)
+    ws.row_dimensions[3].height = 30
+    formats = {key: number_format(DEG if key.endswith("_deg") else q.unit)
+               for key, q in columns if q is not None}
+    for r, angle in enumerate(angles, start=first):
+        ws.cell(r, 1, angle).number_format = "0.0##"
+        row_text = str(r)
+        for key, text in formulas.items():
+            c = ws[f"{letters[key]}{r}"]
+            c.value = text.replace(ROW, row_text)
+            c.number_format = formats[key]
+    ws.freeze_panes = ws.cell(first, 2)
+    return {"sheet": SWEEP, "rows": [first, first + len(angles) - 1], "columns": letters}
+
+
+# ---------------------------------------------------------------- grid (pump)
+def _grid_sheet(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
+    """The textbook's copyable grid: one self-contained formula per cell, mixed references."""
+    param, out = t.mechanism.grid
+    q_out = model.get(out)
+    _text(ws, "A1", f"{t.title}: {q_out.symbol} for every {t.mechanism.input_symbol} and "
+                    f"{param}", TITLE)
+    _text(ws, "A2", f"Each cell is one formula reading its row's {t.mechanism.input_symbol} "
+                    f"($A) and its column's {param} (row 5), like the textbook's "
+                    "=AdjustablePump(…; B$5; $A6). No macros.", NOTE)
+    head_row, first = 5, 6
+    angles = t.sweep.angles()
+    ws.column_dimensions["A"].width = 14
+    _head(ws, head_row - 1, 1, "")
+    _head(ws, head_row, 1, f"{t.mechanism.input_symbol} [deg] / {param} [{t.length_unit}]")
+    cols = []
+    for j, value in enumerate(t.grid_values, start=2):
+        letter = get_column_letter(j)
+        ws.column_dimensions[letter].width = 12
+        _head(ws, head_row - 1, j, header(q_out.symbol, LENGTH, t.length_unit))
+        c = ws.cell(head_row, j, value)
+        c.fill = INPUT_FILL
+        c.font = BOLD
+        c.border = BOX
+        cols.append(letter)
+    for i, angle in enumerate(angles, start=first):
+        ws.cell(i, 1, angle).number_format = "0.0##"
+    text = _grid_formula(model, names, t.mechanism.input_key, param, out, head_row)
+    for i in range(first, first + len(angles)):
+        for letter in cols:
+            c = ws[f"{letter}{i}"]
+            c.value = text.replace("\x01", letter).replace(ROW, str(i))
+            c.number_format = number_format(LENGTH)
+    ws.freeze_panes = ws.cell(first, 2)
+    return {"sheet": GRID, "param": param, "key": out, "param_row": head_row,
+            "rows": [first, first + len(angles) - 1], "columns": cols}
+
+
+def _grid_formula(model, names, input_key, param, out, param_row) -> str:
+    cells = {f"{input_key}_deg": f"$A{ROW}", param: f"\x01${param_row}"}
+    text = Resolver(model, names, cells).formula(out)
+    if len(text) > 8000:   # Excel's limit is 8,192 characters
+        raise ValueError(f"grid formula of {len(text)} characters is too long for Excel")
+    return text
+
+
+def _stroke_sheet(ws, t: Template, model: Model, names: dict[str, str], grid: dict) -> dict:
+    """A fine sweep of the same grid formula, so that max − min finds the real stroke."""
+    param, out = t.mechanism.grid
+    step = t.stroke_step
+    count = int(round(360 / step)) + 1
+    _text(ws, "A1", f"Fine sweep of {out} every {step:g}° for the stroke", TITLE)
+    _text(ws, "A2", f"The stroke (max − min over a turn) is under the grid on sheet {GRID}.",
+          NOTE)
+    head_row, first = 4, 5
+    _head(ws, head_row, 1, f"{t.mechanism.input_symbol} [deg] / {param} [{t.length_unit}]")
+    cols = []
+    grid_ws_ref = quote_sheetname(GRID)
+    for j, letter in enumerate(grid["columns"], start=2):
+        mine = get_column_letter(j)
+        c = ws.cell(head_row, j, f"={grid_ws_ref}!{letter}${grid['param_row']}")
+        c.font = BOLD
+        c.fill = HEAD_FILL
+        cols.append(mine)
+    for i in range(count):
+        ws.cell(first + i, 1, round(i * step, 10))
+    text = _grid_formula(model, names, t.mechanism.input_key, param, out, head_row)
+    for i in range(first, first + count):
+        for letter in cols:
+            c = ws[f"{letter}{i}"]
+            c.value = text.replace("\x01", letter).replace(ROW, str(i))
+            c.number_format = number_format(LENGTH)
+    ws.freeze_panes = ws.cell(first, 2)
+    return {"sheet": STROKE, "param_row": head_row, "rows": [first, first + count - 1],
+            "columns": cols}
+
+
+def _stroke_row(ws, t: Template, grid: dict, stroke: dict) -> int:
+    """Under the grid: max − min of the fine sweep, per column."""
+    row = grid["rows"][1] + 2
+    _text(ws, f"A{row}", f"stroke [{t.length_unit}]", BOLD)
+    first, last = stroke["rows"]
+    src = quote_sheetname(STROKE)
+    for mine, theirs in zip(grid["columns"], stroke["columns"]):
+        rng = f"{src}!{theirs}{first}:{theirs}{last}"
+        c = ws[f"{mine}{row}"]
+        c.value = f"=MAX({rng})-MIN({rng})"
+        c.number_format = number_format(LENGTH)
+        c.font = BOLD
+        c.fill = DERIVED_FILL
+    _text(ws, f"A{row + 1}", f"max − min of the {t.stroke_step:g}° sweep on sheet {STROKE}",
+          NOTE)
+    return row
+
+
+def _write_meta(ws, meta: dict) -> None:
+    ws.sheet_state = "hidden"
+    ws["A1"] = "linkbook build record: which template, branch and layout this workbook has."
+    ws["A1"].data_type = "s"
+    ws["A2"] = json.dumps(meta, ensure_ascii=False, sort_keys=True)
+    ws["A2"].data_type = "s"
+
+
+def read_meta(wb) -> dict | None:
+    if META not in wb.sheetnames:
+        return None
+    text = wb[META]["A2"].value
+    try:
+        return json.loads(text) if isinstance(text, str) else None
+    except json.JSONDecodeError:
+        return None
