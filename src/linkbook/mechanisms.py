@@ -26,6 +26,12 @@ class Mechanism:
     grid: tuple[str, str] | None = None   # (parameter across the grid, quantity in its cells)
 
 
+def on_loop(value: str, witness: str) -> str:
+    """A coordinate fixed by construction (a slider pin's y on its line) that exists only where
+    the loop closes: #N/A wherever `witness` is."""
+    return f"IF(ISNUMBER({{{witness}}}),{value},NA())"
+
+
 def _joints(**where: tuple[str, str] | None) -> list[Joint]:
     """Joints in drawing order: fixed ones with their coordinates, moving ones (None) from the
     point columns xName, yName that the steps added."""
@@ -70,7 +76,7 @@ def slider_crank() -> Model:
            angle=Sym("theta13", "θ13", "coupler, angle of B→A", deg=True),
            position=Sym("s14", "s14", "slider position, x of B"))
     point(m, "A", "{a2}*COS({theta12})", "{a2}*SIN({theta12})", label="crank pin A")
-    point(m, "B", "{s14}", "{a1}", label="slider pin B")
+    point(m, "B", "{s14}", on_loop("{a1}", "s14"), label="slider pin B")
     point(m, "C", "{s14}+{b3}*COS({theta13}-RADIANS({gamma3}))",
           "{a1}+{b3}*SIN({theta13}-RADIANS({gamma3}))", label="coupler point C")
     m.joints = _joints(A0=("0", "0"), A=None, B=None, C=None)
@@ -99,7 +105,7 @@ def pump() -> Model:
     point(m, "A", "{a2}*COS({theta12})", "{a2}*SIN({theta12})", label="crank pin A")
     point(m, "B", "-{b1}-{a4}*SIN({theta14})", "{s1}+{a4}*COS({theta14})", label="rocker pin B")
     point(m, "E", "-{b1}+{c4}*COS({theta14})", "{s1}+{c4}*SIN({theta14})", label="slot foot E")
-    point(m, "P", "-{s15}", "0", label="plunger pin P")
+    point(m, "P", "-{s15}", on_loop("0", "s15"), label="plunger pin P")
     m.joints = _joints(A0=("0", "0"), A=None, B=None, B0=("-{b1}", "{s1}"), E=None, P=None)
     m.links = [("A0", "A"), ("A", "B"), ("B", "B0", "E"), ("E", "P")]
     m.charts = [Chart("Plunger position s15", "theta12_deg", ("s15",), "θ12 [deg]", "s15"),
@@ -131,18 +137,21 @@ def quick_return() -> Model:
     m = Model()
     input_angle(m, "theta12", "θ12")
     polar(m, "{a2}*COS({theta12})", "{a1}+{a2}*SIN({theta12})",
-          Sym("xa", "xa", "B0→A, x"), Sym("ya", "ya", "B0→A, y"),
+          Sym("xA", "xA", "crank pin A = B0→A, x"), Sym("yA", "yA", "crank pin A = B0→A, y"),
           Sym("s43", "s43", "block on the rocker, |B0A|"),
           Sym("theta14", "θ14", "rocker, angle of B0→A", deg=True))
     slider(m, pin_x="{a4}*COS({theta14})", pin_y="{a4}*SIN({theta14})", line_y="b1",
            length="a5", branch="branch",
            angle=Sym("theta15", "θ15", "link 5, angle of D→C", deg=True),
            position=Sym("s16", "s16", "ram position, x of D"))
+    # The rocker swings over 90° ± α, α = asin(a2/a1); the ram link closes over the whole turn
+    # iff it reaches the ram line at both ends of that swing. Otherwise there is no full stroke.
+    alpha = asin_or_na("{a2}/{a1}")
     constant(m, Sym("time_ratio", "Q", "quick-return ratio, forward/return time"), RATIO,
-             f"(PI()+2*{asin_or_na('{a2}/{a1}')})/(PI()-2*{asin_or_na('{a2}/{a1}')})")
-    point(m, "A", "{xa}", "{ya}", label="crank pin A")
+             f"IF(MAX(ABS({{b1}}-{{a4}}*COS({alpha})),ABS({{b1}}-{{a4}}))>{{a5}},NA(),"
+             f"(PI()+2*{alpha})/(PI()-2*{alpha}))")
     point(m, "C", "{a4}*COS({theta14})", "{a4}*SIN({theta14})", label="rocker end C")
-    point(m, "D", "{s16}", "{b1}", label="ram pin D")
+    point(m, "D", "{s16}", on_loop("{b1}", "s16"), label="ram pin D")
     m.joints = _joints(A0=("0", "{a1}"), A=None, B0=("0", "0"), C=None, D=None)
     m.links = [("A0", "A"), ("B0", "C"), ("C", "D")]
     m.path = None

@@ -1,0 +1,63 @@
+"""Open a workbook someone handed us without trusting it.
+
+An .xlsx is a zip of XML parts. Before openpyxl parses anything we check that the file is a zip
+that is complete, that it would not inflate to something huge (a zip bomb), and that no XML part
+declares a DTD or entities (billion laughs, external entities). openpyxl itself parses with
+defusedxml when it is installed, which pyproject requires.
+"""
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+
+MAX_UNCOMPRESSED = 512 * 1024 * 1024     # a 1,048,576-row sheet of numbers stays below this
+MAX_RATIO = 200                          # real workbooks compress about 5-20 times
+MAX_PARTS = 10_000
+DTD_MARKERS = (b"<!DOCTYPE", b"<!ENTITY")
+
+
+class UnsafeFile(Exception):
+    """The file is not a workbook we are willing to open (exit 2)."""
+
+
+def check_zip(path: Path) -> None:
+    path = Path(path)
+    if not path.is_file():
+        raise UnsafeFile(f"{path}: no such file")
+    if not zipfile.is_zipfile(path):
+        raise UnsafeFile(f"{path}: not an .xlsx workbook (not a zip file)")
+    try:
+        with zipfile.ZipFile(path) as zf:
+            infos = zf.infolist()
+            if len(infos) > MAX_PARTS:
+                raise UnsafeFile(f"{path}: {len(infos)} parts; refusing an unusual archive")
+            total = sum(i.file_size for i in infos)
+            packed = sum(i.compress_size for i in infos) or 1
+            if total > MAX_UNCOMPRESSED or (total > 10_000_000 and total / packed > MAX_RATIO):
+                raise UnsafeFile(f"{path}: would inflate to {total:,} bytes; refusing a "
+                                 "possible zip bomb")
+            if "[Content_Types].xml" not in zf.namelist():
+                raise UnsafeFile(f"{path}: not an .xlsx workbook (no [Content_Types].xml)")
+            for info in infos:
+                if info.filename.endswith((".xml", ".rels", ".vml")):
+                    _check_part(zf, info, path)
+    except zipfile.BadZipFile as exc:
+        raise UnsafeFile(f"{path}: damaged or truncated workbook ({exc})") from None
+
+
+def _check_part(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> None:
+    """A DTD can only come before the root element: the head of each part is enough."""
+    with zf.open(info) as f:
+        head = f.read(4096)
+    if any(marker in head for marker in DTD_MARKERS):
+        raise UnsafeFile(f"{path}: part {info.filename} declares a DTD or XML entities; refusing")
+
+
+def load_workbook_safely(path: Path, data_only: bool = False):
+    import openpyxl
+    check_zip(path)
+    try:
+        return openpyxl.load_workbook(path, data_only=data_only)
+    except Exception as exc:  # openpyxl raises many kinds on a damaged file
+        raise UnsafeFile(f"{path}: cannot be read as a workbook ({type(exc).__name__}: "
+                         f"{exc})") from None

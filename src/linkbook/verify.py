@@ -1,0 +1,288 @@
+"""Re-check a linkbook workbook against the independent reference.
+
+The workbook says what it is (the hidden `linkbook` sheet: mechanism and layout); its inputs are
+read from its own cells, so a book edited in Excel is verified with its new numbers. Every formula
+cell is evaluated by an engine and compared with reference.solve() at the angles and adjustments
+the sheets hold: |Δ| ≤ tolerance where the loop closes, #N/A exactly where it cannot.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import reference, workbook as layout
+from .templates import InputError, check_value
+
+ABS_TOL = 1e-9
+ANGLE_UNITS = {"rad": 2 * math.pi, "deg": 360.0}
+
+
+class UnusableFile(Exception):
+    """The file cannot be verified at all (exit 2)."""
+
+
+@dataclass
+class Mismatch:
+    sheet: str
+    cell: str
+    expected: object
+    got: object
+
+
+@dataclass
+class Check:
+    """One column (or grid, or block) of formula cells compared with the reference."""
+    block: str
+    name: str
+    cells: int = 0
+    max_abs: float = 0.0
+    na_expected: int = 0
+    na_agree: int = 0
+    mismatches: list[Mismatch] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.mismatches
+
+    def as_dict(self) -> dict:
+        return {"block": self.block, "column": self.name, "cells": self.cells,
+                "max_abs_diff": self.max_abs, "na_expected": self.na_expected,
+                "na_agree": self.na_agree, "ok": self.ok,
+                "mismatches": [m.__dict__ for m in self.mismatches[:20]]}
+
+
+@dataclass
+class Report:
+    path: str
+    mechanism: str
+    engine: str
+    checks: list[Check]
+
+    @property
+    def ok(self) -> bool:
+        return all(c.ok for c in self.checks)
+
+    @property
+    def cells(self) -> int:
+        return sum(c.cells for c in self.checks)
+
+    @property
+    def max_abs(self) -> float:
+        return max((c.max_abs for c in self.checks), default=0.0)
+
+
+# ---------------------------------------------------------------- reading the book
+def inputs_of(wb, meta: dict) -> dict[str, float]:
+    """The parameter values as they stand in the workbook's input cells."""
+    ws = wb[layout.MECH]
+    values = {}
+    for symbol, info in meta["inputs"].items():
+        raw = ws[info["cell"]].value
+        try:
+            values[symbol] = check_value(f"input {symbol} (cell {info['cell']})", info["kind"], raw)
+        except InputError as exc:
+            raise UnusableFile(str(exc)) from None
+    return values
+
+
+def _angles(ws, column: str, rows: list[int]) -> np.ndarray:
+    out = []
+    for r in range(rows[0], rows[1] + 1):
+        v = ws[f"{column}{r}"].value
+        if not isinstance(v, (int, float)) or isinstance(v, bool):
+            raise UnusableFile(f"{ws.title}!{column}{r}: input angle must be a number (got {v!r})")
+        out.append(float(v))
+    return np.array(out)
+
+
+def _number(ws, cell: str, what: str) -> float:
+    v = ws[cell].value
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        raise UnusableFile(f"{ws.title}!{cell}: {what} must be a number (got {v!r})")
+    return float(v)
+
+
+# ---------------------------------------------------------------- comparing
+def _expected(ref: dict, key: str, unit: str) -> np.ndarray:
+    """Reference values for a column key; `_deg` keys are the degree view of a radian key."""
+    if key.endswith("_deg") and key[:-4] in ref:
+        return np.degrees(np.asarray(ref[key[:-4]], dtype=float))
+    return np.asarray(ref[key], dtype=float)
+
+
+def compare(check: Check, sheet: str, cells: list[str], got: list, expected, unit: str,
+            is_error, error_code, tol: float = ABS_TOL, relative: bool = False) -> None:
+    period = ANGLE_UNITS.get(unit)
+    for cell, value, exp in zip(cells, got, np.broadcast_to(expected, (len(cells),))):
+        check.cells += 1
+        exp = float(exp)
+        if math.isnan(exp):
+            check.na_expected += 1
+            if is_error(value) and error_code(value) == "#N/A":
+                check.na_agree += 1
+            else:
+                check.mismatches.append(Mismatch(sheet, cell, "#N/A", _show(value, error_code)))
+            continue
+        if is_error(value) or not isinstance(value, (int, float)) or isinstance(value, bool):
+            check.mismatches.append(Mismatch(sheet, cell, exp, _show(value, error_code)))
+            continue
+        diff = float(value) - exp
+        if period:
+            diff = (diff + period / 2) % period - period / 2
+        diff = abs(diff)
+        check.max_abs = max(check.max_abs, diff)
+        limit = tol * max(1.0, abs(exp)) if relative else tol
+        if diff > limit:
+            check.mismatches.append(Mismatch(sheet, cell, exp, float(value)))
+
+
+def _show(value, error_code):
+    code = error_code(value)
+    return code if code else value
+
+
+def column_unit(model, key: str) -> str:
+    if key.endswith("_deg"):
+        return "deg"
+    return model.get(key).unit
+
+
+# ---------------------------------------------------------------- blocks
+def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float = ABS_TOL,
+               relative: bool = False) -> list[Check]:
+    from .mechanisms import MECHANISMS
+    mech = MECHANISMS[meta["mechanism"]]
+    model = mech.build()
+    params = inputs_of(wb, meta)
+    checks: list[Check] = []
+
+    def run(block, name, sheet, cells, expected, unit):
+        c = Check(block, name)
+        compare(c, sheet, cells, [values.get((sheet, x)) for x in cells], expected, unit,
+                is_error, error_code, tol, relative)
+        checks.append(c)
+
+    # The sweep table, column by column.
+    sweep = meta["sweep"]
+    ws = wb[sweep["sheet"]]
+    rows = sweep["rows"]
+    angles = _angles(ws, "A", rows)
+    ref = reference.solve(mech.name, params, angles)
+    for key, letter in sweep["columns"].items():
+        if key == f"{mech.input_key}_deg":
+            continue
+        cells = [f"{letter}{r}" for r in range(rows[0], rows[1] + 1)]
+        run(layout.SWEEP, key, sweep["sheet"], cells, _expected(ref, key, ""),
+            column_unit(model, key))
+
+    # The current position, the joints and the drawing rows.
+    pos = meta["position"]
+    angle = _number(wb[pos["sheet"]], pos["input_cell"], "the current input angle")
+    one = reference.solve(mech.name, params, np.array([angle]))
+    for key, cell in pos["cells"].items():
+        run("position", key, pos["sheet"], [cell], _expected(one, key, ""),
+            column_unit(model, key))
+    pivots = reference.pivots(mech.name, params)
+    joint_values = {}
+    for joint in model.joints:
+        x_cell, y_cell = pos["joints"][joint.name]
+        if joint.name in pivots:
+            xy = pivots[joint.name]
+        else:
+            xy = (float(one[joint.x.strip("{}")][0]), float(one[joint.y.strip("{}")][0]))
+        joint_values[joint.name] = xy
+        run("joints", joint.name, pos["sheet"], [x_cell, y_cell], np.array(xy), "length")
+    drawing_cells, drawing_expected = [], []
+    for link in pos["drawing"]:
+        for i, name in enumerate(link["joints"]):
+            r = link["rows"][0] + i
+            drawing_cells += [f"N{r}", f"O{r}"]
+            drawing_expected += list(joint_values[name])
+    run("joints", "drawing rows", pos["sheet"], drawing_cells, np.array(drawing_expected),
+        "length")
+
+    # Derived constants.
+    consts = reference.solve(mech.name, params, np.array([0.0]))
+    for key, info in meta.get("constants", {}).items():
+        run("constants", key, layout.MECH, [info["cell"]],
+            np.array([float(np.asarray(consts[key]).ravel()[0])]), info["unit"])
+
+    if "grid" in meta:
+        checks += _check_grid(wb, meta, mech, params, values, is_error, error_code, tol,
+                              relative)
+    return checks
+
+
+def _grid_reference(mech, params, param, angles, column_values):
+    out = np.empty((len(angles), len(column_values)))
+    for j, v in enumerate(column_values):
+        out[:, j] = reference.solve(mech.name, {**params, param: v}, angles)[
+            mech.grid[1]]
+    return out
+
+
+def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relative):
+    checks = []
+    grid, stroke = meta["grid"], meta["stroke"]
+    param = grid["param"]
+    expected_by_block = {}
+    for block in (grid, stroke):
+        ws = wb[block["sheet"]]
+        angles = _angles(ws, "A", block["rows"])
+        if block is grid:
+            adjust = [_number(ws, f"{c}{grid['param_row']}", f"{param}") for c in grid["columns"]]
+        expected = _grid_reference(mech, params, param, angles, adjust)
+        expected_by_block[block["sheet"]] = expected
+        c = Check(block["sheet"], f"{grid['key']} grid")
+        for j, letter in enumerate(block["columns"]):
+            cells = [f"{letter}{r}" for r in range(block["rows"][0], block["rows"][1] + 1)]
+            compare(c, block["sheet"], cells, [values.get((block["sheet"], x)) for x in cells],
+                    expected[:, j], "length", is_error, error_code, tol, relative)
+        checks.append(c)
+        if block is stroke:
+            heads = [f"{x}{stroke['param_row']}" for x in stroke["columns"]]
+            h = Check(block["sheet"], f"{param} header")
+            compare(h, block["sheet"], heads, [values.get((block["sheet"], x)) for x in heads],
+                    np.array(adjust), "length", is_error, error_code, tol, relative)
+            checks.append(h)
+    fine = expected_by_block[stroke["sheet"]]
+    strokes = np.where(np.isnan(fine).any(axis=0), np.nan,
+                       np.nanmax(np.where(np.isnan(fine), -np.inf, fine), axis=0)
+                       - np.nanmin(np.where(np.isnan(fine), np.inf, fine), axis=0))
+    cells = [f"{c}{grid['stroke_row']}" for c in grid["columns"]]
+    s = Check(grid["sheet"], "stroke")
+    compare(s, grid["sheet"], cells, [values.get((grid["sheet"], x)) for x in cells], strokes,
+            "length", is_error, error_code, tol, relative)
+    checks.append(s)
+    return checks
+
+
+# ---------------------------------------------------------------- the command
+def open_book(path: Path):
+    from .safety import load_workbook_safely
+    return load_workbook_safely(path)
+
+
+def verify(path: Path, engine: str = "vector") -> Report:
+    wb = open_book(path)
+    meta = layout.read_meta(wb)
+    if meta is None or meta.get("format") != layout.FORMAT_VERSION:
+        raise UnusableFile(f"{path}: not a linkbook workbook (no build record sheet)")
+    from . import engine as engines
+    if engine == "vector":
+        values = engines.evaluate(wb)
+        checks = check_book(wb, meta, values, engines.is_error, engines.error_code)
+    elif engine == "formulas":
+        values = engines.evaluate_formulas_model(path)
+        checks = check_book(wb, meta, values, engines.is_error, engines.error_code)
+    elif engine == "libreoffice":
+        from . import office
+        values = office.recalculated_values(path)
+        checks = check_book(wb, meta, values, office.is_error, office.error_code,
+                            relative=True)
+    else:
+        raise UnusableFile(f"unknown engine {engine!r}")
+    return Report(str(path), meta["mechanism"], engine, checks)
