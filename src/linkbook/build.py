@@ -4,6 +4,7 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import Callable
 
 from . import charts, engine, workbook
 from .templates import Template
@@ -17,20 +18,28 @@ def make(t: Template) -> tuple[workbook.Built, dict]:
     return built, values
 
 
-def save_atomic(wb, path: Path) -> None:
-    """Write beside the target, then rename: an existing file is never left half-written."""
+def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
+    """Let `write` fill a temporary file beside the target, then rename it into place: an
+    existing file is never left half-written, whatever happens before the rename."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:
-        wb.save(tmp)
+        write(Path(tmp))
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
 
 
-def build_file(t: Template, path: Path) -> workbook.Built:
-    built, _ = make(t)
-    save_atomic(built.workbook, path)
+def build_file(t: Template, path: Path, with_values: bool = False) -> workbook.Built:
+    built, values = make(t)
+
+    def write(tmp: Path) -> None:
+        built.workbook.save(tmp)
+        if with_values:
+            from .cached import add_cached_values
+            add_cached_values(tmp, tmp, values)
+
+    write_atomic(path, write)
     return built

@@ -52,6 +52,28 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--all", action="store_true", help="build every bundled template")
     b.add_argument("--outdir", metavar="DIR", default=None,
                    help="folder for --all (default: output)")
+    b.add_argument("--values", action="store_true",
+                   help="also store each formula's computed value in the file, so viewers that "
+                        "do not calculate (previews, pandas, openpyxl data_only) show numbers")
+
+    v = sub.add_parser("verify", help="re-check a workbook against the independent reference",
+                       description="Evaluate every formula cell of a linkbook workbook (with the "
+                                   "inputs it holds now, even after editing in Excel) and compare "
+                                   "it with the independent Newton-Raphson reference: |Δ| ≤ 1e-9, "
+                                   "#N/A exactly where the loop cannot close. Exit status: 0 all "
+                                   "agree, 1 something disagrees, 2 the file cannot be used.")
+    v.add_argument("book", metavar="BOOK.xlsx")
+    v.add_argument("--engine", choices=("vector", "formulas", "libreoffice"), default="vector",
+                   help="vector (default, fast: one compiled formula per column shape), formulas "
+                        "(the full ExcelModel, slow), libreoffice (recalculate in soffice)")
+    v.add_argument("--json", action="store_true", help="print the report as JSON")
+
+    p = sub.add_parser("preview", help="render every sheet and chart of a workbook to PNG",
+                       description="Convert a workbook to PDF with LibreOffice and each page to "
+                                   "PNG with pdftoppm (needs soffice and poppler-utils).")
+    p.add_argument("book", metavar="BOOK.xlsx")
+    p.add_argument("-o", "--outdir", metavar="DIR", default=None,
+                   help="folder for the PNGs (default: BOOK_preview next to the book)")
     return ap
 
 
@@ -62,7 +84,72 @@ def main(argv: list[str] | None = None) -> int:
             return _list(args.verbose)
         if args.command == "build":
             return _build(args)
+        if args.command == "verify":
+            return _verify(args)
+        if args.command == "preview":
+            return _preview(args)
     except InputError as exc:
+        print(f"linkbook: error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def _verify(args) -> int:
+    import json
+
+    from .safety import UnsafeFile
+    from .verify import UnusableFile, verify
+    try:
+        report = verify(Path(args.book), args.engine)
+    except (UnusableFile, UnsafeFile) as exc:
+        print(f"linkbook: error: {exc}", file=sys.stderr)
+        return 2
+    except _office_errors() as exc:
+        print(f"linkbook: error: {exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps({"book": report.path, "mechanism": report.mechanism,
+                          "engine": report.engine, "ok": report.ok, "cells": report.cells,
+                          "max_abs_diff": report.max_abs,
+                          "checks": [c.as_dict() for c in report.checks]}, indent=2))
+    else:
+        _print_report(report)
+    return 0 if report.ok else 1
+
+
+def _print_report(report) -> None:
+    print(f"{report.path}: {report.mechanism}, engine {report.engine}")
+    print(f"{'block':12} {'column':16} {'cells':>6} {'max |Δ|':>10} {'#N/A agree':>11}  verdict")
+    for c in report.checks:
+        verdict = "ok" if c.ok else f"{len(c.mismatches)} DIFFER"
+        print(f"{c.block:12} {c.name:16} {c.cells:6d} {c.max_abs:10.2e} "
+              f"{f'{c.na_agree}/{c.na_expected}':>11}  {verdict}")
+    for c in report.checks:
+        for m in c.mismatches[:5]:
+            print(f"  {m.sheet}!{m.cell}: expected {m.expected}, got {m.got}")
+    print(f"{'all agree' if report.ok else 'DISAGREES'}: {report.cells} formula cells, "
+          f"max |Δ| {report.max_abs:.2e}")
+
+
+def _office_errors() -> tuple:
+    try:
+        from .office import OfficeUnavailable
+    except ImportError:
+        return ()
+    return (OfficeUnavailable,)
+
+
+def _preview(args) -> int:
+    from .office import OfficeUnavailable, preview
+    from .safety import UnsafeFile, check_zip
+    book = Path(args.book)
+    try:
+        check_zip(book)
+        outdir = Path(args.outdir) if args.outdir else book.with_name(book.stem + "_preview")
+        outdir.mkdir(parents=True, exist_ok=True)
+        for png in preview(book, outdir):
+            print(f"wrote {png}")
+    except (UnsafeFile, OfficeUnavailable) as exc:
         print(f"linkbook: error: {exc}", file=sys.stderr)
         return 2
     return 0
@@ -89,7 +176,7 @@ def _build(args) -> int:
         for path in templates.bundled():
             t = templates.load(str(path))
             out = outdir / f"{t.name}.xlsx"
-            build_file(t, out)
+            build_file(t, out, args.values)
             print(f"wrote {out}")
         return 0
     if not args.template:
@@ -104,7 +191,7 @@ def _build(args) -> int:
     if not out.parent.is_dir():
         raise InputError("-o", f"folder {str(out.parent)!r} does not exist")
     from .build import build_file
-    build_file(t, out)
+    build_file(t, out, args.values)
     print(f"wrote {out}")
     return 0
 

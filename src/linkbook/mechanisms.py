@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from .model import DEG, LENGTH, RAD, RATIO, Chart, Joint, Model
+from .model import DEG, LENGTH, RAD, RATIO, Chart, FourBarLoop, Joint, Model
 from .steps import (Sym, asin_or_na, acos_or_na, column, constant, input_angle, offset_slide,
                     point, polar, slider, triangle)
 
@@ -61,6 +61,8 @@ def fourbar() -> Model:
           label="coupler point C")
     m.joints = _joints(A0=("0", "0"), A=None, B=None, B0=("{a1}", "0"), C=None)
     m.links = [("A0", "A"), ("A", "B", "C", "A"), ("B", "B0")]
+    m.closes, m.transmission = "theta13", "mu"
+    m.fourbar = FourBarLoop("{a1}", "{a2}", "{a3}", "{a4}")
     m.path = ("xC", "yC")
     m.charts = [_angle_chart("Output angles and transmission angle", "theta12_deg",
                              ("theta13", "theta14", "mu"), "θ12 [deg]"),
@@ -81,6 +83,7 @@ def slider_crank() -> Model:
           "{a1}+{b3}*SIN({theta13}-RADIANS({gamma3}))", label="coupler point C")
     m.joints = _joints(A0=("0", "0"), A=None, B=None, C=None)
     m.links = [("A0", "A"), ("A", "B", "C", "A")]
+    m.closes, m.output = "theta13", "s14"
     m.path = ("xC", "yC")
     m.charts = [_angle_chart("Coupler angle θ13", "theta12_deg", ("theta13",), "θ12 [deg]"),
                 Chart("Slider position s14", "theta12_deg", ("s14",), "θ12 [deg]", "s14"),
@@ -107,6 +110,8 @@ def pump() -> Model:
     point(m, "E", "-{b1}+{c4}*COS({theta14})", "{s1}+{c4}*SIN({theta14})", label="slot foot E")
     point(m, "P", "-{s15}", on_loop("0", "s15"), label="plunger pin P")
     m.joints = _joints(A0=("0", "0"), A=None, B=None, B0=("-{b1}", "{s1}"), E=None, P=None)
+    m.closes, m.output = "s15", "s15"
+    m.fourbar = FourBarLoop("SQRT({b1}^2+{s1}^2)", "{a2}", "{a3}", "{a4}", "ATAN2(-{b1},{s1})")
     m.links = [("A0", "A"), ("A", "B"), ("B", "B0", "E"), ("E", "P")]
     m.charts = [Chart("Plunger position s15", "theta12_deg", ("s15",), "θ12 [deg]", "s15"),
                 _angle_chart("Rocker angle θ14", "theta12_deg", ("theta14",), "θ12 [deg]")]
@@ -127,6 +132,7 @@ def inverted_slider_crank() -> Model:
     point(m, "A", "{a2}*COS({theta12})", "{a2}*SIN({theta12})", label="crank pin A")
     point(m, "B", "{a1}+{a4}*COS({theta14})", "{a4}*SIN({theta14})", label="foot B of the slide")
     m.joints = _joints(A0=("0", "0"), A=None, B=None, B0=("{a1}", "0"))
+    m.closes, m.output = "theta14", "s"
     m.links = [("A0", "A"), ("B0", "B", "A")]
     m.charts = [_angle_chart("Link angles", "theta12_deg", ("theta14", "theta13"), "θ12 [deg]"),
                 Chart("Slider position s", "theta12_deg", ("s",), "θ12 [deg]", "s")]
@@ -153,6 +159,7 @@ def quick_return() -> Model:
     point(m, "C", "{a4}*COS({theta14})", "{a4}*SIN({theta14})", label="rocker end C")
     point(m, "D", "{s16}", on_loop("{b1}", "s16"), label="ram pin D")
     m.joints = _joints(A0=("0", "{a1}"), A=None, B0=("0", "0"), C=None, D=None)
+    m.closes, m.output = "s16", "s16"
     m.links = [("A0", "A"), ("B0", "C"), ("C", "D")]
     m.path = None
     m.charts = [_angle_chart("Rocker and link angles", "theta12_deg", ("theta14", "theta15"),
@@ -172,6 +179,7 @@ def shaper() -> Model:
     column(m, Sym("r5", "r5", "ram position, x of B"), LENGTH, "{r4}*COS({theta3})")
     point(m, "B", "{r5}", "{r1}+{r6}", label="ram pin B")
     m.joints = _joints(O1=("0", "0"), O2=("0", "{r1}"), A=None, B=None)
+    m.closes, m.output = "r5", "r5"
     m.links = [("O2", "A"), ("O1", "A", "B")]
     m.charts = [_angle_chart("Lever angle θ3", "theta2_deg", ("theta3",), "θ2 [deg]"),
                 Chart("Lengths r3, r4, r5", "theta2_deg", ("r3", "r4", "r5"), "θ2 [deg]",
@@ -203,6 +211,8 @@ def garage_door() -> Model:
     point(m, "C", "{xB}+{a5}*COS({theta15})", "{yB}+{a5}*SIN({theta15})")
     point(m, "A", "{a2}*COS({theta12})", "{a2}*SIN({theta12})", label="crank pin A")
     m.joints = _joints(A0=("0", "0"), A=None, D=None, B=None, B0=("0", "{a1}"), C=None)
+    m.closes, m.transmission = "theta16", "mu"
+    m.fourbar = FourBarLoop("{a1}", "{a2}", "{a3}", "{a4}", "PI()/2")
     m.links = [("A0", "A", "D"), ("A", "B"), ("B0", "B"), ("B", "C"), ("D", "C")]
     m.path = ("xC", "yC")
     m.charts = [_angle_chart("Link angles", "theta12_deg",
@@ -232,6 +242,8 @@ def tk_fourbar() -> Model:
            "SQRT(({x4}-{x2})^2+({y4}-{y2})^2)")
     m.joints = [Joint("P0", "0", "0"), Joint("P1", "{x1}", "{y1}"), Joint("P2", "{x2}", "{y2}"),
                 Joint("P3", "{x3}", "{y3}"), Joint("P4", "{x4}", "{y4}")]
+    m.closes, m.transmission = "theta", "mu"
+    m.fourbar = FourBarLoop("SQRT({x3}^2+{y3}^2)", "{a}", "{b}", "{c}", "ATAN2({x3},{y3})")
     m.links = [("P0", "P1"), ("P1", "P2", "P4", "P1"), ("P3", "P2")]
     m.path = ("x4", "y4")
     m.charts = [_angle_chart("Output crank ψ and coupler θ", "phi_deg", ("psi", "theta"),

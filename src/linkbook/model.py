@@ -59,6 +59,17 @@ class Chart:
     equal_axes: bool = False
 
 
+@dataclass(frozen=True)
+class FourBarLoop:
+    """The four-bar loop inside a mechanism, for its Grashof class and dead centres: link
+    lengths as expressions, and the direction of the ground link (input pivot → output pivot)."""
+    ground: str
+    crank: str
+    coupler: str
+    rocker: str
+    ground_angle: str = "0"
+
+
 @dataclass
 class Model:
     """What the workbook writer needs: quantities in evaluation order, drawing and charts."""
@@ -67,6 +78,10 @@ class Model:
     links: list[tuple[str, ...]] = field(default_factory=list)   # polylines through joint names
     charts: list[Chart] = field(default_factory=list)
     path: tuple[str, str] | None = None    # (x key, y key) of a traced point drawn on the mechanism
+    closes: str = ""          # a quantity that is a number exactly where every loop closes
+    output: str = ""          # the main output, whose swing the summary reports
+    transmission: str = ""    # the transmission angle, if the mechanism has one
+    fourbar: FourBarLoop | None = None
 
     def add(self, *quantities: Quantity) -> None:
         known = {q.key for q in self.quantities}

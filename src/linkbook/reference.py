@@ -780,3 +780,69 @@ def pivots(mechanism: str, params: Mapping[str, float]) -> dict[str, tuple[float
         "tk-fourbar": lambda: {"P0": (0.0, 0.0), "P3": (p["x3"], p["y3"])},
     }
     return frames[mechanism]()
+
+
+# --------------------------------------------------------------------------------------------
+# Properties of a mechanism's four-bar loop (Grashof class, input limit angles)
+# --------------------------------------------------------------------------------------------
+
+# (input pivot, output pivot, crank, coupler, output link) of each four-bar loop in the doc.
+_FOURBAR_LOOPS = {
+    "fourbar": ("A0", "B0", "a2", "a3", "a4"),
+    "pump": ("A0", "B0", "a2", "a3", "a4"),
+    "garage-door": ("A0", "B0", "a2", "a3", "a4"),
+    "tk-fourbar": ("P0", "P3", "a", "b", "c"),
+}
+
+
+def fourbar_loop(mechanism: str, params: Mapping[str, float]):
+    """(ground, crank, coupler, output link) lengths of the mechanism's four-bar loop, or None."""
+    if mechanism not in _FOURBAR_LOOPS:
+        return None
+    a, b, crank, coupler, rocker = _FOURBAR_LOOPS[mechanism]
+    piv = pivots(mechanism, params)
+    ground = math.dist(piv[a], piv[b])
+    return ground, float(params[crank]), float(params[coupler]), float(params[rocker])
+
+
+def grashof_class(ground: float, crank: float, coupler: float, rocker: float) -> str:
+    """Grashof's rule, s + l against p + q, and which link is the shortest."""
+    links = {"ground": ground, "crank": crank, "coupler": coupler, "rocker": rocker}
+    s, l = min(links.values()), max(links.values())
+    pq = sum(links.values()) - s - l
+    if s + l > pq * (1 + 1e-12):
+        return "non-Grashof: triple rocker"
+    if s + l >= pq * (1 - 1e-12):
+        return "change point"
+    shortest = min(links, key=links.get)
+    return {"ground": "Grashof: double crank", "crank": "Grashof: crank-rocker",
+            "coupler": "Grashof: double rocker", "rocker": "Grashof: rocker-crank"}[shortest]
+
+
+def limit_angles(mechanism: str, params: Mapping[str, float], length: float) -> list[float]:
+    """Input angles (degrees, [0, 360), ascending) where the output pivot is exactly `length`
+    from the crank pin: found by sampling |Q − A(θ)| − length and bisecting each sign change."""
+    a, b, crank, _, _ = _FOURBAR_LOOPS[mechanism]
+    piv = pivots(mechanism, params)
+    (ax, ay), (qx, qy) = piv[a], piv[b]
+    r = float(params[crank])
+
+    def f(deg: float) -> float:
+        t = math.radians(deg)
+        return math.hypot(qx - ax - r * math.cos(t), qy - ay - r * math.sin(t)) - length
+
+    roots = []
+    grid = [i * 0.25 for i in range(1441)]
+    values = [f(x) for x in grid]
+    for x0, x1, f0, f1 in zip(grid, grid[1:], values, values[1:]):
+        if f0 == 0.0:
+            roots.append(x0)
+        elif f0 * f1 < 0:
+            for _ in range(200):
+                xm = 0.5 * (x0 + x1)
+                fm = f(xm)
+                if xm in (x0, x1):
+                    break
+                x0, f0, x1 = (xm, fm, x1) if f0 * fm > 0 else (x0, f0, xm)
+            roots.append(0.5 * (x0 + x1))
+    return sorted({round(x % 360.0, 12) for x in roots})

@@ -172,7 +172,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     angles = _angles(ws, "A", rows)
     ref = reference.solve(mech.name, params, angles)
     for key, letter in sweep["columns"].items():
-        if key == f"{mech.input_key}_deg":
+        if key == f"{mech.input_key}_deg" or key in ASSEMBLY_COLUMNS:
             continue
         cells = [f"{letter}{r}" for r in range(rows[0], rows[1] + 1)]
         run(layout.SWEEP, key, sweep["sheet"], cells, _expected(ref, key, ""),
@@ -210,10 +210,97 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         run("constants", key, layout.MECH, [info["cell"]],
             np.array([float(np.asarray(consts[key]).ravel()[0])]), info["unit"])
 
+    if "closes" in sweep["columns"]:
+        checks += _check_assembly(wb, meta, model, mech, params, angles, ref, values)
     if "grid" in meta:
         checks += _check_grid(wb, meta, mech, params, values, is_error, error_code, tol,
                               relative)
     return checks
+
+
+ASSEMBLY_COLUMNS = ("closes", "gap_from", "gap_to")
+DASH = "—"
+
+
+def compare_exact(check: Check, sheet: str, cells: list[str], got: list, expected: list) -> None:
+    """Text (and bookkeeping) cells: the same text, or the same number within 1e-9."""
+    for cell, value, exp in zip(cells, got, expected):
+        check.cells += 1
+        if isinstance(exp, str) or isinstance(value, str):
+            if value != exp:
+                check.mismatches.append(Mismatch(sheet, cell, exp, value))
+            continue
+        if not isinstance(value, (int, float)) or abs(float(value) - exp) > ABS_TOL:
+            check.mismatches.append(Mismatch(sheet, cell, exp, value))
+        else:
+            check.max_abs = max(check.max_abs, abs(float(value) - exp))
+
+
+def _gaps(angles: np.ndarray, closes: np.ndarray) -> tuple[list, list]:
+    """Per row: the angle where a run of rows that cannot close starts / ends, else ''."""
+    n = len(angles)
+    starts = [float(angles[i]) if not closes[i] and (i == 0 or closes[i - 1]) else ""
+              for i in range(n)]
+    ends = [float(angles[i]) if not closes[i] and (i == n - 1 or closes[i + 1]) else ""
+            for i in range(n)]
+    return starts, ends
+
+
+def _check_assembly(wb, meta, model, mech, params, angles, ref, values) -> list[Check]:
+    sweep = meta["sweep"]
+    cols, (r0, r1) = sweep["columns"], sweep["rows"]
+    closes = np.asarray(ref["assembled"], dtype=bool)
+    starts, ends = _gaps(angles, closes)
+    checks = []
+    for key, expected in (("closes", [1.0 if c else 0.0 for c in closes]),
+                          ("gap_from", starts), ("gap_to", ends)):
+        c = Check(layout.SWEEP, key)
+        cells = [f"{cols[key]}{r}" for r in range(r0, r1 + 1)]
+        compare_exact(c, sweep["sheet"], cells, [values.get((sweep["sheet"], x)) for x in cells],
+                      expected)
+        checks.append(c)
+    expected = _summary_expected(model, mech, params, ref, closes, starts, ends)
+    summary = meta.get("summary", {})
+    c = Check("summary", "geometry")
+    for key, info in summary.items():
+        compare_exact(c, layout.MECH, [info["cell"]], [values.get((layout.MECH, info["cell"]))],
+                      [expected[key]])
+    checks.append(c)
+    return checks
+
+
+def _extreme(values: np.ndarray, fn) -> object:
+    values = values[np.isfinite(values)]
+    return DASH if values.size == 0 else float(fn(values))
+
+
+def _summary_expected(model, mech, params, ref, closes, starts, ends) -> dict:
+    from .workbook import GAPS_SHOWN
+    out: dict[str, object] = {
+        "assembles_all": "yes" if closes.all() else "no",
+        "not_closing": float((~closes).sum()),
+    }
+    gap_starts = sorted(x for x in starts if x != "")
+    gap_ends = sorted(x for x in ends if x != "")
+    for k in range(1, GAPS_SHOWN + 1):
+        out[f"gap{k}_from"] = gap_starts[k - 1] if k <= len(gap_starts) else DASH
+        out[f"gap{k}_to"] = gap_ends[k - 1] if k <= len(gap_ends) else DASH
+    if model.output:
+        o = np.asarray(ref[model.output], dtype=float)
+        out["output_min"], out["output_max"] = _extreme(o, np.min), _extreme(o, np.max)
+    if model.transmission:
+        m = np.degrees(np.asarray(ref[model.transmission], dtype=float))
+        out["mu_min"], out["mu_max"] = _extreme(m, np.min), _extreme(m, np.max)
+    loop = reference.fourbar_loop(mech.name, params)
+    if loop:
+        g, c, k, r = loop
+        out.update(fb_ground=g, fb_crank=c, fb_coupler=k, fb_rocker=r,
+                   grashof=reference.grashof_class(g, c, k, r))
+        for name, length in (("stretched", k + r), ("folded", abs(k - r))):
+            roots = reference.limit_angles(mech.name, params, length)
+            lo, hi = (roots[0], roots[-1]) if roots else ("none", "none")
+            out[f"limit_{name}_1"], out[f"limit_{name}_2"] = lo, hi
+    return out
 
 
 def _grid_reference(mech, params, param, angles, column_values):

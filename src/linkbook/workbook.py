@@ -64,6 +64,7 @@ def build(t: Template) -> Built:
     names, meta["inputs"], meta["constants"], next_row = _inputs_block(wb, ws_mech, t, model)
     meta["position"] = _position_block(wb, ws_mech, t, model, names)
     meta["sweep"] = _sweep_table(ws_sweep, t, model, names)
+    meta["summary"] = _summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1)
     if t.mechanism.grid:
         meta["grid"] = _grid_sheet(wb.create_sheet(GRID), t, model, names)
         meta["stroke"] = _stroke_sheet(wb.create_sheet(STROKE), t, model, names,
@@ -201,18 +202,19 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     dv.add("I7")
     _define(wb, angle_name, MECH, "I7")
     cells = {f"{mech.input_key}_deg": angle_name}
-    row = 8
-    for q in model.of_role(COLUMN):
-        cells[q.key] = f"I{row}"
-        row += 1
+    rows = _sweep_columns(model, mech.input_key)[1:]
+    for row, (key, _) in enumerate(rows, start=8):
+        cells[key] = f"I{row}"
     resolve = Resolver(model, names, cells)
-    for q in model.of_role(COLUMN):
-        r = int(cells[q.key][1:])
+    for key, q in rows:
+        cell = cells[key]
+        r = int(cell[1:])
         _text(ws, f"G{r}", q.label)
         _text(ws, f"H{r}", q.symbol)
-        ws[f"I{r}"] = resolve.formula(q.key)
-        ws[f"I{r}"].number_format = number_format(q.unit)
-        _text(ws, f"J{r}", unit_text(q.unit, t.length_unit))
+        ws[cell] = _degree_formula(q, cells[q.key]) if key != q.key else resolve.formula(key)
+        unit = DEG if key != q.key else q.unit
+        ws[cell].number_format = number_format(unit)
+        _text(ws, f"J{r}", unit_text(unit, t.length_unit))
     joints = _joints_table(ws, model, resolve)
     return {"sheet": MECH, "input_cell": "I7", "input_name": angle_name,
             "cells": {k: v for k, v in cells.items() if k != f"{mech.input_key}_deg"},
@@ -265,6 +267,10 @@ def _sweep_columns(model: Model, input_key: str) -> list[tuple[str, object]]:
     return columns
 
 
+def _degree_formula(q, ref: str) -> str:
+    return f"=MOD(DEGREES({ref}),360)" if q.wrap_360 else f"=DEGREES({ref})"
+
+
 def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
     mech = t.mechanism
     angles = t.sweep.angles()
@@ -288,8 +294,7 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
         ws[f"{letters[key]}3"].alignment = Alignment(wrap_text=True, vertical="top")
         _head(ws, head_row, i, header(q.symbol, unit, t.length_unit))
         if degree_column:
-            ref = f"{letters[q.key]}{ROW}"
-            formulas[key] = f"=MOD(DEGREES({ref}),360)" if q.wrap_360 else f"=DEGREES({ref})"
+            formulas[key] = _degree_formula(q, f"{letters[q.key]}{ROW}")
         else:
             formulas[key] = resolve.formula(key)
     ws.row_dimensions[3].height = 30
@@ -302,8 +307,116 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
             c = ws[f"{letters[key]}{r}"]
             c.value = text.replace(ROW, row_text)
             c.number_format = formats[key]
+    last = first + len(angles) - 1
+    if model.closes:
+        letters.update(_assembly_columns(ws, letters, model.closes, first, last, head_row))
     ws.freeze_panes = ws.cell(first, 2)
-    return {"sheet": SWEEP, "rows": [first, first + len(angles) - 1], "columns": letters}
+    return {"sheet": SWEEP, "rows": [first, last], "columns": letters}
+
+
+def _assembly_columns(ws, letters: dict, witness: str, first: int, last: int,
+                      head_row: int) -> dict:
+    """Bookkeeping for the summary: does the row close (1/0), and where do gaps start and end."""
+    col = len(letters) + 1
+    closes, start, end = (get_column_letter(col + i) for i in range(3))
+    w = letters[witness]
+    for i, (text, label) in enumerate((("closes [1/0]", "1 where every loop closes"),
+                                       ("gap from [deg]", "first angle of a gap"),
+                                       ("gap to [deg]", "last angle of a gap"))):
+        _head(ws, head_row, col + i, text)
+        _text(ws, f"{get_column_letter(col + i)}3", label, NOTE)
+        ws.column_dimensions[get_column_letter(col + i)].width = 11
+    for r in range(first, last + 1):
+        ws[f"{closes}{r}"] = f"=IF(ISNUMBER({w}{r}),1,0)"
+        before = f"{closes}{r}=0" if r == first else f"AND({closes}{r}=0,{closes}{r - 1}=1)"
+        after = f"{closes}{r}=0" if r == last else f"AND({closes}{r}=0,{closes}{r + 1}=1)"
+        ws[f"{start}{r}"] = f'=IF({before},A{r},"")'
+        ws[f"{end}{r}"] = f'=IF({after},A{r},"")'
+    return {"closes": closes, "gap_from": start, "gap_to": end}
+
+
+GAPS_SHOWN = 3
+
+
+def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row: int) -> dict:
+    """Geometry honesty, as live formulas: where the mechanism assembles, its swing, its
+    transmission angle, and for a four-bar loop the Grashof class and the input limit angles."""
+    if not model.closes:
+        return {}
+    cols, (r0, r1) = sweep["columns"], sweep["rows"]
+    src = quote_sheetname(SWEEP)
+
+    def rng(key: str) -> str:
+        return f"{src}!${cols[key]}${r0}:${cols[key]}${r1}"
+
+    ws[f"A{row}"] = f"Geometry summary (over the {t.mechanism.input_symbol} sweep on sheet {SWEEP})"
+    ws[f"A{row}"].font = BOLD
+    row += 1
+    cells: dict[str, dict] = {}
+
+    def put(key: str, label: str, formula: str, unit: str = "", kind: str = "number") -> str:
+        nonlocal row
+        _text(ws, f"A{row}", label)
+        c = ws[f"C{row}"]
+        c.value = formula
+        c.fill = DERIVED_FILL
+        c.number_format = number_format(unit) if unit else "General"
+        c.alignment = Alignment(horizontal="right")
+        _text(ws, f"D{row}", unit_text(unit, t.length_unit) if unit else "")
+        cells[key] = {"cell": f"C{row}", "kind": kind, "unit": unit}
+        row += 1
+        return f"$C${row - 1}"
+
+    w = rng(model.closes)
+    put("assembles_all", "assembles at every angle of the sweep",
+        f'=IF(COUNT({w})=ROWS({w}),"yes","no")', kind="text")
+    put("not_closing", "angles where the loop cannot close", f"=ROWS({w})-COUNT({w})")
+    for k in range(1, GAPS_SHOWN + 1):
+        put(f"gap{k}_from", f"gap {k}: cannot close from",
+            f'=IFERROR(SMALL({rng("gap_from")},{k}),"—")', DEG, "number_or_dash")
+        put(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"—")', DEG,
+            "number_or_dash")
+    if model.output:
+        q = model.get(model.output)
+        o = rng(model.output)
+        for key, fn, word in (("output_min", "MINIFS", "smallest"), ("output_max", "MAXIFS",
+                                                                      "largest")):
+            put(key, f"{word} {q.symbol} ({q.label})",
+                f'=IF(COUNT({o})=0,"—",{fn}({o},{o},">-1E+300"))', q.unit, "number_or_dash")
+    if model.transmission:
+        m = rng(f"{model.transmission}_deg")
+        for key, fn, word in (("mu_min", "MINIFS", "smallest"), ("mu_max", "MAXIFS", "largest")):
+            put(key, f"{word} transmission angle μ",
+                f'=IF(COUNT({m})=0,"—",{fn}({m},{m},">-1E+300"))', DEG, "number_or_dash")
+    if model.fourbar:
+        _fourbar_summary(put, model, names)
+    return cells
+
+
+def _fourbar_summary(put, model: Model, names: dict) -> None:
+    resolve = Resolver(model, names, {})
+    fb = model.fourbar
+    g = put("fb_ground", "four-bar loop: ground link", "=" + render(fb.ground, resolve), LENGTH)
+    c = put("fb_crank", "four-bar loop: input crank", "=" + render(fb.crank, resolve), LENGTH)
+    k = put("fb_coupler", "four-bar loop: coupler", "=" + render(fb.coupler, resolve), LENGTH)
+    r = put("fb_rocker", "four-bar loop: output link", "=" + render(fb.rocker, resolve), LENGTH)
+    links = f"{g},{c},{k},{r}"
+    shortest, longest = f"MIN({links})", f"MAX({links})"
+    others = f"({g}+{c}+{k}+{r}-{shortest}-{longest})"
+    put("grashof", "Grashof class",
+        f'=IF({shortest}+{longest}>{others}*(1+1E-12),"non-Grashof: triple rocker",'
+        f'IF({shortest}+{longest}>={others}*(1-1E-12),"change point",'
+        f'IF({shortest}={g},"Grashof: double crank",IF({shortest}={c},"Grashof: crank-rocker",'
+        f'IF({shortest}={k},"Grashof: double rocker","Grashof: rocker-crank")))))', kind="text")
+    ground_angle = render(fb.ground_angle, resolve)
+    for name, length in (("stretched", f"({k}+{r})"), ("folded", f"ABS({k}-{r})")):
+        cosine = f"({g}^2+{c}^2-{length}^2)/(2*{g}*{c})"
+        lo = f"MOD(DEGREES({ground_angle}-ACOS({cosine})),360)"
+        hi = f"MOD(DEGREES({ground_angle}+ACOS({cosine})),360)"
+        put(f"limit_{name}_1", f"input limit angle, coupler and output link {name}",
+            f'=IFERROR(MIN({lo},{hi}),"none")', DEG, "number_or_none")
+        put(f"limit_{name}_2", "… and the other one",
+            f'=IFERROR(MAX({lo},{hi}),"none")', DEG, "number_or_none")
 
 
 # ---------------------------------------------------------------- grid (pump)

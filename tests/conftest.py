@@ -1,0 +1,53 @@
+"""Shared test helpers: building templates in memory and the published acceptance data."""
+from __future__ import annotations
+
+import sys
+import tomllib
+from functools import lru_cache
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "src"))
+
+from linkbook import build, engine, templates  # noqa: E402
+from linkbook.verify import check_book  # noqa: E402
+
+
+def published() -> dict:
+    """../shared/reference/published.toml: the numbers the sources printed."""
+    for base in (ROOT.parent / "shared", ROOT / "shared"):
+        path = base / "reference" / "published.toml"
+        if path.is_file():
+            return tomllib.loads(path.read_text(encoding="utf-8"))
+    pytest.fail("shared/reference/published.toml not found beside the repository")
+
+
+def template(name: str, sets=(), step=None, branch=None) -> templates.Template:
+    return templates.with_overrides(templates.load(name), list(sets), step, branch)
+
+
+@lru_cache(maxsize=None)
+def built(name: str, sets: tuple = (), step=None, branch=None):
+    """(Built, values) of a template with overrides, evaluated by the vector engine."""
+    return build.make(template(name, sets, step, branch))
+
+
+def formula_cells(wb) -> set[tuple[str, str]]:
+    return {(ws.title, c.coordinate) for ws in wb.worksheets for row in ws.iter_rows()
+            for c in row if isinstance(c.value, str) and c.value.startswith("=")}
+
+
+def checks_of(b, values):
+    return check_book(b.workbook, b.meta, values, engine.is_error, engine.error_code)
+
+
+def value_at(b, values, key: str, angle: float, sheet: str = "Sweep"):
+    """The sweep value of column `key` on the row whose input angle is `angle`."""
+    ws = b.workbook[sheet]
+    first, last = b.meta["sweep"]["rows"]
+    for r in range(first, last + 1):
+        if abs(ws[f"A{r}"].value - angle) < 1e-9:
+            return values[(sheet, f"{b.meta['sweep']['columns'][key]}{r}")]
+    raise KeyError(angle)

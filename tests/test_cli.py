@@ -1,0 +1,77 @@
+"""The command line: list, build, and bad input that exits 2 with one line and writes nothing."""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import openpyxl
+import pytest
+
+from conftest import ROOT
+
+ENV_PATH = str(ROOT / "src")
+
+
+def run(*args, cwd=None):
+    import os
+    env = dict(os.environ, PYTHONPATH=ENV_PATH)
+    return subprocess.run([sys.executable, "-m", "linkbook", *args], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_list_shows_all_eight_templates():
+    out = run("list")
+    assert out.returncode == 0
+    names = [line.split()[0] for line in out.stdout.splitlines()]
+    assert names == sorted(["fourbar", "slider-crank", "pump", "inverted-slider-crank",
+                            "quick-return", "shaper", "garage-door", "tk-fourbar"])
+
+
+def test_help_teaches(tmp_path):
+    out = run("build", "--help")
+    assert out.returncode == 0
+    assert "--set a2=40" in out.stdout and "--branch" in out.stdout
+
+
+def test_build_writes_a_workbook_with_defined_names(tmp_path):
+    target = tmp_path / "fb.xlsx"
+    out = run("build", "fourbar", "--set", "a2=40", "--branch", "crossed", "-o", str(target))
+    assert out.returncode == 0, out.stderr
+    wb = openpyxl.load_workbook(target)
+    names = set(wb.defined_names.keys())
+    assert {"a_1", "a_2", "a_3", "a_4", "b_3", "c_3", "Branch"} <= names
+    assert wb["Mechanism"][wb.defined_names["a_2"].attr_text.split("!")[1].replace("$", "")].value == 40
+    assert wb["Mechanism"]["C13"].value == -1 or any(
+        wb["Mechanism"][f"C{r}"].value == -1 for r in range(7, 15))
+
+
+BAD = [
+    (("--set", "a2=-5"), "a2"),
+    (("--set", "a2=abc"), "a2"),
+    (("--set", "a9=3"), "a9"),
+    (("--set", "a2=nan"), "a2"),
+    (("--set", "a2=inf"), "a2"),
+    (("--set", "a2=0"), "a2"),
+    (("--set", "a2"), "--set"),
+    (("--set", "branch=2"), "branch"),
+    (("--step", "0"), "step"),
+    (("--step", "-5"), "step"),
+    (("--step", "x"), "step"),
+    (("--step", "0.0001"), "step"),
+]
+
+
+@pytest.mark.parametrize("args,field", BAD, ids=[" ".join(a) for a, _ in BAD])
+def test_bad_input_exits_2_with_one_line_and_no_file(tmp_path, args, field):
+    target = tmp_path / "out.xlsx"
+    out = run("build", "fourbar", *args, "-o", str(target))
+    assert out.returncode == 2
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and field in lines[0] and "Traceback" not in out.stderr, out.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_unknown_key_suggests_the_nearest():
+    out = run("build", "fourbar", "--set", "a22=5", "-o", "/tmp/never.xlsx")
+    assert out.returncode == 2 and "did you mean a2" in out.stderr
