@@ -51,3 +51,18 @@ def value_at(b, values, key: str, angle: float, sheet: str = "Sweep"):
         if abs(ws[f"A{r}"].value - angle) < 1e-9:
             return values[(sheet, f"{b.meta['sweep']['columns'][key]}{r}")]
     raise KeyError(angle)
+
+
+def pytest_terminal_summary(terminalreporter):
+    """Report how many random examples ran per family, and how many had unassembled rows."""
+    try:
+        from test_properties import TALLY
+    except ImportError:
+        return
+    if not TALLY:
+        return
+    terminalreporter.section("property tests")
+    for family in sorted({f for f, _ in TALLY}):
+        terminalreporter.write_line(
+            f"{family:24} {TALLY[(family, 'examples')]:5d} examples, "
+            f"{TALLY[(family, 'with rows that cannot close')]:5d} with rows that cannot close")

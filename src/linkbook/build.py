@@ -1,21 +1,81 @@
-"""From a checked template to a saved workbook: lay out, evaluate once, chart, write atomically."""
+"""From a checked template to a saved workbook: lay out, evaluate, chart, write atomically."""
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from pathlib import Path
 from typing import Callable
 
 from . import charts, engine, workbook
+from .model import COLUMN
 from .templates import Template
 
 
 def make(t: Template) -> tuple[workbook.Built, dict]:
-    """The workbook and the value of every cell (the fast engine; used for chart scales)."""
+    """The workbook and the value of every cell (the fast engine: chart scales, cached values).
+
+    Output angles are shown in degrees in a 360° window chosen from the evaluated sweep, so that
+    each curve is continuous; that needs one evaluation before the final layout."""
     built = workbook.build(t)
     values = engine.evaluate(built.workbook)
+    windows = degree_windows(built, values)
+    defaults = {q.key: workbook.default_window(q) for q in built.model.of_role(COLUMN)}
+    if any(windows[k] != defaults[k] for k in windows):
+        built = workbook.build(t, windows)
+        values = engine.evaluate(built.workbook)
     charts.add_charts(built, t, built.model, values)
+    _print_setup(built.workbook)
     return built, values
+
+
+def _print_setup(wb) -> None:
+    """Page layout for printing and previews; the Mechanism sheet (inputs, current position and
+    drawing side by side) prints one page wide, landscape, so no block is cut off."""
+    from openpyxl.worksheet.pagebreak import ColBreak
+
+    from .office import apply_print_setup
+    apply_print_setup(wb)
+    ws = wb[workbook.MECH]
+    ws.col_breaks = ColBreak()
+    ws.page_setup.orientation = "landscape"
+    ws.page_setup.scale = None
+    ws.sheet_properties.pageSetUpPr.fitToPage = True
+    ws.page_setup.fitToWidth = 1
+    ws.page_setup.fitToHeight = 0
+
+
+def degree_windows(built: workbook.Built, values: dict) -> dict[str, float]:
+    """For each output angle: the start of a 360° window that puts the cut in the widest empty
+    arc of its sampled values (a multiple of 10°, in [-180°, 180°)). A full turn keeps [0°, 360°)."""
+    sweep = built.meta["sweep"]
+    r0, r1 = sweep["rows"]
+    out = {}
+    for q in built.model.of_role(COLUMN):
+        if not q.in_degrees:
+            continue
+        if q.wrap_360:
+            out[q.key] = 0.0
+            continue
+        letter = sweep["columns"][q.key]
+        degs = sorted(math.degrees(v) % 360.0 for r in range(r0, r1 + 1)
+                      if isinstance(v := values.get((sweep["sheet"], f"{letter}{r}")), float)
+                      and math.isfinite(v))
+        out[q.key] = _cut(degs)
+    return out
+
+
+def _cut(degs: list[float]) -> float:
+    if not degs:
+        return -180.0
+    gaps = [(b - a, a, b) for a, b in zip(degs, degs[1:] + [degs[0] + 360.0])]
+    width, a, b = max(gaps)
+    if width < 20.0:       # the angle turns all the way round: any window has a jump
+        return 0.0
+    lo = math.floor((a + b) / 2 / 10.0) * 10.0
+    if not a < lo < b:
+        lo = (a + b) / 2
+    return (lo + 180.0) % 360.0 - 180.0
 
 
 def write_atomic(path: Path, write: Callable[[Path], None]) -> None:

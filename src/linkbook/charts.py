@@ -10,6 +10,7 @@ import math
 
 from openpyxl.chart import Reference, ScatterChart, Series
 from openpyxl.chart.axis import ChartLines
+from openpyxl.chart.data_source import NumFmt
 from openpyxl.chart.layout import Layout, ManualLayout
 from openpyxl.utils import column_index_from_string
 
@@ -46,6 +47,9 @@ def _chart(title: str, x_title: str, y_title: str) -> ScatterChart:
     c.x_axis.majorGridlines = ChartLines()
     c.y_axis.majorGridlines = ChartLines()
     c.x_axis.majorTickMark = c.y_axis.majorTickMark = "out"
+    for axis in (c.x_axis, c.y_axis):
+        axis.numFmt = NumFmt(formatCode="General", sourceLinked=False)  # not the cells' 0.0000
+        axis.tickLblPos = "low"      # labels at the edge of the plot, not where the axes cross
     c.legend.position = "b"
     return c
 
@@ -120,7 +124,7 @@ def _drawing(wb, t, model: Model, meta: dict, values: dict) -> None:
                 cell = pos["joints"][joint.name][0 if out is xs else 1]
                 out.append(values.get((MECH, cell)))
     _equal_axes(chart, xs, ys, DRAWING_CM)
-    ws.add_chart(chart, "Q5")
+    ws.add_chart(chart, pos["chart_anchor"])   # under the joints table it draws
 
 
 def _sweep_charts(wb, t, model: Model, meta: dict, values: dict) -> None:

@@ -473,7 +473,8 @@ def _inverted_slider_crank(p: dict, th: np.ndarray) -> dict:
     xp, yp = xA - a1, yA
     out = {
         "theta12": th, "xp": xp, "yp": yp, "p": np.hypot(xp, yp), "phi": np.arctan2(yp, xp),
-        "psi": _interior(xp, yp, xB - a1, yB), "s": s, "theta14": t14,
+        # ψ against the direction of link 4, which is defined even for an in-line slide (a4 = 0)
+        "psi": _interior(xp, yp, np.cos(t14), np.sin(t14)), "s": s, "theta14": t14,
         "theta13": np.arctan2(yA - yB, xA - xB),
         "xA": xA, "yA": yA, "xB": xB, "yB": yB,
     }

@@ -205,16 +205,17 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
             raise InputError(field, f"must be a table with label, unit, value (got {entry!r})")
         label = _need(entry, "label", field)
         unit = _need(entry, "unit", field)
-        name = entry.get("name", default_name(symbol))
-        problem = excel_name_problem(name) if isinstance(name, str) else "must be text"
+        excel_name = entry.get("name", default_name(symbol))
+        problem = (excel_name_problem(excel_name) if isinstance(excel_name, str)
+                   else "must be text")
         if problem:
-            raise InputError(f"{field}.name", f"{name!r} {problem}")
+            raise InputError(f"{field}.name", f"{excel_name!r} {problem}")
         if "value" not in entry:
             raise InputError(f"{field}.value", "is missing")
         value = (parse_list(f"{field}.value", kind, entry["value"])[0]
                  if isinstance(entry["value"], list) else
                  check_value(f"{field}.value", kind, entry["value"]))
-        params.append(Parameter(symbol, kind, label, unit, name, value))
+        params.append(Parameter(symbol, kind, label, unit, excel_name, value))
     _check_unique_names(params, origin)
     sweep_data = _need(data, "sweep", origin, dict)
     sweep = Sweep(*(parse_number(f"{origin}: sweep.{k}", _need(sweep_data, k, f"{origin}: sweep",

@@ -50,7 +50,10 @@ class Built:
     meta: dict = field(default_factory=dict)
 
 
-def build(t: Template) -> Built:
+def build(t: Template, windows: dict[str, float] | None = None) -> Built:
+    """Lay the workbook out. `windows`: where each output angle's degree view starts (see
+    build.degree_windows); by default [-180°, 180°)."""
+    windows = windows or {}
     model = t.mechanism.build()
     wb = Workbook()
     ws_mech = wb.active
@@ -62,8 +65,8 @@ def build(t: Template) -> Built:
             "input": t.mechanism.input_key}
 
     names, meta["inputs"], meta["constants"], next_row = _inputs_block(wb, ws_mech, t, model)
-    meta["position"] = _position_block(wb, ws_mech, t, model, names)
-    meta["sweep"] = _sweep_table(ws_sweep, t, model, names)
+    meta["position"] = _position_block(wb, ws_mech, t, model, names, windows)
+    meta["sweep"] = _sweep_table(ws_sweep, t, model, names, windows)
     meta["summary"] = _summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1)
     if t.mechanism.grid:
         meta["grid"] = _grid_sheet(wb.create_sheet(GRID), t, model, names)
@@ -179,17 +182,18 @@ def _inputs_block(wb, ws, t: Template, model: Model):
     return names, inputs, constants, row
 
 
-def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) -> dict:
+def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str],
+                    windows: dict) -> dict:
     """The textbook's spin-button row: one input angle drives every step and the drawing."""
     mech = t.mechanism
-    for col, width in zip("GHIJ", (30, 8, 13, 7)):
+    for col, width in zip("GHIJ", (34, 8, 13, 7)):
         ws.column_dimensions[col].width = width
     ws["G5"] = "Current position"
     ws["G5"].font = BOLD
     for i, h in enumerate(("Quantity", "Symbol", "Value", "Unit"), start=7):
         _head(ws, 6, i, h)
     angle_name = f"{mech.input_key}_now"
-    _text(ws, "G7", "input angle (change it: the drawing moves)")
+    _text(ws, "G7", "input angle: change it, the drawing moves")
     _text(ws, "H7", mech.input_symbol)
     ws["I7"] = t.position
     ws["I7"].fill = INPUT_FILL
@@ -210,15 +214,18 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
         cell = cells[key]
         r = int(cell[1:])
         _text(ws, f"G{r}", q.label)
+        ws[f"G{r}"].alignment = Alignment(wrap_text=True, vertical="top")
         _text(ws, f"H{r}", q.symbol)
-        ws[cell] = _degree_formula(q, cells[q.key]) if key != q.key else resolve.formula(key)
+        ws[cell] = (_degree_formula(q, cells[q.key], windows) if key != q.key
+                    else resolve.formula(key))
         unit = DEG if key != q.key else q.unit
         ws[cell].number_format = number_format(unit)
         _text(ws, f"J{r}", unit_text(unit, t.length_unit))
     joints = _joints_table(ws, model, resolve)
     return {"sheet": MECH, "input_cell": "I7", "input_name": angle_name,
             "cells": {k: v for k, v in cells.items() if k != f"{mech.input_key}_deg"},
-            "joints": joints["cells"], "drawing": joints["drawing"]}
+            "joints": joints["cells"], "drawing": joints["drawing"],
+            "chart_anchor": f"L{joints['chart_row']}"}
 
 
 def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
@@ -251,7 +258,7 @@ def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
                 ws[f"{col}{row}"].number_format = number_format(LENGTH)
             row += 1
         drawing.append({"joints": list(link), "rows": [first, row - 1]})
-    return {"cells": cells, "drawing": drawing}
+    return {"cells": cells, "drawing": drawing, "chart_row": row + 1}
 
 
 def _render(expr: str, resolve: Resolver) -> str:
@@ -267,11 +274,20 @@ def _sweep_columns(model: Model, input_key: str) -> list[tuple[str, object]]:
     return columns
 
 
-def _degree_formula(q, ref: str) -> str:
-    return f"=MOD(DEGREES({ref}),360)" if q.wrap_360 else f"=DEGREES({ref})"
+def default_window(q) -> float:
+    """Where the 360° window of a degree view starts unless the build chose one from data."""
+    return 0.0 if q.wrap_360 else -180.0
 
 
-def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
+def _degree_formula(q, ref: str, windows: dict) -> str:
+    """The degree view of a radian cell, shown in [lo, lo + 360)."""
+    lo = windows.get(q.key, default_window(q))
+    shift = f"-{lo:g}" if lo > 0 else f"+{-lo:g}" if lo < 0 else ""
+    back = f"+{lo:g}" if lo > 0 else f"-{-lo:g}" if lo < 0 else ""
+    return f"=MOD(DEGREES({ref}){shift},360){back}"
+
+
+def _sweep_table(ws, t: Template, model: Model, names: dict[str, str], windows: dict) -> dict:
     mech = t.mechanism
     angles = t.sweep.angles()
     columns = _sweep_columns(model, mech.input_key)
@@ -294,7 +310,7 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
         ws[f"{letters[key]}3"].alignment = Alignment(wrap_text=True, vertical="top")
         _head(ws, head_row, i, header(q.symbol, unit, t.length_unit))
         if degree_column:
-            formulas[key] = _degree_formula(q, f"{letters[q.key]}{ROW}")
+            formulas[key] = _degree_formula(q, f"{letters[q.key]}{ROW}", windows)
         else:
             formulas[key] = resolve.formula(key)
     ws.row_dimensions[3].height = 30
@@ -336,6 +352,9 @@ def _assembly_columns(ws, letters: dict, witness: str, first: int, last: int,
 
 
 GAPS_SHOWN = 3
+# Functions newer than Excel 2007 are stored with the _xlfn. prefix; without it Excel and
+# LibreOffice show #NAME?.
+MINIFS, MAXIFS = "_xlfn.MINIFS", "_xlfn.MAXIFS"
 
 
 def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row: int) -> dict:
@@ -379,13 +398,13 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
     if model.output:
         q = model.get(model.output)
         o = rng(model.output)
-        for key, fn, word in (("output_min", "MINIFS", "smallest"), ("output_max", "MAXIFS",
-                                                                      "largest")):
+        for key, fn, word in (("output_min", MINIFS, "smallest"), ("output_max", MAXIFS,
+                                                                    "largest")):
             put(key, f"{word} {q.symbol} ({q.label})",
                 f'=IF(COUNT({o})=0,"—",{fn}({o},{o},">-1E+300"))', q.unit, "number_or_dash")
     if model.transmission:
         m = rng(f"{model.transmission}_deg")
-        for key, fn, word in (("mu_min", "MINIFS", "smallest"), ("mu_max", "MAXIFS", "largest")):
+        for key, fn, word in (("mu_min", MINIFS, "smallest"), ("mu_max", MAXIFS, "largest")):
             put(key, f"{word} transmission angle μ",
                 f'=IF(COUNT({m})=0,"—",{fn}({m},{m},">-1E+300"))', DEG, "number_or_dash")
     if model.fourbar:

@@ -1,0 +1,197 @@
+"""Speed of verification, measured in one run on this machine (a script, not a test).
+
+For each case (four-bar at 5°, 1°, 0.1°; pump grid 20° × 6 and 1° × 51) it measures, each in a
+fresh Python process (wall time and peak memory of that process):
+  build      linkbook build (layout, one evaluation for chart scales, save)
+  vector     linkbook verify --engine vector (load, evaluate every formula cell, reference, compare)
+  excelmodel formulas' ExcelModel on the same file (skipped where a per-cell cost calibrated in
+             this run predicts more than 2 minutes)
+  office     LibreOffice headless full recalculation (if soffice is installed)
+  reference  the numpy reference alone, for the same angles and adjustments
+and prints a table with ratios against ExcelModel and against the reference.
+
+    python benchmarks/verify_speed.py [--json results.json] [--only fourbar-1]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src"
+EXCELMODEL_LIMIT_S = 120.0
+
+PUMP_51 = ",".join(str(v) for v in range(0, 251, 5))     # 51 adjustments s1 = 0 … 250 mm
+CASES = {
+    "fourbar-5": ("fourbar", ["--step", "5"]),
+    "fourbar-1": ("fourbar", ["--step", "1"]),
+    "fourbar-0.1": ("fourbar", ["--step", "0.1"]),
+    "pump-20x6": ("pump", []),
+    "pump-1x51": ("pump", ["--step", "1", "--set", f"s1={PUMP_51}"]),
+}
+
+# Each job runs in its own interpreter and prints a JSON line: {"seconds": …, "peak_mb": …, …}.
+JOBS = {
+    "build": """
+from linkbook.cli import main
+assert main(["build", NAME, *ARGS, "-o", BOOK]) == 0
+""",
+    "vector": """
+from linkbook.verify import verify
+report = verify(Path(BOOK), "vector")
+EXTRA["ok"] = report.ok
+EXTRA["cells"] = report.cells
+EXTRA["max_abs"] = report.max_abs
+""",
+    "excelmodel": """
+from linkbook.engine import evaluate_formulas_model
+EXTRA["cells"] = len(evaluate_formulas_model(Path(BOOK)))
+""",
+    "office": """
+from linkbook.office import recalculate
+with tempfile.TemporaryDirectory() as d:
+    recalculate(Path(BOOK), Path(d))
+""",
+    "reference": """
+from linkbook import reference
+from linkbook.safety import load_workbook_safely
+from linkbook.verify import inputs_of
+from linkbook.workbook import read_meta
+wb = load_workbook_safely(Path(BOOK))
+meta = read_meta(wb)
+params = inputs_of(wb, meta)
+t0 = time.perf_counter()
+ws = wb[meta["sweep"]["sheet"]]
+r0, r1 = meta["sweep"]["rows"]
+angles = [ws[f"A{r}"].value for r in range(r0, r1 + 1)]
+reference.solve(meta["mechanism"], params, angles)
+if "grid" in meta:
+    g = wb["Grid"]
+    for block in (meta["grid"], meta["stroke"]):
+        bws = wb[block["sheet"]]
+        a = [bws[f"A{r}"].value for r in range(block["rows"][0], block["rows"][1] + 1)]
+        for c in meta["grid"]["columns"]:
+            s1 = g[f"{c}{meta['grid']['param_row']}"].value
+            reference.solve(meta["mechanism"], {**params, "s1": s1}, a)
+EXTRA["solve_seconds"] = time.perf_counter() - t0
+""",
+}
+
+PRELUDE = """
+import json, resource, sys, tempfile, time
+from pathlib import Path
+sys.path.insert(0, {src!r})
+NAME, ARGS, BOOK = {name!r}, {args!r}, {book!r}
+EXTRA = {{}}
+t0 = time.perf_counter()
+"""
+POSTLUDE = """
+seconds = time.perf_counter() - t0
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps({"seconds": seconds, "peak_mb": peak, **EXTRA}))
+"""
+
+
+def run_job(job: str, name: str, args: list[str], book: Path, timeout: float = 1800) -> dict:
+    code = PRELUDE.format(src=str(SRC), name=name, args=args, book=str(book)) + JOBS[job] + POSTLUDE
+    start = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=timeout, env={**os.environ, "TQDM_DISABLE": "1"})
+    wall = time.perf_counter() - start
+    if proc.returncode != 0:
+        return {"error": proc.stderr.strip().splitlines()[-1] if proc.stderr else "failed",
+                "wall": wall}
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    out["wall"] = wall      # whole process, interpreter start-up and imports included
+    return out
+
+
+def formula_cells(book: Path) -> int:
+    sys.path.insert(0, str(SRC))
+    import openpyxl
+    wb = openpyxl.load_workbook(book)
+    return sum(1 for ws in wb.worksheets for row in ws.iter_rows() for c in row
+               if isinstance(c.value, str) and c.value.startswith("="))
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json", help="also write the results to this file")
+    ap.add_argument("--only", action="append", help="run only these cases")
+    opts = ap.parse_args()
+    have_office = bool(__import__("shutil").which("soffice"))
+    results = {}
+    seconds_per_cell = None    # ExcelModel cost, calibrated on the first case it runs
+    with tempfile.TemporaryDirectory() as tmp:
+        for case, (name, args) in CASES.items():
+            if opts.only and case not in opts.only:
+                continue
+            book = Path(tmp) / f"{case}.xlsx"
+            r = {"build": run_job("build", name, args, book)}
+            r["cells"] = formula_cells(book)
+            r["vector"] = run_job("vector", name, args, book)
+            predicted = seconds_per_cell * r["cells"] if seconds_per_cell else 0.0
+            if "pump" in case and seconds_per_cell:
+                predicted *= 20        # a grid cell is one ~1,000-character formula
+            if predicted > EXCELMODEL_LIMIT_S:
+                r["excelmodel"] = {"skipped": f"predicted {predicted:.0f} s"}
+            else:
+                r["excelmodel"] = run_job("excelmodel", name, args, book)
+                if "seconds" in r["excelmodel"] and "pump" not in case:
+                    seconds_per_cell = r["excelmodel"]["seconds"] / r["cells"]
+            r["office"] = run_job("office", name, args, book) if have_office else \
+                {"skipped": "no soffice"}
+            r["reference"] = run_job("reference", name, args, book)
+            results[case] = r
+            print_row(case, r, flush=True)
+    print_table(results)
+    if opts.json:
+        Path(opts.json).write_text(json.dumps(results, indent=2))
+    return 0
+
+
+def _s(job: dict, key: str = "wall") -> str:
+    if "skipped" in job:
+        return "skipped"
+    if "error" in job:
+        return "ERROR"
+    return f"{job[key]:.2f}"
+
+
+def print_row(case: str, r: dict, flush: bool = False) -> None:
+    print(f"{case}: done ({r['cells']} formula cells)", file=sys.stderr, flush=flush)
+
+
+def print_table(results: dict) -> None:
+    head = (f"{'case':12} {'cells':>7} {'build':>7} {'vector':>7} {'peakMB':>7} {'Excel-':>9} "
+            f"{'Libre-':>7} {'refer-':>7} {'ExcelModel/':>12} {'vector/':>8} {'verify':>7}")
+    sub = (f"{'':12} {'':>7} {'[s]':>7} {'[s]':>7} {'':>7} {'Model [s]':>9} {'Office':>7} "
+           f"{'ence [s]':>7} {'vector':>12} {'reference':>8} {'':>7}")
+    print(head)
+    print(sub)
+    for case, r in results.items():
+        vec, xl, ref = r["vector"], r["excelmodel"], r["reference"]
+        ratio_xl = (f"{xl['wall'] / vec['wall']:.1f}x" if "wall" in xl and "wall" in vec
+                    and "skipped" not in xl and "error" not in xl else "-")
+        ratio_ref = (f"{vec['wall'] / ref['wall']:.1f}x" if "wall" in ref and "wall" in vec
+                     and "error" not in ref else "-")
+        verdict = "ok" if vec.get("ok") else "FAIL"
+        print(f"{case:12} {r['cells']:7d} {_s(r['build']):>7} {_s(vec):>7} "
+              f"{vec.get('peak_mb', 0):7.0f} {_s(xl):>9} {_s(r['office']):>7} {_s(ref):>7} "
+              f"{ratio_xl:>12} {ratio_ref:>8} {verdict:>7}")
+    print("\nTimes are whole-process wall seconds (start-up and imports included); peakMB is the "
+          "vector verify process's peak resident memory.")
+    f1, f01 = results.get("fourbar-1"), results.get("fourbar-0.1")
+    if f1 and f01 and "wall" in f1["vector"] and "wall" in f01["vector"]:
+        print(f"0.1° / 1° four-bar vector verify: {f01['vector']['wall'] / f1['vector']['wall']:.1f}x"
+              f" for {f01['cells'] / f1['cells']:.1f}x the cells")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

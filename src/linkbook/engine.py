@@ -1,0 +1,950 @@
+"""Fast evaluation of a workbook of live formulas, with the `formulas` package's own functions.
+
+Method
+------
+1. *Shapes.* Every formula cell's text is rewritten with each reference in a relative form
+   (R1C1: an offset for relative parts, a number for ``$`` parts, the sheet always explicit; a
+   workbook-scoped defined name becomes the absolute reference to its target).  In C8,
+   ``=A8*COS(B8)-$D$2+E$7`` has the shape ``='S'!R[0]C[-2]*COS('S'!R[0]C[-1])-'S'!R2C4+'S'!R7C[2]``.
+   Cells of one sheet with one shape form a *group*: a column of a sweep table is one group.
+   References are found by a regex lexer (fast), and for every group the `formulas` tokenizer
+   re-reads the first member: if its Range tokens are not exactly the lexer's spans, every member
+   of that group is re-read by the tokenizer (slow but exact).
+2. *One compile per group.* ``Parser().ast(formula)[1].compile()`` of the first member.  The
+   compiled function's inputs (``'E5'``, ``'SWEEP!B5:B40'``, ``'A_3'``) are tied to the reference
+   descriptors of the shape, so any member's inputs are the descriptors shifted to that member.
+3. *Order.* A group depends on the groups owning the cells it reads.  Groups are evaluated in
+   topological order of their strongly connected components; a group that reads itself (a running
+   column) or a cycle of groups is evaluated cell by cell in cell-level topological order.
+4. *Modes.*
+   - ``vector``: only single-cell inputs and no reference-aware function.  The function is called
+     once with an (n, 1) object array per input.  Each node of the compiled graph is wrapped:
+     element-wise functions (arithmetic, COS, ATAN2, IF, IFERROR, ...) run on the whole array; any
+     other node (MAX of two cells, AND, ...), and an element-wise node whose output collapsed
+     (``formulas`` turns an exception such as an overflow into a single #VALUE! for the whole
+     call), runs row by row on (1, 1) slices, which is exactly what a per-cell call does.
+   - ``cell``: ranges or reference-aware functions (ROWS, INDEX, ``:``).  The group's one
+     compiled function is called per member with `formulas` Ranges inputs, as ExcelModel does.
+   - ``each``: functions that read the host cell (ROW(), COLUMN(), ``@``), or a shape whose inputs
+     cannot be tied to descriptors (``B8`` and ``$B$8`` in one formula, intersections, unions):
+     every member is compiled on its own with the host cell, like ExcelModel.
+5. *Values* follow ExcelModel: an empty cell is ``sh.EMPTY`` (functions treat it as 0 / ""), a
+   result that is EMPTY becomes 0, numeric constants are what the saved file holds (openpyxl writes
+   ``%.16g``) rounded to 15 decimals, errors are `formulas` XlError objects (#N/A, #NUM!, ...).
+
+Limits (they raise UnsupportedFormulaError rather than guess): INDIRECT, OFFSET, ISFORMULA,
+FORMULATEXT, CELL, spill/anchor references, whole-column/row ranges (A:A, 1:1), R1C1 text,
+external books, unknown sheets or names, sheet-scoped names, names that are not a cell or range
+reference, multi-cell array formulas, data-table formulas.  Circular references raise
+CircularReferenceError.  Dates are passed through as openpyxl returns them.  A self-reading group
+that reads itself through ranges (``=SUM($C$5:C7)`` in column C) costs O(n^2) to order.
+"""
+from __future__ import annotations
+
+import contextlib
+import functools
+import io
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import openpyxl
+import schedula as sh
+from formulas import Parser
+from formulas.cell import CELL
+from formulas.functions import Array, replace_empty
+from formulas.ranges import Ranges
+from formulas.tokens.function import Function
+from formulas.tokens.operand import Error, Range, XlError
+from formulas.tokens.operator import Intersect, OperatorToken
+from openpyxl.compat import safe_string
+from openpyxl.utils import get_column_letter
+
+__all__ = [
+    "evaluate", "evaluate_file", "evaluate_formulas_model", "is_error", "error_code", "shape_of",
+    "Engine",
+    "EngineError", "UnsupportedFormulaError", "CircularReferenceError",
+]
+
+MAX_ROW, MAX_COL = 1048576, 16384
+
+# Functions whose compiled node maps (n, 1) arrays element by element exactly as it maps (1, 1)
+# arrays (checked against per-cell calls over numbers, bools, strings, EMPTY and errors in
+# tests/test_engine.py).  Every other node runs row by row in vector mode.
+ELEMENTWISE = frozenset("""
+    ABS ACOS ACOSH ASIN ASINH ATAN ATAN2 ATANH CHOOSE COS COSH COT CSC DEGREES EVEN EXP IF
+    IFERROR IFNA INT ISBLANK ISERR ISERROR ISNA ISNUMBER ISTEXT LN LOG LOG10 MOD NA NOT ODD PI
+    POWER RADIANS ROUND ROUNDDOWN ROUNDUP SEC SIGN SIN SINH SQRT TAN TANH TRUNC
+    + - * / ^ & = <> < > <= >= u- u+ % bypass
+""".split())
+# Functions that take `formulas` Ranges (reference-aware): never fed plain arrays.
+RANGE_AWARE = frozenset({"AREAS", "COLUMNS", "ROWS", "INDEX", ":", ",", " "})
+# Functions that read the host cell (the compiled graph has the CELL input).
+HOST_AWARE = frozenset({"ROW", "COLUMN", "SINGLE", "_XLFN.SINGLE", "@"})
+# Functions whose result depends on cells that are not among the compiled inputs.
+DYNAMIC = frozenset({"INDIRECT", "OFFSET", "ISFORMULA", "_XLFN.ISFORMULA", "FORMULATEXT",
+                     "_XLFN.FORMULATEXT", "CELL"})
+
+_PARSER = Parser()
+
+
+class EngineError(Exception):
+    """The engine cannot evaluate this workbook."""
+
+
+class UnsupportedFormulaError(EngineError):
+    """A formula uses something outside the engine's documented limits."""
+
+
+class CircularReferenceError(EngineError):
+    """Formula cells read each other in a cycle."""
+
+
+# --------------------------------------------------------------------------- public API
+
+def evaluate(wb: openpyxl.Workbook) -> dict[tuple[str, str], object]:
+    """Value of every non-empty cell of every worksheet, keyed by (sheet title, 'B7').
+
+    Formula cells get a float, a `formulas` XlError (#N/A, #NUM!, #DIV/0!, ...), or a str/bool
+    where the formula yields one; constants keep their type (ints stay ints)."""
+    return Engine(wb).run()
+
+
+def evaluate_file(path) -> dict[tuple[str, str], object]:
+    """evaluate() of the workbook at `path`, loaded with its formulas (not data_only)."""
+    return evaluate(openpyxl.load_workbook(path, data_only=False))
+
+
+def shape_of(formula: str, cell: str, sheet: str = "Sheet", wb=None) -> str:
+    """The shape of `formula` written in `cell` ('C8') of `sheet`: every reference in R1C1 form
+    with its sheet, names of `wb` replaced by their targets.  Found by the `formulas` tokenizer."""
+    refs = References.of(wb) if wb is not None else References([sheet])
+    row, col = openpyxl.utils.cell.coordinate_to_tuple(cell)
+    return _shape(formula, _tokenize(formula).spans, refs, refs.sheet(sheet), row, col)[0]
+
+
+def is_error(value) -> bool:
+    return isinstance(value, XlError)
+
+
+def error_code(value) -> str | None:
+    """'#N/A', '#NUM!', ... for an error value, else None."""
+    return str(value) if isinstance(value, XlError) else None
+
+
+def evaluate_formulas_model(path) -> dict[tuple[str, str], object]:
+    """The same dict as evaluate_file(), computed by the slow full-fidelity formulas.ExcelModel."""
+    import formulas
+    path = str(Path(path).resolve())
+    with contextlib.redirect_stderr(io.StringIO()):  # ExcelModel.finish() draws a tqdm bar
+        solution = formulas.ExcelModel().loads(path).finish().calculate()
+    book = openpyxl.load_workbook(path, data_only=False)
+    titles = {ws.title.upper(): ws.title for ws in book.worksheets}
+    formula_cells = {(ws.title, c.coordinate) for ws in book.worksheets
+                     for c in ws._cells.values() if c.data_type == "f"}
+    out = {}
+    for key, value in solution.items():
+        cell = _model_key(key, titles)
+        if cell is None:
+            continue
+        if isinstance(value, Ranges):
+            value = value.value
+        if isinstance(value, np.ndarray):
+            if value.size != 1:
+                continue
+            value = value.reshape(-1)[0]
+        if value is sh.EMPTY:
+            continue  # a referenced empty cell, not a cell of the book
+        out[cell] = _public_value(value, cell in formula_cells)
+    return out
+
+
+_MODEL_KEY = re.compile(r"^'\[[^\]]*\](?P<sheet>.*)'!(?P<ref>[A-Z]{1,3}[0-9]+)$", re.S)
+
+
+def _model_key(key, titles: dict[str, str]) -> tuple[str, str] | None:
+    """("'[book.xlsx]SHEET'!A1") -> ('Sheet', 'A1'); None for names, ranges and tokens."""
+    if not isinstance(key, str) or isinstance(key, sh.Token):
+        return None
+    m = _MODEL_KEY.match(key)
+    if not m:
+        return None
+    title = titles.get(m["sheet"].replace("''", "'"))
+    return (title, m["ref"]) if title else None
+
+
+def _public_value(value, is_formula: bool):
+    """numpy scalars -> Python; formula numbers -> float; errors, str, bool unchanged."""
+    if isinstance(value, XlError):
+        return value
+    if value is sh.EMPTY:
+        return 0.0 if is_formula else None
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, np.generic):
+        value = value.item()
+    if is_formula and isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    return value
+
+
+# --------------------------------------------------------------------------- references
+
+@dataclass(frozen=True)
+class RefDesc:
+    """One reference of a shape.  A coordinate is absolute where its flag is set, else an
+    offset from the host cell.  Names are all-absolute descriptors of their target."""
+    sheet: str
+    r1: int
+    c1: int
+    r2: int
+    c2: int
+    ar1: bool
+    ac1: bool
+    ar2: bool
+    ac2: bool
+    is_range: bool
+
+    def canonical(self) -> str:
+        def part(v, absolute, letter):
+            return f"{letter}{v}" if absolute else f"{letter}[{v}]"
+        first = part(self.r1, self.ar1, "R") + part(self.c1, self.ac1, "C")
+        if self.is_range:
+            first += ":" + part(self.r2, self.ar2, "R") + part(self.c2, self.ac2, "C")
+        return f"'{self.sheet}'!{first}"
+
+    @property
+    def is_absolute(self) -> bool:
+        return self.ar1 and self.ac1 and self.ar2 and self.ac2
+
+    def at(self, rows, cols):
+        """(r1, c1, r2, c2) for host cell(s); works on ints and on numpy arrays."""
+        r1 = self.r1 if self.ar1 else rows + self.r1
+        c1 = self.c1 if self.ac1 else cols + self.c1
+        r2 = self.r2 if self.ar2 else rows + self.r2
+        c2 = self.c2 if self.ac2 else cols + self.c2
+        return r1, c1, r2, c2
+
+    def rect(self, row: int, col: int) -> tuple[str, int, int, int, int]:
+        """(sheet, top, left, bottom, right) for one host cell."""
+        r1, c1, r2, c2 = self.at(row, col)
+        return self.sheet, min(r1, r2), min(c1, c2), max(r1, r2), max(c1, c2)
+
+
+_SHEET_RX = r"(?:'(?:[^']|'')+'|[^\W\d][\w.]*)"
+_CELL_RX = r"\$?[A-Za-z]{1,3}\$?[0-9]+"
+# Fast lexer: strings, errors and numbers are consumed whole so that "E1" in 1E-12 or "LOG10(" is
+# never a reference; every identifier is consumed whole (a function if followed by "(").
+_LEXER = re.compile(rf"""
+    (?P<string>"(?:[^"]|"")*")
+  | (?P<error>\#(?:NULL!|DIV/0!|VALUE!|REF!|NUM!|NAME\?|N/A|GETTING_DATA))
+  | (?P<ref>(?:{_SHEET_RX}!)?{_CELL_RX}(?::{_CELL_RX})?)(?![\w.(!:$\#\[])
+  | (?P<number>(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)
+  | (?P<ident>[^\W\d][\w.]*)(?P<call>\s*\()?
+""", re.X)
+_REF_TEXT = re.compile(r"""^(?:(?P<sheet>'(?:[^']|'')+'|[^\W\d][\w.]*)!)?
+    (?P<ca>\$?)(?P<c>[A-Za-z]{1,3})(?P<ra>\$?)(?P<r>[0-9]+)
+    (?::(?P<cb>\$?)(?P<c2>[A-Za-z]{1,3})(?P<rb>\$?)(?P<r2>[0-9]+))?$""", re.X)
+_NAME_TEXT = re.compile(r"^[^\W\d][\w.]*$")
+
+
+def _col_index(letters: str) -> int:
+    n = 0
+    for ch in letters.upper():
+        n = n * 26 + ord(ch) - 64
+    return n
+
+
+@functools.lru_cache(maxsize=65536)
+def _parse_a1(text: str):
+    """'Sheet'!$B5:C$7 -> (sheet text or None, (row, col, row_abs, col_abs) x 1 or 2), or None."""
+    m = _REF_TEXT.match(text)
+    if not m:
+        return None
+    sheet = m["sheet"]
+    if sheet and sheet.startswith("'"):
+        sheet = sheet[1:-1].replace("''", "'")
+    corners = [(int(m["r"]), _col_index(m["c"]), bool(m["ra"]), bool(m["ca"]))]
+    if m["c2"]:
+        corners.append((int(m["r2"]), _col_index(m["c2"]), bool(m["rb"]), bool(m["cb"])))
+    for row, col, _, _ in corners:
+        if not (1 <= row <= MAX_ROW and 1 <= col <= MAX_COL):
+            return None
+    return sheet, tuple(corners)
+
+
+class References:
+    """Resolves reference texts and defined names of one workbook to RefDesc."""
+
+    def __init__(self, titles, names: dict[str, str] | None = None):
+        self.titles = {t.upper(): t for t in titles}
+        self.names = {k.upper(): v for k, v in (names or {}).items()}   # NAME -> "'S'!$C$6"
+
+    @classmethod
+    def of(cls, wb: openpyxl.Workbook) -> "References":
+        return cls([ws.title for ws in wb.worksheets], dict(_global_names(wb)))
+
+    def sheet(self, text: str) -> str:
+        title = self.titles.get(text.upper())
+        if title is None:
+            raise UnsupportedFormulaError(f"reference to unknown sheet {text!r}")
+        return title
+
+    def is_name(self, ident: str) -> bool:
+        return ident.upper() in self.names
+
+    @functools.lru_cache(maxsize=None)
+    def name(self, ident: str) -> RefDesc:
+        text = self.names.get(ident.upper())
+        parsed = _parse_a1(text.strip().lstrip("=")) if text else None
+        if parsed is None or parsed[0] is None:
+            raise UnsupportedFormulaError(
+                f"defined name {ident!r} is not a sheet-qualified cell or range ({text!r})")
+        return self._desc(parsed, 0, 0, absolute=True)
+
+    def ref(self, text: str, host_sheet: str, row: int, col: int) -> RefDesc:
+        """Descriptor of one reference text (A1 reference or defined name) in a host cell."""
+        parsed = _parse_a1(text)
+        if parsed is None:
+            if _NAME_TEXT.match(text) and self.is_name(text):
+                return self.name(text)
+            raise UnsupportedFormulaError(f"unsupported reference {text!r}")
+        sheet = self.sheet(parsed[0]) if parsed[0] is not None else host_sheet
+        return self._desc((sheet, parsed[1]), row, col)
+
+    def _desc(self, parsed, row, col, absolute=False) -> RefDesc:
+        sheet, corners = parsed
+        sheet = self.sheet(sheet)
+        (r1, c1, ar1, ac1) = corners[0]
+        (r2, c2, ar2, ac2) = corners[-1]
+        if absolute:
+            ar1 = ac1 = ar2 = ac2 = True
+        return RefDesc(sheet, r1 if ar1 else r1 - row, c1 if ac1 else c1 - col,
+                       r2 if ar2 else r2 - row, c2 if ac2 else c2 - col,
+                       ar1, ac1, ar2, ac2, len(corners) == 2)
+
+
+def _global_names(wb):
+    """(name, reference text) of visible workbook-scoped names, as ExcelModel reads them."""
+    names = wb.defined_names
+    items = names.items() if hasattr(names, "items") else ((d.name, d) for d in names)
+    for name, dn in items:
+        if getattr(dn, "hidden", False) or getattr(dn, "localSheetId", None) is not None:
+            continue
+        yield name, dn.attr_text
+
+
+# --------------------------------------------------------------------------- formula reading
+
+def _lex_spans(formula: str, refs: References) -> list[tuple[int, int]]:
+    """Spans of references and defined names found by the regex lexer."""
+    spans = []
+    for m in _LEXER.finditer(formula):
+        if m["ref"] is not None:
+            spans.append(m.span("ref"))
+        elif m["ident"] is not None and m["call"] is None and refs.is_name(m["ident"]):
+            spans.append(m.span("ident"))
+    return spans
+
+
+@dataclass
+class TokenInfo:
+    """What the `formulas` tokenizer says about one formula."""
+    spans: list[tuple[int, int]]
+    keys: list[str]            # Range token names, e.g. 'SWEEP!D8', 'A_3' (the compiled inputs)
+    functions: set[str]
+    builder: object
+
+
+def _tokenize(formula: str) -> TokenInfo:
+    try:
+        tokens, builder = _PARSER.ast(formula)
+    except Exception as ex:  # formulas raises several error types for bad syntax
+        raise UnsupportedFormulaError(f"cannot parse {formula!r}: {ex!r}") from ex
+    spans, keys, functions = [], [], set()
+    for tok in tokens:
+        if isinstance(tok, Range):
+            if tok.attr.get("indirect") or tok.attr.get("anchor"):
+                raise UnsupportedFormulaError(f"dynamic reference in {formula!r}")
+            text = tok.source[:tok.end_match]
+            start = len(formula) - len(tok.source) + len(text) - len(text.lstrip())
+            spans.append((start, start + len(text.strip())))
+            keys.append(tok.attr["name"])
+        elif isinstance(tok, Function):
+            functions.add(tok.name.upper())
+        elif isinstance(tok, Intersect):
+            functions.add(" ")
+        elif isinstance(tok, OperatorToken):
+            functions.add(tok.name)
+    bad = functions & DYNAMIC
+    if bad:
+        raise UnsupportedFormulaError(f"{sorted(bad)} in {formula!r}")
+    return TokenInfo(spans, keys, functions, builder)
+
+
+def _shape(formula, spans, refs: References, sheet, row, col) -> tuple[str, list[RefDesc]]:
+    parts, descs, pos = [], [], 0
+    for start, end in spans:
+        desc = refs.ref(formula[start:end], sheet, row, col)
+        parts += [formula[pos:start], desc.canonical()]
+        descs.append(desc)
+        pos = end
+    parts.append(formula[pos:])
+    return "".join(parts), descs
+
+
+# --------------------------------------------------------------------------- compiled shapes
+
+class _Batch:
+    """Rows of the current vector call (1 outside vector calls); shared by a group's nodes.
+    `row_by_row` counts node calls that had to run row by row."""
+    n = 1
+    row_by_row = 0
+
+
+def _size(x) -> int:
+    return x.size if isinstance(x, np.ndarray) else 1
+
+
+def _single(x):
+    """The one value of a per-row result."""
+    if isinstance(x, np.ndarray):
+        if x.size != 1:
+            raise _NotScalar
+        return x.reshape(-1)[0]
+    return x
+
+
+class _NotScalar(Exception):
+    """A row-by-row node returned more than one value: the group cannot be vectorized."""
+
+
+def _vector_node(func, batch: _Batch, elementwise: bool):
+    """Wrap a node of the compiled graph for (n, 1) calls.  Element-wise nodes run once; if their
+    output is not (n, 1) (an exception collapsed it), or the node is not element-wise, it runs
+    row by row on (1, 1) slices, exactly as in a per-cell call."""
+    def node(*args, **kw):
+        n = batch.n
+        if n == 1 or not any(_size(a) == n for a in args):
+            return func(*args, **kw)
+        if elementwise:
+            out = func(*args, **kw)
+            if isinstance(out, np.ndarray) and out.shape == (n, 1):
+                return out
+        batch.row_by_row += 1
+        out = np.empty((n, 1), object)
+        cols = [np.reshape(a, (n, 1)) if _size(a) == n else None for a in args]
+        for i in range(n):
+            row = [a if c is None else c[i:i + 1] for a, c in zip(args, cols)]
+            out[i, 0] = _single(func(*row, **kw))
+        return out.view(Array)
+    return node
+
+
+def _compile(builder, batch: _Batch | None = None, host: Ranges | None = None):
+    """Compile a parsed formula; with `batch`, every node is wrapped for vector calls."""
+    if batch is not None:
+        for node_id, node in builder.dsp.function_nodes.items():
+            name = re.sub(r"<\d+>$", "", node_id)
+            node["function"] = _vector_node(node["function"], batch, name in ELEMENTWISE)
+    extra = {CELL: host} if host is not None else {}
+    return builder.compile(**extra)
+
+
+def _call(func, args):
+    """Call a compiled formula as ExcelModel does (#NAME? for unimplemented functions)."""
+    try:
+        return func(*args)
+    except sh.DispatcherError as ex:
+        if isinstance(getattr(ex, "ex", None), NotImplementedError):
+            return Error.errors["#NAME?"]
+        raise
+
+
+_ONE_CELL = Ranges.get_range("A1")
+
+
+def _cell_result(out):
+    """A compiled formula's output as ExcelModel stores it for one cell."""
+    return Ranges().set_value(dict(_ONE_CELL), replace_empty(out)).value[0, 0]
+
+
+# --------------------------------------------------------------------------- groups
+
+@dataclass
+class _Member:
+    row: int
+    col: int
+    formula: str
+    descs: list[RefDesc]
+
+
+@dataclass
+class _EachCell:
+    """A member compiled on its own ('each' mode)."""
+    func: object
+    inputs: list  # per compiled input: ('ranges', Ranges template, rects) or ('name', RefDesc)
+    rects: list
+
+
+@dataclass
+class Group:
+    gid: int
+    sheet: str
+    shape: str
+    members: list[_Member]
+    info: TokenInfo
+    mode: str = "vector"
+    func: object = None
+    inputs: list[RefDesc] = field(default_factory=list)   # per compiled input, in order
+    batch: _Batch = field(default_factory=_Batch)
+    each: list[_EachCell] = field(default_factory=list)
+    rows: np.ndarray = None
+    cols: np.ndarray = None
+
+    def reads(self, i: int) -> list[tuple[str, int, int, int, int]]:
+        """Rectangles (sheet, top, left, bottom, right) read by member i."""
+        if self.mode == "each":
+            return self.each[i].rects
+        m = self.members[i]
+        return [d.rect(m.row, m.col) for d in self.inputs]
+
+
+class Engine:
+    """One evaluation of one workbook; `stats` tells how it was grouped and run."""
+
+    def __init__(self, wb: openpyxl.Workbook, vectorize: bool = True):
+        self.wb = wb
+        self.vectorize = vectorize
+        self.refs = References.of(wb)
+        self.constants: dict[str, dict[tuple[int, int], object]] = {}
+        self.groups: list[Group] = []
+        self.grid: dict[str, np.ndarray] = {}
+        self.owner: dict[str, np.ndarray] = {}
+        self.member: dict[str, np.ndarray] = {}
+        self.stats = dict(formula_cells=0, shapes=0, compiled=0, vector_groups=0,
+                          cell_groups=0, each_groups=0, cyclic_cells=0, tokenized_cells=0,
+                          vector_fallbacks=0, row_by_row_nodes=0)
+
+    # ---- pipeline
+    def run(self) -> dict[tuple[str, str], object]:
+        if self.groups or self.constants:
+            raise EngineError("an Engine runs once; make a new one")
+        formulas_by_sheet = self._read_cells()
+        self._group(formulas_by_sheet)
+        for g in self.groups:
+            self._plan(g)
+        self._allocate()
+        # Overflow warnings would only repeat what the #NUM!/#VALUE! results say; 'ignore' and
+        # numpy's default 'warn' give the same values.
+        with np.errstate(all="ignore"):
+            for component in self._components():
+                self._evaluate_component(component)
+        self.stats["row_by_row_nodes"] = sum(g.batch.row_by_row for g in self.groups)
+        return self._values()
+
+    # ---- 1. cells
+    def _read_cells(self) -> dict[str, list[tuple[int, int, str]]]:
+        formulas_by_sheet = {}
+        for ws in self.wb.worksheets:
+            consts, forms = {}, []
+            for (row, col), cell in ws._cells.items():  # only cells that exist (ExcelModel too)
+                if cell.value is None:
+                    continue
+                if cell.data_type == "f":
+                    forms.append((row, col, _formula_text(cell)))
+                else:
+                    value = _constant(cell)
+                    if value is not None:
+                        consts[(row, col)] = value
+            forms.sort()
+            self.constants[ws.title] = consts
+            formulas_by_sheet[ws.title] = forms
+            self.stats["formula_cells"] += len(forms)
+        return formulas_by_sheet
+
+    # ---- 2. shapes
+    def _group(self, formulas_by_sheet):
+        candidates: dict[tuple[str, str], list[_Member]] = {}
+        for sheet, forms in formulas_by_sheet.items():
+            for row, col, formula in forms:
+                try:
+                    spans = _lex_spans(formula, self.refs)
+                    shape, descs = _shape(formula, spans, self.refs, sheet, row, col)
+                except UnsupportedFormulaError:
+                    shape, descs = f"\0lexer failed: {formula}", []   # the tokenizer decides
+                candidates.setdefault((sheet, shape), []).append(_Member(row, col, formula, descs))
+        exact: dict[tuple[str, str], tuple[list[_Member], TokenInfo]] = {}
+        for (sheet, shape), members in candidates.items():
+            info = self._tokenize(members[0], sheet)
+            lexed = not shape.startswith("\0")
+            if lexed and info.spans == _lex_spans(members[0].formula, self.refs):
+                exact[(sheet, shape)] = (members, info)
+                continue
+            for m in members:  # the lexer misread this shape: re-read every member exactly
+                info = info if m is members[0] else self._tokenize(m, sheet)
+                shape, m.descs = self._exact_shape(m, sheet, info)
+                entry = exact.setdefault((sheet, "\0" + shape), ([], info))
+                entry[0].append(m)
+        for gid, ((sheet, shape), (members, info)) in enumerate(exact.items()):
+            self.groups.append(Group(gid, sheet, shape, members, info))
+        self.stats["shapes"] = len(self.groups)
+
+    def _tokenize(self, member: _Member, sheet: str) -> TokenInfo:
+        self.stats["tokenized_cells"] += 1
+        try:
+            return _tokenize(member.formula)
+        except UnsupportedFormulaError as ex:
+            raise UnsupportedFormulaError(f"{sheet}!{_a1(member.row, member.col)}: {ex}") from ex
+
+    def _exact_shape(self, m: _Member, sheet: str, info: TokenInfo):
+        try:
+            return _shape(m.formula, info.spans, self.refs, sheet, m.row, m.col)
+        except UnsupportedFormulaError as ex:
+            raise UnsupportedFormulaError(f"{sheet}!{_a1(m.row, m.col)}: {ex}") from ex
+
+    # ---- 3. compile
+    def _plan(self, g: Group):
+        g.rows = np.array([m.row for m in g.members], dtype=np.int64)
+        g.cols = np.array([m.col for m in g.members], dtype=np.int64)
+        functions = g.info.functions
+        if functions & HOST_AWARE:
+            return self._plan_each(g)
+        chosen = self._representative(g)
+        if chosen is None:
+            return self._plan_each(g)
+        rep, info, by_key = chosen
+        ranged = any(d.is_range for d in by_key.values()) or bool(functions & RANGE_AWARE)
+        g.mode = "vector" if self.vectorize and len(g.members) > 1 and not ranged else "cell"
+        func = _compile(info.builder, g.batch if g.mode == "vector" else None)
+        self.stats["compiled"] += 1
+        inputs = []
+        for key, template in func.inputs.items():
+            desc = by_key.get(key)
+            if desc is None or not _same_cells(desc, template, rep, g.sheet, self.refs):
+                return self._plan_each(g)   # unions, intersections: not tied to one reference
+            inputs.append(desc)
+        g.func, g.inputs = func, inputs
+        self.stats[f"{g.mode}_groups"] += 1
+
+    def _representative(self, g: Group):
+        """(member, TokenInfo, compiled-input key -> RefDesc) of a member whose formula gives
+        every compiled input one descriptor.  In row 5, `=B5+$B$5` has one input 'B5' for two
+        descriptors; row 6 has two inputs, and its compiled function serves rows 5.. as well
+        (two inputs that happen to hold one cell are still right).  None if no member fits."""
+        n = len(g.members)
+        for i in dict.fromkeys((0, min(1, n - 1), n // 2, n - 1)):
+            m = g.members[i]
+            info = g.info if i == 0 else self._tokenize(m, g.sheet)
+            by_key, clash = {}, []
+            for key, desc in zip(info.keys, g.members[0].descs):   # descs are the group's
+                if by_key.setdefault(key, desc) != desc:
+                    clash.append((by_key[key], desc))
+            if not clash or all(self._always_same(g, a, b) for a, b in clash):
+                return m, info, by_key
+        return None
+
+    @staticmethod
+    def _always_same(g: Group, a: RefDesc, b: RefDesc) -> bool:
+        """Do two descriptors name the same cells for every member (e.g. B8 and $B8 in C)?"""
+        if a.sheet != b.sheet or a.is_range != b.is_range:
+            return False
+        shape = g.rows.shape
+        return all(np.array_equal(np.broadcast_to(x, shape), np.broadcast_to(y, shape))
+                   for x, y in zip(a.at(g.rows, g.cols), b.at(g.rows, g.cols)))
+
+    def _plan_each(self, g: Group):
+        g.mode, g.each = "each", []
+        for m in g.members:
+            info = self._tokenize(m, g.sheet)   # a fresh parse: compile() may have run on g.info
+            host = Ranges().push(f"{_sheet_prefix(g.sheet)}{_a1(m.row, m.col)}")
+            func = _compile(info.builder, host=host)
+            self.stats["compiled"] += 1
+            inputs, rects = [], []
+            for key, template in func.inputs.items():
+                if isinstance(template, Ranges):
+                    cells = [self._range_rect(r, g.sheet) for r in template.ranges]
+                    inputs.append(("ranges", template, cells))
+                    rects += cells
+                elif template is None and self.refs.is_name(key):
+                    desc = self.refs.name(key)
+                    inputs.append(("name", desc))
+                    rects.append(desc.rect(m.row, m.col))
+                else:
+                    raise UnsupportedFormulaError(
+                        f"{g.sheet}!{_a1(m.row, m.col)}: unknown reference {key!r}")
+            g.each.append(_EachCell(func, inputs, rects))
+        self.stats["each_groups"] += 1
+
+    def _range_rect(self, r: dict, host_sheet: str):
+        r1, r2, c1, c2 = int(r["r1"]), int(r["r2"]), r["n1"], r["n2"]
+        if not (1 <= r1 <= r2 < MAX_ROW and 1 <= c1 <= c2 < MAX_COL):
+            raise UnsupportedFormulaError(f"whole-row/column or invalid range {r['name']!r}")
+        sid = r.get("sheet_id") or ""
+        if sid.startswith("'"):
+            sid = sid[1:-1].replace("''", "'")
+        if "[" in sid:
+            raise UnsupportedFormulaError(f"external reference {r['name']!r}")
+        return (self.refs.sheet(sid) if sid else host_sheet), r1, c1, r2, c2
+
+    # ---- 4. storage
+    def _allocate(self):
+        """Value grid (object, EMPTY where nothing), and which group/member owns each cell."""
+        size = {ws.title: [ws.max_row, ws.max_column] for ws in self.wb.worksheets}
+        for g in self.groups:
+            self._grow(size, g.sheet, int(g.rows.max()), int(g.cols.max()))
+            if g.mode == "each":
+                for cell in g.each:
+                    for sheet, _, _, r2, c2 in cell.rects:
+                        self._grow(size, sheet, r2, c2)
+                continue
+            for d in g.inputs:
+                r1, c1, r2, c2 = d.at(g.rows, g.cols)
+                self._grow(size, d.sheet, int(np.max(np.maximum(r1, r2))),
+                           int(np.max(np.maximum(c1, c2))))
+        for sheet, (rows, cols) in size.items():
+            grid = np.empty((rows + 1, cols + 1), object)
+            grid.fill(sh.EMPTY)
+            for (r, c), v in self.constants[sheet].items():
+                grid[r, c] = v
+            self.grid[sheet] = grid
+            self.owner[sheet] = np.full((rows + 1, cols + 1), -1, dtype=np.int64)
+            self.member[sheet] = np.full((rows + 1, cols + 1), -1, dtype=np.int64)
+        for g in self.groups:
+            self.owner[g.sheet][g.rows, g.cols] = g.gid
+            self.member[g.sheet][g.rows, g.cols] = np.arange(len(g.members))
+
+    @staticmethod
+    def _grow(size, sheet, rows, cols):
+        size[sheet][0] = max(size[sheet][0], rows)
+        size[sheet][1] = max(size[sheet][1], cols)
+
+    # ---- 5. order
+    def _group_deps(self, g: Group) -> set[int]:
+        deps = set()
+        if g.mode == "each":
+            for i in range(len(g.members)):
+                for sheet, r1, c1, r2, c2 in g.reads(i):
+                    deps.update(np.unique(self.owner[sheet][r1:r2 + 1, c1:c2 + 1]).tolist())
+        else:
+            for d in g.inputs:
+                owner = self.owner[d.sheet]
+                if not d.is_range:
+                    r1, c1, _, _ = d.at(g.rows, g.cols)
+                    deps.update(np.unique(owner[r1, c1]).tolist())
+                    continue
+                hosts = [(g.rows[0], g.cols[0])] if d.is_absolute else zip(g.rows, g.cols)
+                for row, col in hosts:
+                    _, r1, c1, r2, c2 = d.rect(int(row), int(col))
+                    deps.update(np.unique(owner[r1:r2 + 1, c1:c2 + 1]).tolist())
+        deps.discard(-1)
+        return deps
+
+    def _components(self) -> list[list[int]]:
+        """Strongly connected components of the group graph, dependencies first (Tarjan)."""
+        deps = [sorted(self._group_deps(g)) for g in self.groups]
+        self.self_reading = {g.gid for g in self.groups if g.gid in deps[g.gid]}
+        index, low, on_stack, stack, out, counter = {}, {}, set(), [], [], [0]
+        for root in range(len(self.groups)):
+            if root in index:
+                continue
+            work = [(root, 0)]
+            while work:
+                v, i = work.pop()
+                if i == 0:
+                    index[v] = low[v] = counter[0]
+                    counter[0] += 1
+                    stack.append(v)
+                    on_stack.add(v)
+                if i < len(deps[v]):
+                    work.append((v, i + 1))
+                    w = deps[v][i]
+                    if w not in index:
+                        work.append((w, 0))
+                    elif w in on_stack:
+                        low[v] = min(low[v], index[w])
+                    continue
+                if low[v] == index[v]:
+                    component = []
+                    while True:
+                        w = stack.pop()
+                        on_stack.discard(w)
+                        component.append(w)
+                        if w == v:
+                            break
+                    out.append(component)
+                if work:
+                    parent = work[-1][0]
+                    low[parent] = min(low[parent], low[v])
+        return out
+
+    # ---- 6. evaluation
+    def _evaluate_component(self, component: list[int]):
+        if len(component) == 1 and component[0] not in self.self_reading:
+            g = self.groups[component[0]]
+            if g.mode == "vector" and self._evaluate_vector(g):
+                return
+            for i in range(len(g.members)):
+                self._evaluate_cell(g, i)
+            return
+        for gid, i in self._cell_order(set(component)):
+            self._evaluate_cell(self.groups[gid], i)
+
+    def _evaluate_vector(self, g: Group) -> bool:
+        """One call for the whole group; False (nothing stored) if the result is not per row."""
+        n = len(g.members)
+        args = []
+        for d in g.inputs:
+            r1, c1, _, _ = d.at(g.rows, g.cols)
+            rows, cols = np.broadcast_arrays(r1, c1, g.rows)[:2]  # absolute refs: one cell, n times
+            args.append(self.grid[d.sheet][rows, cols].reshape(n, 1))
+        g.batch.n = n
+        try:
+            out = np.asarray(replace_empty(_call(g.func, args)), dtype=object)
+        except (_NotScalar, sh.DispatcherError):
+            out = None
+        finally:
+            g.batch.n = 1
+        per_row = out is not None and (out.size == n or (out.size == 1 and not g.inputs))
+        if not per_row or any(isinstance(v, np.ndarray) for v in out.reshape(-1)):
+            self.stats["vector_fallbacks"] += 1
+            return False
+        values = np.empty(n, object)
+        values[:] = list(out.reshape(-1)) if out.size == n else [out.reshape(-1)[0]] * n
+        self.grid[g.sheet][g.rows, g.cols] = values
+        return True
+
+    def _evaluate_cell(self, g: Group, i: int):
+        m = g.members[i]
+        if g.mode == "each":
+            cell = g.each[i]
+            func = cell.func
+            args = [self._name_arg(x[1], m) if x[0] == "name" else self._ranges_arg(x[1], x[2])
+                    for x in cell.inputs]
+        else:
+            func = g.func
+            args = [self._desc_arg(d, m) for d in g.inputs]
+        try:
+            value = _cell_result(_call(func, args))
+        except Exception as ex:
+            raise EngineError(f"{g.sheet}!{_a1(m.row, m.col)} {m.formula!r}: {ex!r}") from ex
+        self.grid[g.sheet][m.row, m.col] = value
+
+    def _desc_arg(self, d: RefDesc, m: _Member) -> Ranges:
+        sheet, r1, c1, r2, c2 = d.rect(m.row, m.col)
+        ref = f"{_sheet_prefix(sheet)}{_a1(r1, c1)}:{_a1(r2, c2)}"
+        return Ranges().push(ref, self.grid[sheet][r1:r2 + 1, c1:c2 + 1].copy())
+
+    _name_arg = _desc_arg
+
+    def _ranges_arg(self, template: Ranges, rects) -> Ranges:
+        values = {}
+        for r, (sheet, r1, c1, r2, c2) in zip(template.ranges, rects):
+            values[r["name"]] = (r, self.grid[sheet][r1:r2 + 1, c1:c2 + 1].copy())
+        return Ranges(template.ranges, values)
+
+    def _cell_order(self, gids: set[int]) -> list[tuple[int, int]]:
+        """Members of mutually dependent groups in dependency order (iterative DFS)."""
+        def deps(gid, i):
+            found = []
+            for sheet, r1, c1, r2, c2 in self.groups[gid].reads(i):
+                owner = self.owner[sheet][r1:r2 + 1, c1:c2 + 1]
+                member = self.member[sheet][r1:r2 + 1, c1:c2 + 1]
+                mask = np.isin(owner, list(gids))
+                found += zip(owner[mask].tolist(), member[mask].tolist())
+            return found
+
+        order, state = [], {}
+        for gid in sorted(gids):
+            for i in range(len(self.groups[gid].members)):
+                if (gid, i) in state:
+                    continue
+                state[(gid, i)] = 1
+                work = [((gid, i), iter(deps(gid, i)))]
+                while work:
+                    node, it = work[-1]
+                    for nxt in it:
+                        s = state.get(nxt)
+                        if s == 1:
+                            g = self.groups[nxt[0]]
+                            m = g.members[nxt[1]]
+                            raise CircularReferenceError(
+                                f"circular reference through {g.sheet}!{_a1(m.row, m.col)}")
+                        if s is None:
+                            state[nxt] = 1
+                            work.append((nxt, iter(deps(*nxt))))
+                            break
+                    else:
+                        work.pop()
+                        state[node] = 2
+                        order.append(node)
+        self.stats["cyclic_cells"] += len(order)
+        return order
+
+    # ---- 7. output
+    def _values(self) -> dict[tuple[str, str], object]:
+        out = {}
+        for sheet, consts in self.constants.items():
+            for (r, c), v in consts.items():
+                out[(sheet, _a1(r, c))] = _public_value(v, False)
+        for g in self.groups:
+            grid = self.grid[g.sheet]
+            for m in g.members:
+                out[(g.sheet, _a1(m.row, m.col))] = _public_value(grid[m.row, m.col], True)
+        return out
+
+
+def _same_cells(desc: RefDesc, template, rep: _Member, host_sheet: str, refs: References) -> bool:
+    """Does the compiled input's own range equal the descriptor at the representative cell?"""
+    if template is None:   # a defined name: formulas leaves it unresolved
+        return True
+    if not isinstance(template, Ranges) or len(template.ranges) != 1:
+        return False
+    r = template.ranges[0]
+    sid = r.get("sheet_id") or ""
+    sid = sid[1:-1].replace("''", "'") if sid.startswith("'") else sid
+    sheet = refs.titles.get(sid.upper()) if sid else host_sheet
+    return (sheet, int(r["r1"]), r["n1"], int(r["r2"]), r["n2"]) == desc.rect(rep.row, rep.col)
+
+
+def _formula_text(cell) -> str:
+    value = cell.value
+    if not isinstance(value, str):
+        ref = getattr(value, "ref", None)
+        text = getattr(value, "text", None)
+        if text is None or (ref and ":" in str(ref) and len(set(str(ref).split(":"))) > 1):
+            raise UnsupportedFormulaError(
+                f"{cell.parent.title}!{cell.coordinate}: array/data-table formula {value!r}")
+        value = text
+    value = value.replace("\n", "")  # as formulas' Parser does
+    return value[1:] if value.startswith("==") else value
+
+
+def _constant(cell):
+    """A constant as ExcelModel sees it after a save: '%.16g' numbers, floats rounded to 15."""
+    value, kind = cell.value, cell.data_type
+    if kind == "n" and not isinstance(value, bool):
+        text = safe_string(value)
+        if text == "":
+            return None  # NaN and infinities are written as empty cells
+        value = float(text) if any(ch in text for ch in ".eE") else int(text)
+        return round(value, 15) if isinstance(value, float) else value
+    if kind == "e":
+        return Error.errors.get(str(value).upper(), value)
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _sheet_prefix(sheet: str) -> str:
+    return "'" + sheet.upper().replace("'", "''") + "'!"
+
+
+@functools.lru_cache(maxsize=None)
+def _column_letter(col: int) -> str:
+    return get_column_letter(col)
+
+
+def _a1(row: int, col: int) -> str:
+    return f"{_column_letter(int(col))}{int(row)}"

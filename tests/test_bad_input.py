@@ -1,0 +1,147 @@
+"""Bad input of every kind: exit 2, one line naming the field and the value, no file written,
+and an existing workbook never left half-written."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import openpyxl
+import pytest
+
+from conftest import ROOT
+from linkbook import build as build_module
+from linkbook.cli import main
+
+FOURBAR_TOML = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")
+
+# (what is tried, command-line arguments, TOML text or None, text the one-line message must hold)
+COMMAND_LINE = [
+    ("negative length", ["--set", "a2=-5"], "a2"),
+    ("zero length", ["--set", "a2=0"], "a2"),
+    ("word for a number", ["--set", "a2=abc"], "'abc'"),
+    ("empty value", ["--set", "a2="], "a2"),
+    ("NaN", ["--set", "a2=nan"], "finite"),
+    ("infinity", ["--set", "a2=inf"], "finite"),
+    ("negative infinity", ["--set", "a3=-inf"], "finite"),
+    ("unknown key", ["--set", "a9=3"], "a9"),
+    ("unknown key near a known one", ["--set", "a22=3"], "did you mean a2"),
+    ("no = in --set", ["--set", "a2"], "KEY=VALUE"),
+    ("empty key", ["--set", "=4"], "KEY=VALUE"),
+    ("branch not ±1", ["--set", "branch=2"], "branch"),
+    ("branch word misspelt", ["--set", "branch=opne"], "branch"),
+    ("zero step", ["--step", "0"], "step"),
+    ("negative step", ["--step", "-5"], "step"),
+    ("word for a step", ["--step", "five"], "step"),
+    ("step beyond Excel's rows", ["--step", "0.0001"], "1,048,576"),
+    ("not an .xlsx output", ["-o", "out.csv"], "-o"),
+    ("output folder missing", ["-o", "no/such/dir/out.xlsx"], "does not exist"),
+    ("unknown template", [], "template"),
+]
+
+TOML_CASES = [
+    ("TOML that does not parse", "mechanism = \n", "not valid TOML"),
+    ("mechanism missing", FOURBAR_TOML.replace('mechanism = "fourbar"', ""), "mechanism"),
+    ("unknown mechanism", FOURBAR_TOML.replace('"fourbar"', '"fivebar"'), "fivebar"),
+    ("title missing", FOURBAR_TOML.replace('title = ', 'xtitle = '), "title"),
+    ("sweep missing", FOURBAR_TOML.replace("[sweep]", "[sweeps]"), "sweep"),
+    ("sweep step is text", FOURBAR_TOML.replace("step = 5", 'step = "5"'), "step"),
+    ("sweep runs backwards", FOURBAR_TOML.replace("stop = 360", "stop = -10"), "stop"),
+    ("parameter missing", FOURBAR_TOML.replace('c3 = {', 'zz = {'), "zz"),
+    ("parameter value missing",
+     FOURBAR_TOML.replace(', value = 84.1 }', ' }'), "parameters.c3.value"),
+    ("negative length in TOML", FOURBAR_TOML.replace("value = 35.0", "value = -35.0"), "a2"),
+    ("NaN in TOML", FOURBAR_TOML.replace("value = 35.0", "value = nan"), "finite"),
+    ("label missing", FOURBAR_TOML.replace('a4 = { label = "rocker |B0B|", ', 'a4 = { '),
+     "label"),
+    ("cell-like Excel name", FOURBAR_TOML.replace('name = "Branch"', 'name = "B3"'),
+     "looks like a cell"),
+    ("R1C1-like Excel name", FOURBAR_TOML.replace('name = "Branch"', 'name = "R2C3"'),
+     "looks like a cell"),
+    ("Excel name with a space", FOURBAR_TOML.replace('name = "Branch"', 'name = "my branch"'),
+     "name"),
+    ("two parameters, one name", FOURBAR_TOML.replace('name = "Branch"', 'name = "a_1"'),
+     "already"),
+    ("parameter not a table", FOURBAR_TOML.replace(
+        'a1 = { label = "ground link |A0B0|", unit = "mm", value = 70.0 }', "a1 = 70"), "a1"),
+]
+
+
+def _run(tmp_path: Path, args: list[str], capsys) -> tuple[int, str]:
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        code = main(args)
+    finally:
+        os.chdir(cwd)
+    return code, capsys.readouterr().err
+
+
+def _assert_refused(tmp_path, code, err, must_hold, before):
+    lines = err.strip().splitlines()
+    assert code == 2, err
+    assert len(lines) == 1 and lines[0].startswith("linkbook: error: "), err
+    assert must_hold in lines[0], lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == before, "a file was left behind"
+
+
+@pytest.mark.parametrize("what,args,must_hold", COMMAND_LINE, ids=[c[0] for c in COMMAND_LINE])
+def test_bad_command_line(tmp_path, capsys, what, args, must_hold):
+    name = "fivebar" if what == "unknown template" else "fourbar"
+    code, err = _run(tmp_path, ["build", name, *args], capsys)
+    _assert_refused(tmp_path, code, err, must_hold, [])
+
+
+@pytest.mark.parametrize("what,text,must_hold", TOML_CASES, ids=[c[0] for c in TOML_CASES])
+def test_bad_template_file(tmp_path, capsys, what, text, must_hold):
+    (tmp_path / "mine.toml").write_text(text, encoding="utf-8")
+    code, err = _run(tmp_path, ["build", "mine.toml", "-o", "mine.xlsx"], capsys)
+    _assert_refused(tmp_path, code, err, must_hold, ["mine.toml"])
+
+
+def test_at_least_25_kinds_of_bad_input_are_tried():
+    assert len(COMMAND_LINE) + len(TOML_CASES) >= 25
+
+
+def test_text_from_a_template_stays_text(tmp_path, capsys):
+    text = FOURBAR_TOML.replace('label = "crank |A0A|"', 'label = "=1+1 crank"').replace(
+        'title = "Four-bar mechanism with coupler point C"', 'title = "=HYPERLINK(\\"x\\")"')
+    (tmp_path / "mine.toml").write_text(text, encoding="utf-8")
+    code, err = _run(tmp_path, ["build", "mine.toml", "-o", "mine.xlsx"], capsys)
+    assert code == 0, err
+    ws = openpyxl.load_workbook(tmp_path / "mine.xlsx")["Mechanism"]
+    cells = {c.value: c.data_type for row in ws.iter_rows() for c in row
+             if isinstance(c.value, str) and ("=1+1" in c.value or "HYPERLINK" in c.value)}
+    assert cells == {"=1+1 crank": "s", '=HYPERLINK("x")': "s"}
+
+
+def test_a_failed_build_leaves_the_earlier_file_intact(tmp_path, monkeypatch):
+    """Simulate a build killed while writing: the save writes half a file, then dies."""
+    target = tmp_path / "fourbar.xlsx"
+    assert main(["build", "fourbar", "-o", str(target)]) == 0
+    before = target.read_bytes()
+
+    def half_then_die(self, filename):
+        Path(filename).write_bytes(b"PK\x03\x04 half a zip")
+        raise KeyboardInterrupt("killed mid-write")
+
+    monkeypatch.setattr(openpyxl.Workbook, "save", half_then_die)
+    with pytest.raises(KeyboardInterrupt):
+        main(["build", "fourbar", "--set", "a2=40", "-o", str(target)])
+    assert target.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["fourbar.xlsx"]   # no temporary left
+    openpyxl.load_workbook(target)
+
+
+def test_write_atomic_never_exposes_a_partial_file(tmp_path):
+    target = tmp_path / "book.xlsx"
+    target.write_bytes(b"old")
+
+    def write(tmp):
+        tmp.write_bytes(b"partial")
+        assert target.read_bytes() == b"old"   # the target is untouched while writing
+        raise RuntimeError("disk full")
+
+    with pytest.raises(RuntimeError):
+        build_module.write_atomic(target, write)
+    assert target.read_bytes() == b"old"
+    assert [p.name for p in tmp_path.iterdir()] == ["book.xlsx"]
