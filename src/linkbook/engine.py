@@ -10,24 +10,27 @@ Method
    References are found by a regex lexer (fast), and for every group the `formulas` tokenizer
    re-reads the first member: if its Range tokens are not exactly the lexer's spans, every member
    of that group is re-read by the tokenizer (slow but exact).
-2. *One compile per group.* ``Parser().ast(formula)[1].compile()`` of the first member.  The
-   compiled function's inputs (``'E5'``, ``'SWEEP!B5:B40'``, ``'A_3'``) are tied to the reference
-   descriptors of the shape, so any member's inputs are the descriptors shifted to that member.
+2. *One compile per group.* ``Parser().ast(formula)[1].compile()`` of a representative member.
+   The compiled function's inputs (``'E5'``, ``'SWEEP!B5:B40'``, ``'A_3'``) are tied to the
+   reference descriptors of the shape (and checked against the ranges `formulas` resolved), so
+   any member's inputs are the descriptors shifted to that member.  The representative is the
+   first member unless two descriptors share one input there (``=B5+$B$5`` in row 5): then a
+   member where they do not (row 6) is compiled instead.
 3. *Order.* A group depends on the groups owning the cells it reads.  Groups are evaluated in
    topological order of their strongly connected components; a group that reads itself (a running
    column) or a cycle of groups is evaluated cell by cell in cell-level topological order.
 4. *Modes.*
-   - ``vector``: only single-cell inputs and no reference-aware function.  The function is called
-     once with an (n, 1) object array per input.  Each node of the compiled graph is wrapped:
-     element-wise functions (arithmetic, COS, ATAN2, IF, IFERROR, ...) run on the whole array; any
-     other node (MAX of two cells, AND, ...), and an element-wise node whose output collapsed
-     (``formulas`` turns an exception such as an overflow into a single #VALUE! for the whole
-     call), runs row by row on (1, 1) slices, which is exactly what a per-cell call does.
-   - ``cell``: ranges or reference-aware functions (ROWS, INDEX, ``:``).  The group's one
+   - ``vector``: single-cell inputs only, functions from ELEMENTWISE and ROW_BY_ROW only.  The
+     function is called once with an (n, 1) object array per input.  Each node of the compiled
+     graph is wrapped: element-wise functions (arithmetic, COS, ATAN2, IF, IFERROR, ...) run on
+     the whole array; other nodes (MAX of two cells, AND, ...), and an element-wise node whose
+     output collapsed (``formulas`` turns an exception such as an overflow into one #VALUE! for
+     the whole call), run row by row on (1, 1) slices, which is exactly what a per-cell call does.
+   - ``cell``: ranges or other functions (ROWS, INDEX, SMALL, ``:``, ...).  The group's one
      compiled function is called per member with `formulas` Ranges inputs, as ExcelModel does.
-   - ``each``: functions that read the host cell (ROW(), COLUMN(), ``@``), or a shape whose inputs
-     cannot be tied to descriptors (``B8`` and ``$B$8`` in one formula, intersections, unions):
-     every member is compiled on its own with the host cell, like ExcelModel.
+   - ``each``: functions that read the host cell (ROW(), COLUMN(), ``@``), or inputs that are not
+     one reference (unions, intersections): every member is compiled on its own with its host
+     cell, like ExcelModel.
 5. *Values* follow ExcelModel: an empty cell is ``sh.EMPTY`` (functions treat it as 0 / ""), a
    result that is EMPTY becomes 0, numeric constants are what the saved file holds (openpyxl writes
    ``%.16g``) rounded to 15 decimals, errors are `formulas` XlError objects (#N/A, #NUM!, ...).
@@ -78,8 +81,16 @@ ELEMENTWISE = frozenset("""
     POWER RADIANS ROUND ROUNDDOWN ROUNDUP SEC SIGN SIN SINH SQRT TAN TANH TRUNC
     + - * / ^ & = <> < > <= >= u- u+ % bypass
 """.split())
-# Functions that take `formulas` Ranges (reference-aware): never fed plain arrays.
-RANGE_AWARE = frozenset({"AREAS", "COLUMNS", "ROWS", "INDEX", ":", ",", " "})
+# Functions that give one value for scalar arguments but do not map arrays element-wise (MAX
+# aggregates them): in vector mode their nodes run row by row.  Anything outside ELEMENTWISE and
+# ROW_BY_ROW (ranges-aware ROWS/INDEX, array makers such as {1,2,3} or SEQUENCE, ...) puts its
+# group in cell mode, so that no array that merely has n elements is taken for n rows.
+ROW_BY_ROW = frozenset("""
+    AND AVERAGE CEILING CONCAT CONCATENATE COUNT COUNTA EXACT FACT FALSE FIND FLOOR LEFT LEN
+    LOWER MAX MEDIAN MID MIN N OR PRODUCT RIGHT SEARCH SQRTPI SUBSTITUTE SUM SUMSQ TEXT TRIM TRUE
+    UPPER VALUE XOR
+""".split())
+VECTOR_SAFE = ELEMENTWISE | ROW_BY_ROW
 # Functions that read the host cell (the compiled graph has the CELL input).
 HOST_AWARE = frozenset({"ROW", "COLUMN", "SINGLE", "_XLFN.SINGLE", "@"})
 # Functions whose result depends on cells that are not among the compiled inputs.
@@ -232,16 +243,21 @@ class RefDesc:
         return self.sheet, min(r1, r2), min(c1, c2), max(r1, r2), max(c1, c2)
 
 
-_SHEET_RX = r"(?:'(?:[^']|'')+'|[^\W\d][\w.]*)"
-_CELL_RX = r"\$?[A-Za-z]{1,3}\$?[0-9]+"
 # Fast lexer: strings, errors and numbers are consumed whole so that "E1" in 1E-12 or "LOG10(" is
 # never a reference; every identifier is consumed whole (a function if followed by "(").
-_LEXER = re.compile(rf"""
-    (?P<string>"(?:[^"]|"")*")
+# Possessive quantifiers and the leading lookahead only make it faster (no backtracking).
+_LEXER = re.compile(r"""
+  (?=["\#'$\w.])
+  (?:
+    (?P<string>"(?:[^"]|"")*+")
   | (?P<error>\#(?:NULL!|DIV/0!|VALUE!|REF!|NUM!|NAME\?|N/A|GETTING_DATA))
-  | (?P<ref>(?:{_SHEET_RX}!)?{_CELL_RX}(?::{_CELL_RX})?)(?![\w.(!:$\#\[])
-  | (?P<number>(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)
-  | (?P<ident>[^\W\d][\w.]*)(?P<call>\s*\()?
+  | (?P<ref>(?:(?P<sheet>'(?:[^']|'')++'|[^\W\d][\w.]*+)!)?
+        (?P<ca>\$?)(?P<c>[A-Za-z]{1,3})(?P<ra>\$?)(?P<r>[0-9]++)
+        (?::(?P<cb>\$?)(?P<c2>[A-Za-z]{1,3})(?P<rb>\$?)(?P<r2>[0-9]++))?
+    )(?![\w.(!:$\#\[])
+  | (?P<number>(?:[0-9]++(?:\.[0-9]*+)?|\.[0-9]++)(?:[eE][+-]?[0-9]++)?)
+  | (?P<ident>[^\W\d][\w.]*+)(?P<call>\s*\()?
+  )
 """, re.X)
 _REF_TEXT = re.compile(r"""^(?:(?P<sheet>'(?:[^']|'')+'|[^\W\d][\w.]*)!)?
     (?P<ca>\$?)(?P<c>[A-Za-z]{1,3})(?P<ra>\$?)(?P<r>[0-9]+)
@@ -249,6 +265,7 @@ _REF_TEXT = re.compile(r"""^(?:(?P<sheet>'(?:[^']|'')+'|[^\W\d][\w.]*)!)?
 _NAME_TEXT = re.compile(r"^[^\W\d][\w.]*$")
 
 
+@functools.lru_cache(maxsize=None)
 def _col_index(letters: str) -> int:
     n = 0
     for ch in letters.upper():
@@ -272,6 +289,20 @@ def _parse_a1(text: str):
         if not (1 <= row <= MAX_ROW and 1 <= col <= MAX_COL):
             return None
     return sheet, tuple(corners)
+
+
+def _rc(digits: str, absolute: str, host: int, letter: str) -> str:
+    value = int(digits)
+    if not 1 <= value <= MAX_ROW:
+        raise UnsupportedFormulaError(f"row {digits} out of range")
+    return f"{letter}{value}" if absolute else f"{letter}[{value - host}]"
+
+
+def _rc_col(letters: str, absolute: str, host: int) -> str:
+    value = _col_index(letters)
+    if value > MAX_COL:
+        raise UnsupportedFormulaError(f"column {letters} out of range")
+    return f"C{value}" if absolute else f"C[{value - host}]"
 
 
 class References:
@@ -303,6 +334,10 @@ class References:
                 f"defined name {ident!r} is not a sheet-qualified cell or range ({text!r})")
         return self._desc(parsed, 0, 0, absolute=True)
 
+    @functools.lru_cache(maxsize=None)
+    def name_shape(self, ident: str) -> str:
+        return self.name(ident).canonical()
+
     def ref(self, text: str, host_sheet: str, row: int, col: int) -> RefDesc:
         """Descriptor of one reference text (A1 reference or defined name) in a host cell."""
         parsed = _parse_a1(text)
@@ -312,6 +347,34 @@ class References:
             raise UnsupportedFormulaError(f"unsupported reference {text!r}")
         sheet = self.sheet(parsed[0]) if parsed[0] is not None else host_sheet
         return self._desc((sheet, parsed[1]), row, col)
+
+    @functools.lru_cache(maxsize=None)
+    def sheet_text(self, text: str) -> str:
+        """Title of a sheet as written before '!' (quoted or not)."""
+        if text.startswith("'"):
+            text = text[1:-1].replace("''", "'")
+        return self.sheet(text)
+
+    def fast_shape(self, formula: str, sheet: str, row: int, col: int) -> str:
+        """The shape from the regex lexer alone (no RefDesc objects): the per-cell hot path.
+        It must equal _shape() over the tokenizer's spans; Engine._group checks one cell of
+        every group."""
+        parts, pos = [], 0
+        for m in _LEXER.finditer(formula):
+            if m["ref"] is not None:
+                title = self.sheet_text(m["sheet"]) if m["sheet"] else sheet
+                ref = _rc(m["r"], m["ra"], row, "R") + _rc_col(m["c"], m["ca"], col)
+                if m["c2"]:
+                    ref += ":" + _rc(m["r2"], m["rb"], row, "R") + _rc_col(m["c2"], m["cb"], col)
+                start, end = m.span("ref")
+                parts += [formula[pos:start], f"'{title}'!", ref]
+                pos = end
+            elif m["ident"] is not None and m["call"] is None and self.is_name(m["ident"]):
+                start, end = m.span("ident")
+                parts += [formula[pos:start], self.name_shape(m["ident"])]
+                pos = end
+        parts.append(formula[pos:])
+        return "".join(parts)
 
     def _desc(self, parsed, row, col, absolute=False) -> RefDesc:
         sheet, corners = parsed
@@ -465,6 +528,13 @@ def _call(func, args):
 _ONE_CELL = Ranges.get_range("A1")
 
 
+def _replace_empty(out: np.ndarray) -> np.ndarray:
+    """replace_empty (EMPTY -> 0), skipping its element-wise == scan when nothing is EMPTY."""
+    if any(v is sh.EMPTY for v in out.reshape(-1)):
+        return np.asarray(replace_empty(out), dtype=object)
+    return out
+
+
 def _cell_result(out):
     """A compiled formula's output as ExcelModel stores it for one cell."""
     return Ranges().set_value(dict(_ONE_CELL), replace_empty(out)).value[0, 0]
@@ -477,7 +547,6 @@ class _Member:
     row: int
     col: int
     formula: str
-    descs: list[RefDesc]
 
 
 @dataclass
@@ -494,7 +563,8 @@ class Group:
     sheet: str
     shape: str
     members: list[_Member]
-    info: TokenInfo
+    info: TokenInfo            # of members[0]
+    descs: list[RefDesc]       # per reference of the shape: the same for every member
     mode: str = "vector"
     func: object = None
     inputs: list[RefDesc] = field(default_factory=list)   # per compiled input, in order
@@ -570,25 +640,26 @@ class Engine:
         for sheet, forms in formulas_by_sheet.items():
             for row, col, formula in forms:
                 try:
-                    spans = _lex_spans(formula, self.refs)
-                    shape, descs = _shape(formula, spans, self.refs, sheet, row, col)
+                    shape = self.refs.fast_shape(formula, sheet, row, col)
                 except UnsupportedFormulaError:
-                    shape, descs = f"\0lexer failed: {formula}", []   # the tokenizer decides
-                candidates.setdefault((sheet, shape), []).append(_Member(row, col, formula, descs))
-        exact: dict[tuple[str, str], tuple[list[_Member], TokenInfo]] = {}
+                    shape = "\0" + formula   # the tokenizer decides below
+                candidates.setdefault((sheet, shape), []).append(_Member(row, col, formula))
+        exact: dict[tuple[str, str], tuple[list[_Member], TokenInfo, list[RefDesc]]] = {}
         for (sheet, shape), members in candidates.items():
-            info = self._tokenize(members[0], sheet)
-            lexed = not shape.startswith("\0")
-            if lexed and info.spans == _lex_spans(members[0].formula, self.refs):
-                exact[(sheet, shape)] = (members, info)
-                continue
+            rep = members[0]
+            info = self._tokenize(rep, sheet)
+            if not shape.startswith("\0") and info.spans == _lex_spans(rep.formula, self.refs):
+                exact_shape, descs = self._exact_shape(rep, sheet, info)
+                if exact_shape == shape:
+                    exact[(sheet, shape)] = (members, info, descs)
+                    continue
             for m in members:  # the lexer misread this shape: re-read every member exactly
-                info = info if m is members[0] else self._tokenize(m, sheet)
-                shape, m.descs = self._exact_shape(m, sheet, info)
-                entry = exact.setdefault((sheet, "\0" + shape), ([], info))
+                m_info = info if m is rep else self._tokenize(m, sheet)
+                exact_shape, descs = self._exact_shape(m, sheet, m_info)
+                entry = exact.setdefault((sheet, "\0" + exact_shape), ([], m_info, descs))
                 entry[0].append(m)
-        for gid, ((sheet, shape), (members, info)) in enumerate(exact.items()):
-            self.groups.append(Group(gid, sheet, shape, members, info))
+        for gid, ((sheet, shape), (members, info, descs)) in enumerate(exact.items()):
+            self.groups.append(Group(gid, sheet, shape, members, info, descs))
         self.stats["shapes"] = len(self.groups)
 
     def _tokenize(self, member: _Member, sheet: str) -> TokenInfo:
@@ -615,8 +686,9 @@ class Engine:
         if chosen is None:
             return self._plan_each(g)
         rep, info, by_key = chosen
-        ranged = any(d.is_range for d in by_key.values()) or bool(functions & RANGE_AWARE)
-        g.mode = "vector" if self.vectorize and len(g.members) > 1 and not ranged else "cell"
+        vector = (self.vectorize and len(g.members) > 1 and functions <= VECTOR_SAFE
+                  and not any(d.is_range for d in by_key.values()))
+        g.mode = "vector" if vector else "cell"
         func = _compile(info.builder, g.batch if g.mode == "vector" else None)
         self.stats["compiled"] += 1
         inputs = []
@@ -638,7 +710,7 @@ class Engine:
             m = g.members[i]
             info = g.info if i == 0 else self._tokenize(m, g.sheet)
             by_key, clash = {}, []
-            for key, desc in zip(info.keys, g.members[0].descs):   # descs are the group's
+            for key, desc in zip(info.keys, g.descs):
                 if by_key.setdefault(key, desc) != desc:
                     clash.append((by_key[key], desc))
             if not clash or all(self._always_same(g, a, b) for a, b in clash):
@@ -801,8 +873,8 @@ class Engine:
             args.append(self.grid[d.sheet][rows, cols].reshape(n, 1))
         g.batch.n = n
         try:
-            out = np.asarray(replace_empty(_call(g.func, args)), dtype=object)
-        except (_NotScalar, sh.DispatcherError):
+            out = _replace_empty(np.asarray(_call(g.func, args), dtype=object))
+        except Exception:   # e.g. _NotScalar: the per-cell path below reports real errors
             out = None
         finally:
             g.batch.n = 1

@@ -219,7 +219,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
 
 
 ASSEMBLY_COLUMNS = ("closes", "gap_from", "gap_to")
-DASH = "—"
+DASH = layout.DASH
 
 
 def compare_exact(check: Check, sheet: str, cells: list[str], got: list, expected: list) -> None:
@@ -237,11 +237,11 @@ def compare_exact(check: Check, sheet: str, cells: list[str], got: list, expecte
 
 
 def _gaps(angles: np.ndarray, closes: np.ndarray) -> tuple[list, list]:
-    """Per row: the angle where a run of rows that cannot close starts / ends, else ''."""
+    """Per row: the angle where a run of rows that cannot close starts / ends, else a dash."""
     n = len(angles)
-    starts = [float(angles[i]) if not closes[i] and (i == 0 or closes[i - 1]) else ""
+    starts = [float(angles[i]) if not closes[i] and (i == 0 or closes[i - 1]) else DASH
               for i in range(n)]
-    ends = [float(angles[i]) if not closes[i] and (i == n - 1 or closes[i + 1]) else ""
+    ends = [float(angles[i]) if not closes[i] and (i == n - 1 or closes[i + 1]) else DASH
             for i in range(n)]
     return starts, ends
 
@@ -280,8 +280,8 @@ def _summary_expected(model, mech, params, ref, closes, starts, ends) -> dict:
         "assembles_all": "yes" if closes.all() else "no",
         "not_closing": float((~closes).sum()),
     }
-    gap_starts = sorted(x for x in starts if x != "")
-    gap_ends = sorted(x for x in ends if x != "")
+    gap_starts = sorted(x for x in starts if x != DASH)
+    gap_ends = sorted(x for x in ends if x != DASH)
     for k in range(1, GAPS_SHOWN + 1):
         out[f"gap{k}_from"] = gap_starts[k - 1] if k <= len(gap_starts) else DASH
         out[f"gap{k}_to"] = gap_ends[k - 1] if k <= len(gap_ends) else DASH

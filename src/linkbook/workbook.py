@@ -346,12 +346,13 @@ def _assembly_columns(ws, letters: dict, witness: str, first: int, last: int,
         ws[f"{closes}{r}"] = f"=IF(ISNUMBER({w}{r}),1,0)"
         before = f"{closes}{r}=0" if r == first else f"AND({closes}{r}=0,{closes}{r - 1}=1)"
         after = f"{closes}{r}=0" if r == last else f"AND({closes}{r}=0,{closes}{r + 1}=1)"
-        ws[f"{start}{r}"] = f'=IF({before},A{r},"")'
-        ws[f"{end}{r}"] = f'=IF({after},A{r},"")'
+        ws[f"{start}{r}"] = f'=IF({before},A{r},"{DASH}")'
+        ws[f"{end}{r}"] = f'=IF({after},A{r},"{DASH}")'
     return {"closes": closes, "gap_from": start, "gap_to": end}
 
 
 GAPS_SHOWN = 3
+DASH = "—"     # "no value here" in text cells (SMALL and MINIFS skip text)
 # Functions newer than Excel 2007 are stored with the _xlfn. prefix; without it Excel and
 # LibreOffice show #NAME?.
 MINIFS, MAXIFS = "_xlfn.MINIFS", "_xlfn.MAXIFS"
@@ -392,8 +393,8 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
     put("not_closing", "angles where the loop cannot close", f"=ROWS({w})-COUNT({w})")
     for k in range(1, GAPS_SHOWN + 1):
         put(f"gap{k}_from", f"gap {k}: cannot close from",
-            f'=IFERROR(SMALL({rng("gap_from")},{k}),"—")', DEG, "number_or_dash")
-        put(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"—")', DEG,
+            f'=IFERROR(SMALL({rng("gap_from")},{k}),"{DASH}")', DEG, "number_or_dash")
+        put(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"{DASH}")', DEG,
             "number_or_dash")
     if model.output:
         q = model.get(model.output)
@@ -401,12 +402,12 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         for key, fn, word in (("output_min", MINIFS, "smallest"), ("output_max", MAXIFS,
                                                                     "largest")):
             put(key, f"{word} {q.symbol} ({q.label})",
-                f'=IF(COUNT({o})=0,"—",{fn}({o},{o},">-1E+300"))', q.unit, "number_or_dash")
+                f'=IF(COUNT({o})=0,"{DASH}",{fn}({o},{o},">-1E+300"))', q.unit, "number_or_dash")
     if model.transmission:
         m = rng(f"{model.transmission}_deg")
         for key, fn, word in (("mu_min", MINIFS, "smallest"), ("mu_max", MAXIFS, "largest")):
             put(key, f"{word} transmission angle μ",
-                f'=IF(COUNT({m})=0,"—",{fn}({m},{m},">-1E+300"))', DEG, "number_or_dash")
+                f'=IF(COUNT({m})=0,"{DASH}",{fn}({m},{m},">-1E+300"))', DEG, "number_or_dash")
     if model.fourbar:
         _fourbar_summary(put, model, names)
     return cells

@@ -1,0 +1,192 @@
+"""`linkbook verify`, the vector engine against ExcelModel, and `build --values`."""
+from __future__ import annotations
+
+import dataclasses
+import io
+import json
+import math
+import zipfile
+from pathlib import Path
+
+import openpyxl
+import pytest
+
+from conftest import formula_cells, template
+from linkbook import build, engine, templates
+from linkbook.cli import main
+
+BUNDLED = sorted(p.stem for p in templates.bundled())
+
+
+def _small(name: str) -> templates.Template:
+    """A bundled template, with a coarser fine sweep under the pump grid so that ExcelModel
+    (about 75 ms per 1,000-character grid formula) finishes in seconds."""
+    t = templates.load(name)
+    return dataclasses.replace(t, stroke_step=20.0) if t.mechanism.grid else t
+
+
+def _same(a, b) -> bool:
+    if engine.is_error(a) or engine.is_error(b):
+        return engine.error_code(a) == engine.error_code(b)
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        return math.isclose(a, b, rel_tol=1e-12, abs_tol=1e-12)
+    return a == b
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", BUNDLED)
+def test_vector_engine_equals_excelmodel_on_every_cell(name, tmp_path):
+    path = tmp_path / f"{name}.xlsx"
+    build.build_file(_small(name), path)
+    wb = openpyxl.load_workbook(path)
+    fast = engine.evaluate(wb)
+    slow = engine.evaluate_formulas_model(path)
+    cells = formula_cells(wb)
+    assert cells
+    errors = sum(engine.is_error(fast[c]) for c in cells)
+    differ = [(c, fast[c], slow.get(c)) for c in sorted(cells) if not _same(fast[c], slow.get(c))]
+    assert not differ, differ[:5]
+    if name == "fourbar":
+        assert errors == 0      # Example 2 assembles at every angle
+
+
+def test_errors_come_through_cell_by_cell(tmp_path):
+    """A non-Grashof four-bar: ExcelModel and the vector engine give #N/A on the same cells."""
+    t = template("fourbar", ("a1=100", "a2=60", "a3=50", "a4=40"), 10)
+    path = tmp_path / "ng.xlsx"
+    build.build_file(t, path)
+    wb = openpyxl.load_workbook(path)
+    fast, slow = engine.evaluate(wb), engine.evaluate_formulas_model(path)
+    na = [c for c in formula_cells(wb) if engine.error_code(fast[c]) == "#N/A"]
+    assert len(na) > 50
+    assert all(engine.error_code(slow[c]) == "#N/A" for c in na)
+
+
+def _verify(*args, capsys):
+    code = main(["verify", *map(str, args)])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_verify_passes_a_fresh_book(tmp_path, capsys):
+    path = tmp_path / "fb.xlsx"
+    assert main(["build", "fourbar", "-o", str(path)]) == 0
+    code, out, _ = _verify(path, capsys=capsys)
+    assert code == 0, out
+    assert "all agree" in out and "theta13" in out
+
+
+def test_verify_finds_a_tampered_formula_and_names_the_cell(tmp_path, capsys):
+    path = tmp_path / "fb.xlsx"
+    assert main(["build", "fourbar", "-o", str(path)]) == 0
+    wb = openpyxl.load_workbook(path)
+    ws = wb["Sweep"]
+    cell = ws["H20"]                       # one formula cell in the middle of the table
+    assert cell.value.startswith("=")
+    cell.value = cell.value + "*1.001"
+    wb.save(path)
+    code, out, _ = _verify(path, capsys=capsys)
+    assert code == 1
+    assert "Sweep!H20" in out and "DISAGREES" in out
+    code, out, _ = _verify(path, "--json", capsys=capsys)
+    report = json.loads(out)
+    assert code == 1 and not report["ok"]
+    bad = [m for c in report["checks"] for m in c["mismatches"]]
+    assert {(m["sheet"], m["cell"]) for m in bad} >= {("Sweep", "H20")}
+
+
+def test_verify_uses_inputs_edited_like_a_user_would(tmp_path, capsys):
+    path = tmp_path / "fb.xlsx"
+    assert main(["build", "fourbar", "-o", str(path)]) == 0
+    wb = openpyxl.load_workbook(path)
+    where = wb.defined_names["a_2"].attr_text.split("!")[1].replace("$", "")
+    wb["Mechanism"][where].value = 41.5
+    branch = wb.defined_names["Branch"].attr_text.split("!")[1].replace("$", "")
+    wb["Mechanism"][branch].value = -1
+    wb["Mechanism"]["I7"].value = 123.0        # the current-position angle
+    wb.save(path)
+    code, out, _ = _verify(path, capsys=capsys)
+    assert code == 0, out
+
+
+def test_verify_with_the_formulas_engine(tmp_path, capsys):
+    path = tmp_path / "sc.xlsx"
+    assert main(["build", "slider-crank", "--step", "30", "-o", str(path)]) == 0
+    code, out, _ = _verify(path, "--engine", "formulas", capsys=capsys)
+    assert code == 0, out
+
+
+def _zip_bomb(path: Path) -> None:
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr("[Content_Types].xml", "<Types/>")
+        zf.writestr("xl/worksheets/sheet1.xml", b"\0" * (600 * 1024 * 1024))
+
+
+def _entities(path: Path, source: Path) -> None:
+    with zipfile.ZipFile(source) as zin, zipfile.ZipFile(path, "w") as zout:
+        for item in zin.infolist():
+            data = zin.read(item)
+            if item.filename == "xl/workbook.xml":
+                body = data.split(b"?>", 1)[1] if data.startswith(b"<?xml") else data
+                data = (b'<?xml version="1.0"?><!DOCTYPE lol [<!ENTITY lol "lol">'
+                        b'<!ENTITY lol2 "&lol;&lol;&lol;">]>' + body)
+            zout.writestr(item, data)
+
+
+@pytest.mark.parametrize("kind", ["missing", "not a zip", "truncated", "zip bomb",
+                                  "xml entities", "not linkbook"])
+def test_verify_refuses_unusable_files_with_exit_2(tmp_path, capsys, kind):
+    good = tmp_path / "good.xlsx"
+    assert main(["build", "slider-crank", "--step", "30", "-o", str(good)]) == 0
+    bad = tmp_path / "bad.xlsx"
+    if kind == "not a zip":
+        bad.write_text("theta12,s14\n0,1\n")
+    elif kind == "truncated":
+        bad.write_bytes(good.read_bytes()[: good.stat().st_size // 2])
+    elif kind == "zip bomb":
+        _zip_bomb(bad)
+    elif kind == "xml entities":
+        _entities(bad, good)
+    elif kind == "not linkbook":
+        wb = openpyxl.Workbook()
+        wb.active["A1"] = "=1+1"
+        wb.save(bad)
+    code, out, err = _verify(bad, capsys=capsys)
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    assert lines[0].startswith("linkbook: error: ")
+
+
+def test_build_with_values_caches_every_formula(tmp_path):
+    path = tmp_path / "ng.xlsx"
+    assert main(["build", "fourbar", "--set", "a1=100", "--set", "a2=60", "--set", "a3=50",
+                 "--set", "a4=40", "--values", "-o", str(path)]) == 0
+    with_formulas = openpyxl.load_workbook(path)
+    cached = openpyxl.load_workbook(path, data_only=True)
+    cells = formula_cells(with_formulas)
+    numbers = na = 0
+    for sheet, ref in cells:
+        v = cached[sheet][ref].value
+        if v == "#N/A":
+            na += 1
+        else:
+            assert isinstance(v, (int, float, str)) and v is not None, (sheet, ref, v)
+            numbers += isinstance(v, (int, float))
+    assert na > 0 and numbers > na
+    # The same file read normally still has its formulas, names and charts.
+    assert with_formulas["Sweep"]["C5"].value.startswith("=")
+    assert "a_2" in with_formulas.defined_names
+    assert with_formulas["Charts"]._charts and with_formulas["Mechanism"]._charts
+
+
+def test_build_refuses_a_sweep_beyond_excels_rows_before_any_work(tmp_path, capsys):
+    code = main(["build", "fourbar", "--step", "0.0003", "-o", str(tmp_path / "x.xlsx")])
+    assert code == 2 and "1,048,576" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_build_refuses_a_grid_beyond_excels_columns(tmp_path, capsys):
+    many = ",".join(str(i) for i in range(16_400))
+    code = main(["build", "pump", "--set", f"s1={many}", "-o", str(tmp_path / "x.xlsx")])
+    assert code == 2 and "16,384" in capsys.readouterr().err
