@@ -9,8 +9,8 @@ from dataclasses import dataclass
 from typing import Callable
 
 from .model import DEG, LENGTH, RAD, RATIO, Chart, FourBarLoop, Joint, Model
-from .steps import (Sym, asin_or_na, acos_or_na, column, constant, input_angle, offset_slide,
-                    point, polar, slider, triangle)
+from .steps import (Sym, acos_or_na, asin_or_na, column, constant, four_bar_loop, input_angle,
+                    offset_slide, point, polar, slider, triangle)
 
 # Kinds of parameter, each with its own check (see params.py).
 LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND = "length", "offset", "angle", "branch"
@@ -45,14 +45,8 @@ def _angle_chart(title: str, x: str, keys: tuple[str, ...], x_title: str) -> Cha
 def fourbar() -> Model:
     m = Model()
     input_angle(m, "theta12", "θ12")
-    polar(m, "{a2}*COS({theta12})-{a1}", "{a2}*SIN({theta12})",
-          Sym("xs", "xs", "B0→A, x"), Sym("ys", "ys", "B0→A, y"),
-          Sym("s", "s", "|B0A|"), Sym("phi", "ϕ", "angle of B0→A"))
-    triangle(m, side="s", angle="phi", p="a3", q="a4", branch="branch",
-             psi=Sym("psi", "ψ", "∠AB0B"),
-             mu=Sym("mu", "μ", "transmission angle ∠ABB0", deg=True),
-             q_angle=Sym("theta14", "θ14", "rocker, angle of B0→B", deg=True),
-             p_angle=Sym("theta13", "θ13", "coupler, angle of A→B", deg=True))
+    four_bar_loop(m, "{a2}*COS({theta12})-{a1}", "{a2}*SIN({theta12})",
+                  coupler="a3", rocker="a4")
     constant(m, Sym("gamma", "γ", "coupler angle ∠BAC"), RAD,
              acos_or_na("({a3}^2+{b3}^2-{c3}^2)/(2*{a3}*{b3})"))
     point(m, "A", "{a2}*COS({theta12})", "{a2}*SIN({theta12})", label="crank pin A")
@@ -190,14 +184,8 @@ def shaper() -> Model:
 def garage_door() -> Model:
     m = Model()
     input_angle(m, "theta12", "θ12")
-    polar(m, "{a2}*COS({theta12})", "{a2}*SIN({theta12})-{a1}",
-          Sym("xs", "xs", "B0→A, x"), Sym("ys", "ys", "B0→A, y"),
-          Sym("s", "s", "|B0A|"), Sym("phi", "ϕ", "angle of B0→A"))
-    triangle(m, side="s", angle="phi", p="a3", q="a4", branch="branch",
-             psi=Sym("psi", "ψ", "∠AB0B"),
-             mu=Sym("mu", "μ", "transmission angle ∠ABB0", deg=True),
-             q_angle=Sym("theta14", "θ14", "rocker, angle of B0→B", deg=True),
-             p_angle=Sym("theta13", "θ13", "coupler, angle of A→B", deg=True))
+    four_bar_loop(m, "{a2}*COS({theta12})", "{a2}*SIN({theta12})-{a1}",
+                  coupler="a3", rocker="a4")
     point(m, "B", "{a4}*COS({theta14})", "{a1}+{a4}*SIN({theta14})")
     point(m, "D", "{b2}*COS({theta12})", "{b2}*SIN({theta12})")
     polar(m, "{xD}-{xB}", "{yD}-{yB}",

@@ -123,3 +123,16 @@ def column(model: Model, sym: Sym, unit: str, formula: str) -> None:
 def constant(model: Model, sym: Sym, unit: str, formula: str) -> None:
     """A quantity of the dimensions alone (γ of a coupler, a time ratio): one named cell."""
     model.add(Quantity(sym.key, sym.symbol, unit, formula, CONSTANT, sym.label))
+
+
+def four_bar_loop(model: Model, dx: str, dy: str, *, coupler: str, rocker: str,
+                  branch: str = "branch") -> None:
+    """The four-bar loop A0ABB0 in the textbook's steps: B0→A from its components, then Raven's
+    triangle A-B-B0 for ψ, the transmission angle μ, the rocker θ14 and the coupler θ13."""
+    polar(model, dx, dy, Sym("xs", "xs", "B0→A, x"), Sym("ys", "ys", "B0→A, y"),
+          Sym("s", "s", "|B0A|"), Sym("phi", "ϕ", "angle of B0→A"))
+    triangle(model, side="s", angle="phi", p=coupler, q=rocker, branch=branch,
+             psi=Sym("psi", "ψ", "∠AB0B"),
+             mu=Sym("mu", "μ", "transmission angle ∠ABB0", deg=True),
+             q_angle=Sym("theta14", "θ14", "rocker, angle of B0→B", deg=True),
+             p_angle=Sym("theta13", "θ13", "coupler, angle of A→B", deg=True))

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 from openpyxl import Workbook
 from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
-from openpyxl.utils import get_column_letter, quote_sheetname
+from openpyxl.utils import column_index_from_string, get_column_letter, quote_sheetname
 from openpyxl.workbook.defined_name import DefinedName
 from openpyxl.worksheet.datavalidation import DataValidation
 
@@ -103,6 +103,16 @@ def _head(ws, row: int, col: int, value: str) -> None:
     c.alignment = Alignment(horizontal="center", vertical="center", wrap_text=True)
 
 
+def _block_head(ws, first_col: str, title: str, columns, row: int = 5) -> None:
+    """A block's bold title in `row` and its column headers (with widths) in the row below."""
+    ws[f"{first_col}{row}"] = title
+    ws[f"{first_col}{row}"].font = BOLD
+    start = column_index_from_string(first_col)
+    for i, (head, width) in enumerate(columns):
+        ws.column_dimensions[get_column_letter(start + i)].width = width
+        _head(ws, row + 1, start + i, head)
+
+
 def _validation(kind: str, field_name: str) -> DataValidation:
     if kind == BRANCH_KIND:
         dv = DataValidation(type="list", formula1='"1,-1"', allow_blank=False)
@@ -126,17 +136,12 @@ def _validation(kind: str, field_name: str) -> DataValidation:
 
 # ---------------------------------------------------------------- Mechanism sheet
 def _inputs_block(wb, ws, t: Template, model: Model):
-    ws.column_dimensions["A"].width = 36
-    for col, width in zip("BCDE", (9, 12, 8, 14)):
-        ws.column_dimensions[col].width = width
     _text(ws, "A1", t.title, TITLE)
     _text(ws, "A2", t.source, NOTE)
     _text(ws, "A3", "Yellow cells are inputs: change them and every formula, table and chart "
                     "follows.", NOTE)
-    ws["A5"] = "Inputs"
-    ws["A5"].font = BOLD
-    for i, h in enumerate(("Quantity", "Symbol", "Value", "Unit", "Excel name"), start=1):
-        _head(ws, 6, i, h)
+    _block_head(ws, "A", "Inputs", (("Quantity", 36), ("Symbol", 9), ("Value", 12),
+                                      ("Unit", 8), ("Excel name", 14)))
     names: dict[str, str] = {}
     inputs: dict[str, dict] = {}
     row = 7
@@ -186,12 +191,8 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str],
                     windows: dict) -> dict:
     """The textbook's spin-button row: one input angle drives every step and the drawing."""
     mech = t.mechanism
-    for col, width in zip("GHIJ", (34, 8, 13, 7)):
-        ws.column_dimensions[col].width = width
-    ws["G5"] = "Current position"
-    ws["G5"].font = BOLD
-    for i, h in enumerate(("Quantity", "Symbol", "Value", "Unit"), start=7):
-        _head(ws, 6, i, h)
+    _block_head(ws, "G", "Current position",
+                (("Quantity", 34), ("Symbol", 8), ("Value", 13), ("Unit", 7)))
     angle_name = f"{mech.input_key}_now"
     _text(ws, "G7", "input angle: change it, the drawing moves")
     _text(ws, "H7", mech.input_symbol)
@@ -230,12 +231,8 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str],
 
 def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
     """Joint coordinates, then each link as a run of rows the drawing chart reads."""
-    for col, width in zip("LMNO", (8, 8, 11, 11)):
-        ws.column_dimensions[col].width = width
-    ws["L5"] = "Joints and links (drawing data)"
-    ws["L5"].font = BOLD
-    for i, h in enumerate(("Link", "Joint", "x", "y"), start=12):
-        _head(ws, 6, i, h)
+    _block_head(ws, "L", "Joints and links (drawing data)",
+                (("Link", 8), ("Joint", 8), ("x", 11), ("y", 11)))
     cells: dict[str, list[str]] = {}
     row = 7
     for j in model.joints:
