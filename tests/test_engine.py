@@ -142,6 +142,50 @@ def test_every_cell_matches_excel_model(book_path, model_values):
     assert all(isinstance(ours[(SWEEP, f"L{r}")], bool) for r in range(FIRST, LAST + 1))
 
 
+def edge_book(sheet: str = "Data sheet") -> openpyxl.Workbook:
+    """Constants of every kind, names to an empty and to a formula cell, error constants."""
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    ws.title = sheet
+    for i, v in enumerate([5.0, "abc", True, "#N/A", 123456789.123456789, 2 ** 60, 0.1 + 0.2,
+                           1e-17, -0.0, ""], start=1):
+        ws[f"A{i}"] = v
+    q = "'" + sheet.replace("'", "''") + "'"
+    other = wb.create_sheet("Other 2")
+    formulas = {"B1": f'={q}!A1&"x"', "B2": f"={q}!A2*2", "B3": f"={q}!A3+1", "B4": f"={q}!A4",
+                "B5": f"=ISNA({q}!A4)", "B6": "=Z99", "B7": "=nm_empty+1", "B8": "=nm_formula*2",
+                "B9": f"={q}!A5*1", "B10": f"={q}!A6+1", "B11": f"={q}!A7*3",
+                "B12": f"={q}!A8*1E+17", "B13": '=IF(1>2,"a",Z98)', "B14": '=""', "B15": "=TRUE",
+                "B16": f"=SUM({q}!A1:A9)", "C1": "=B1&B2", "C2": f"={q}!A10+1",
+                "C3": f'={q}!A10&"x"'}
+    for ref, formula in formulas.items():
+        other[ref] = formula
+    for r in range(1, 6):
+        other[f"D{r}"] = f'=IFERROR(1/(E{r}-2),"inf")'
+        other[f"E{r}"] = r
+    wb.defined_names["nm_empty"] = DefinedName("nm_empty", attr_text="'Other 2'!$Z$50")
+    wb.defined_names["nm_formula"] = DefinedName("nm_formula", attr_text="'Other 2'!$B$11")
+    return wb
+
+
+def test_constants_names_and_empty_cells_match_excel_model(tmp_path):
+    path = tmp_path / "edge.xlsx"
+    edge_book().save(path)
+    ours = engine.evaluate_file(path)
+    compare(ours, engine.evaluate_formulas_model(path))
+    compare(engine.evaluate(edge_book()), ours)
+    assert ours[("Other 2", "B1")] == "5x"          # 5.0 is saved as 5
+    assert ours[("Data sheet", "A8")] == 0.0          # 1e-17 rounded to 15 decimals, as ExcelModel
+    assert ours[("Other 2", "B7")] == 1.0             # a name of an empty cell is 0
+
+
+def test_sheet_name_with_apostrophe():
+    """ExcelModel answers #REF! for 'It''s'!A1 (formulas 1.3.4); the engine reads the cell."""
+    values = engine.evaluate(edge_book("It's"))
+    assert values[("Other 2", "B1")] == "5x"
+    assert values[("Other 2", "B11")] == pytest.approx(0.9)
+
+
 def test_in_memory_book_equals_saved_book(book_path):
     """evaluate(wb) before saving gives exactly what the saved file evaluates to."""
     assert compare(engine.evaluate(build_book()), engine.evaluate_file(book_path)) == 0.0

@@ -145,7 +145,11 @@ def error_code(value) -> str | None:
 
 
 def evaluate_formulas_model(path) -> dict[tuple[str, str], object]:
-    """The same dict as evaluate_file(), computed by the slow full-fidelity formulas.ExcelModel."""
+    """The same dict as evaluate_file(), computed by the slow full-fidelity formulas.ExcelModel.
+
+    ExcelModel's keys ("'[book.xlsx]SHEET'!A1", sheet upper-cased) become ('Sheet', 'A1'); its
+    1x1 Ranges become scalars; names, ranges and referenced-but-empty cells are left out.  Note
+    (formulas 1.3.4): a reference to a sheet whose name holds an apostrophe gives #REF! here."""
     import formulas
     path = str(Path(path).resolve())
     with contextlib.redirect_stderr(io.StringIO()):  # ExcelModel.finish() draws a tqdm bar
@@ -305,6 +309,26 @@ def _rc_col(letters: str, absolute: str, host: int) -> str:
     return f"C{value}" if absolute else f"C[{value - host}]"
 
 
+@dataclass(frozen=True)
+class Template:
+    """A formula as literal chunks around the row numbers and column letters of its references,
+    so that the formula of a copied cell is found by shifting the relative ones (no lexing)."""
+    chunks: tuple[str, ...]
+    slots: tuple[tuple[bool, int, bool], ...]   # (is_row, value, relative)
+
+    def shifted(self, dr: int, dc: int) -> tuple[str, "Template"] | None:
+        """(text, template) of this formula copied dr rows down and dc columns right."""
+        slots, text = [], [self.chunks[0]]
+        for (is_row, value, relative), chunk in zip(self.slots, self.chunks[1:]):
+            if relative:
+                value += dr if is_row else dc
+            if not 1 <= value <= (MAX_ROW if is_row else MAX_COL):
+                return None
+            slots.append((is_row, value, relative))
+            text += [str(value) if is_row else _column_letter(value), chunk]
+        return "".join(text), Template(self.chunks, tuple(slots))
+
+
 class References:
     """Resolves reference texts and defined names of one workbook to RefDesc."""
 
@@ -355,26 +379,36 @@ class References:
             text = text[1:-1].replace("''", "'")
         return self.sheet(text)
 
-    def fast_shape(self, formula: str, sheet: str, row: int, col: int) -> str:
-        """The shape from the regex lexer alone (no RefDesc objects): the per-cell hot path.
-        It must equal _shape() over the tokenizer's spans; Engine._group checks one cell of
-        every group."""
-        parts, pos = [], 0
+    def fast_shape(self, formula: str, sheet: str, row: int, col: int):
+        """(shape, Template) from the regex lexer alone: the per-cell hot path.  The shape must
+        equal _shape() over the tokenizer's spans; Engine._group checks one cell per group."""
+        parts, chunks, slots, pos, cut = [], [], [], 0, 0
         for m in _LEXER.finditer(formula):
-            if m["ref"] is not None:
+            kind = m.lastgroup
+            if kind == "ref":
                 title = self.sheet_text(m["sheet"]) if m["sheet"] else sheet
                 ref = _rc(m["r"], m["ra"], row, "R") + _rc_col(m["c"], m["ca"], col)
+                corners = [("c", "ca"), ("r", "ra")]
                 if m["c2"]:
                     ref += ":" + _rc(m["r2"], m["rb"], row, "R") + _rc_col(m["c2"], m["cb"], col)
+                    corners += [("c2", "cb"), ("r2", "rb")]
                 start, end = m.span("ref")
                 parts += [formula[pos:start], f"'{title}'!", ref]
                 pos = end
-            elif m["ident"] is not None and m["call"] is None and self.is_name(m["ident"]):
+                for group, dollar in corners:  # the numbers a copy of this cell would change
+                    a, b = m.span(group)
+                    is_row = group[0] == "r"
+                    value = int(m[group]) if is_row else _col_index(m[group])
+                    chunks.append(formula[cut:a])
+                    slots.append((is_row, value, not m[dollar]))
+                    cut = b
+            elif kind == "ident" and self.is_name(m["ident"]):
                 start, end = m.span("ident")
                 parts += [formula[pos:start], self.name_shape(m["ident"])]
                 pos = end
         parts.append(formula[pos:])
-        return "".join(parts)
+        chunks.append(formula[cut:])
+        return "".join(parts), Template(tuple(chunks), tuple(slots))
 
     def _desc(self, parsed, row, col, absolute=False) -> RefDesc:
         sheet, corners = parsed
@@ -638,11 +672,16 @@ class Engine:
     def _group(self, formulas_by_sheet):
         candidates: dict[tuple[str, str], list[_Member]] = {}
         for sheet, forms in formulas_by_sheet.items():
+            above, left = {}, {}   # last (row, col, shape, template) per column / per row
             for row, col, formula in forms:
-                try:
-                    shape = self.refs.fast_shape(formula, sheet, row, col)
-                except UnsupportedFormulaError:
-                    shape = "\0" + formula   # the tokenizer decides below
+                shape, template = self._copied_shape(formula, row, col, above, left)
+                if shape is None:
+                    try:
+                        shape, template = self.refs.fast_shape(formula, sheet, row, col)
+                    except UnsupportedFormulaError:
+                        shape, template = "\0" + formula, None   # the tokenizer decides below
+                if template is not None:
+                    above[col] = left[row] = (row, col, shape, template)
                 candidates.setdefault((sheet, shape), []).append(_Member(row, col, formula))
         exact: dict[tuple[str, str], tuple[list[_Member], TokenInfo, list[RefDesc]]] = {}
         for (sheet, shape), members in candidates.items():
@@ -661,6 +700,19 @@ class Engine:
         for gid, ((sheet, shape), (members, info, descs)) in enumerate(exact.items()):
             self.groups.append(Group(gid, sheet, shape, members, info, descs))
         self.stats["shapes"] = len(self.groups)
+
+    @staticmethod
+    def _copied_shape(formula, row, col, above, left):
+        """The shape of the cell above (or to the left) if this formula is its copy; a copy has
+        the same shape by definition, and checking it is much cheaper than lexing."""
+        for prev in (above.get(col), left.get(row)):
+            if prev is None:
+                continue
+            prow, pcol, shape, template = prev
+            copied = template.shifted(row - prow, col - pcol)
+            if copied is not None and copied[0] == formula:
+                return shape, copied[1]
+        return None, None
 
     def _tokenize(self, member: _Member, sheet: str) -> TokenInfo:
         self.stats["tokenized_cells"] += 1
@@ -1002,6 +1054,8 @@ def _constant(cell):
             return None  # NaN and infinities are written as empty cells
         value = float(text) if any(ch in text for ch in ".eE") else int(text)
         return round(value, 15) if isinstance(value, float) else value
+    if value == "":
+        return None  # saved as an empty inline string, read back as no value
     if kind == "e":
         return Error.errors.get(str(value).upper(), value)
     if isinstance(value, np.generic):
