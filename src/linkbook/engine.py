@@ -98,6 +98,8 @@ DYNAMIC = frozenset({"INDIRECT", "OFFSET", "ISFORMULA", "_XLFN.ISFORMULA", "FORM
                      "_XLFN.FORMULATEXT", "CELL"})
 
 _PARSER = Parser()
+_COMPILED: dict[tuple[str, str, str], tuple[object, "_Batch"]] = {}
+_COMPILED_MAX = 2048
 
 
 class EngineError(Exception):
@@ -627,7 +629,7 @@ class Engine:
         self.grid: dict[str, np.ndarray] = {}
         self.owner: dict[str, np.ndarray] = {}
         self.member: dict[str, np.ndarray] = {}
-        self.stats = dict(formula_cells=0, shapes=0, compiled=0, vector_groups=0,
+        self.stats = dict(formula_cells=0, shapes=0, compiled=0, reused=0, vector_groups=0,
                           cell_groups=0, each_groups=0, cyclic_cells=0, tokenized_cells=0,
                           vector_fallbacks=0, row_by_row_nodes=0)
 
@@ -741,8 +743,7 @@ class Engine:
         vector = (self.vectorize and len(g.members) > 1 and functions <= VECTOR_SAFE
                   and not any(d.is_range for d in by_key.values()))
         g.mode = "vector" if vector else "cell"
-        func = _compile(info.builder, g.batch if g.mode == "vector" else None)
-        self.stats["compiled"] += 1
+        func = self._compiled(g, rep, info)
         inputs = []
         for key, template in func.inputs.items():
             desc = by_key.get(key)
@@ -751,6 +752,24 @@ class Engine:
             inputs.append(desc)
         g.func, g.inputs = func, inputs
         self.stats[f"{g.mode}_groups"] += 1
+
+    def _compiled(self, g: Group, rep: _Member, info: TokenInfo):
+        """The compiled representative, reused across evaluations in this process: a function
+        depends only on the formula's text, its sheet and the mode (its input keys are tied to
+        this workbook's cells afterwards), and compiling is most of the cost of a small book."""
+        key = (g.sheet, rep.formula, g.mode)
+        cached = _COMPILED.get(key)
+        if cached is not None:
+            func, g.batch = cached
+            g.batch.row_by_row = 0
+            self.stats["reused"] += 1
+            return func
+        func = _compile(info.builder, g.batch if g.mode == "vector" else None)
+        self.stats["compiled"] += 1
+        if len(_COMPILED) >= _COMPILED_MAX:
+            _COMPILED.pop(next(iter(_COMPILED)))
+        _COMPILED[key] = (func, g.batch)
+        return func
 
     def _representative(self, g: Group):
         """(member, TokenInfo, compiled-input key -> RefDesc) of a member whose formula gives

@@ -341,8 +341,10 @@ def _assembly_columns(ws, letters: dict, witness: str, first: int, last: int,
         ws.column_dimensions[get_column_letter(col + i)].width = 11
     for r in range(first, last + 1):
         ws[f"{closes}{r}"] = f"=IF(ISNUMBER({w}{r}),1,0)"
-        before = f"{closes}{r}=0" if r == first else f"AND({closes}{r}=0,{closes}{r - 1}=1)"
-        after = f"{closes}{r}=0" if r == last else f"AND({closes}{r}=0,{closes}{r + 1}=1)"
+        # (x=0)*(y=1) rather than AND(): the same truth in every application, and element-wise
+        # for the vector engine (AND aggregates, so it would run row by row).
+        before = f"{closes}{r}=0" if r == first else f"({closes}{r}=0)*({closes}{r - 1}=1)"
+        after = f"{closes}{r}=0" if r == last else f"({closes}{r}=0)*({closes}{r + 1}=1)"
         ws[f"{start}{r}"] = f'=IF({before},A{r},"{DASH}")'
         ws[f"{end}{r}"] = f'=IF({after},A{r},"{DASH}")'
     return {"closes": closes, "gap_from": start, "gap_to": end}
