@@ -12,7 +12,7 @@ from openpyxl.chart import Reference, ScatterChart, Series
 from openpyxl.chart.axis import ChartLines
 from openpyxl.chart.data_source import NumFmt
 from openpyxl.chart.layout import Layout, ManualLayout
-from openpyxl.utils import column_index_from_string
+from openpyxl.utils import column_index_from_string, get_column_letter
 
 from .model import LENGTH, Model, header
 from .templates import Template
@@ -179,6 +179,4 @@ def _family_chart(wb, t, model: Model, meta: dict) -> None:
         chart.series.append(_series(ws, "A", letter, rows, f"{param} = {value:g} {t.length_unit}"))
     chart.width, chart.height = 20, 12
     _angle_axis(chart, t)
-    col = len(grid["columns"]) + 3
-    from openpyxl.utils import get_column_letter
-    ws.add_chart(chart, f"{get_column_letter(col)}4")
+    ws.add_chart(chart, f"{get_column_letter(len(grid['columns']) + 3)}4")

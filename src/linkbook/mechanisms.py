@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from .model import DEG, LENGTH, RAD, RATIO, Chart, FourBarLoop, Joint, Model
+from .model import LENGTH, RAD, RATIO, Chart, FourBarLoop, Joint, Model
 from .steps import (Sym, acos_or_na, asin_or_na, column, constant, four_bar_loop, input_angle,
                     offset_slide, point, polar, slider, triangle)
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from typing import Callable, Iterable
+from typing import Callable
 
 PLACEHOLDER = re.compile(r"\{(\w+)\}")
 
@@ -167,21 +167,6 @@ class Resolver:
         return "=" + render(self._by_key[key].formula, self)
 
 
-def dependencies(model: Model, key: str) -> set[str]:
-    """Every key that `key` needs, directly or through other quantities."""
-    by_key = {q.key: q for q in model.quantities}
-    seen: set[str] = set()
-    stack = list(references(by_key[key].formula))
-    while stack:
-        k = stack.pop()
-        if k in seen:
-            continue
-        seen.add(k)
-        if k in by_key:
-            stack.extend(references(by_key[k].formula))
-    return seen
-
-
 def unit_text(unit: str, length_unit: str) -> str:
     return length_unit if unit == LENGTH else unit
 
@@ -189,7 +174,3 @@ def unit_text(unit: str, length_unit: str) -> str:
 def header(symbol: str, unit: str, length_unit: str) -> str:
     """`θ13 [deg]`: every header is the symbol and its unit in brackets."""
     return f"{symbol} [{unit_text(unit, length_unit)}]"
-
-
-def keys_in_order(quantities: Iterable[Quantity]) -> list[str]:
-    return [q.key for q in quantities]

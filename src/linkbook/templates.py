@@ -12,8 +12,7 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MECHANISMS, OFFSET_KIND,
-                         Mechanism)
+from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MECHANISMS, Mechanism
 
 def _template_dir() -> Path:
     """Installed: templates/ is packaged inside linkbook; from a checkout: the repo's templates/."""

@@ -107,7 +107,7 @@ def _number(ws, cell: str, what: str) -> float:
 
 
 # ---------------------------------------------------------------- comparing
-def _expected(ref: dict, key: str, unit: str) -> np.ndarray:
+def _expected(ref: dict, key: str) -> np.ndarray:
     """Reference values for a column key; `_deg` keys are the degree view of a radian key."""
     if key.endswith("_deg") and key[:-4] in ref:
         return np.degrees(np.asarray(ref[key[:-4]], dtype=float))
@@ -179,7 +179,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         if key == f"{mech.input_key}_deg" or key in ASSEMBLY_COLUMNS:
             continue
         cells = [f"{letter}{r}" for r in range(rows[0], rows[1] + 1)]
-        run(layout.SWEEP, key, sweep["sheet"], cells, _expected(ref, key, ""),
+        run(layout.SWEEP, key, sweep["sheet"], cells, _expected(ref, key),
             column_unit(model, key))
 
     # The current position, the joints and the drawing rows.
@@ -187,7 +187,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     angle = _number(wb[pos["sheet"]], pos["input_cell"], "the current input angle")
     one = reference.solve(mech.name, params, np.array([angle]))
     for key, cell in pos["cells"].items():
-        run("position", key, pos["sheet"], [cell], _expected(one, key, ""),
+        run("position", key, pos["sheet"], [cell], _expected(one, key),
             column_unit(model, key))
     pivots = reference.pivots(mech.name, params)
     joint_values = {}
@@ -209,10 +209,9 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         "length")
 
     # Derived constants.
-    consts = reference.solve(mech.name, params, np.array([0.0]))
-    for key, info in meta.get("constants", {}).items():
-        run("constants", key, layout.MECH, [info["cell"]],
-            np.array([float(np.asarray(consts[key]).ravel()[0])]), info["unit"])
+    for key, info in meta.get("constants", {}).items():   # solve() returns them as floats
+        run("constants", key, layout.MECH, [info["cell"]], np.array([float(ref[key])]),
+            info["unit"])
 
     if "closes" in sweep["columns"]:
         checks += _check_assembly(wb, meta, model, mech, params, angles, ref, values)

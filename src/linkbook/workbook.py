@@ -59,7 +59,7 @@ def build(t: Template, windows: dict[str, float] | None = None) -> Built:
     ws_mech = wb.active
     ws_mech.title = MECH
     ws_sweep = wb.create_sheet(SWEEP)
-    ws_charts = wb.create_sheet(CHARTS)
+    wb.create_sheet(CHARTS)     # filled by charts.add_charts once values are known
     meta = {"format": FORMAT_VERSION, "linkbook": __version__, "template": t.name,
             "mechanism": t.mechanism.name, "title": t.title, "length_unit": t.length_unit,
             "input": t.mechanism.input_key}
@@ -238,7 +238,7 @@ def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
     for j in model.joints:
         _text(ws, f"M{row}", j.name)
         for col, expr in (("N", j.x), ("O", j.y)):
-            ws[f"{col}{row}"] = "=" + _render(expr, resolve)
+            ws[f"{col}{row}"] = "=" + render(expr, resolve)
             ws[f"{col}{row}"].number_format = number_format(LENGTH)
         cells[j.name] = [f"N{row}", f"O{row}"]
         row += 1
@@ -256,10 +256,6 @@ def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
             row += 1
         drawing.append({"joints": list(link), "rows": [first, row - 1]})
     return {"cells": cells, "drawing": drawing, "chart_row": row + 1}
-
-
-def _render(expr: str, resolve: Resolver) -> str:
-    return render(expr, resolve)
 
 
 # ---------------------------------------------------------------- Sweep sheet
