@@ -97,8 +97,10 @@ def pump() -> Model:
              q_offset="-PI()/2")
     column(m, Sym("s4", "s4", "plunger pin along the slot"), LENGTH,
            "-({s1}+{c4}*SIN({theta14}))/COS({theta14})")
+    # The textbook's s15 = b1 − c4·cos θ14 + s4·sin θ14 with s4 substituted: the same number,
+    # and the self-contained grid formula then carries θ14 twice instead of four times.
     column(m, Sym("s15", "s15", "plunger position"), LENGTH,
-           "{b1}-{c4}*COS({theta14})+{s4}*SIN({theta14})")
+           "{b1}-({c4}+{s1}*SIN({theta14}))/COS({theta14})")
     point(m, "A", "{a2}*COS({theta12})", "{a2}*SIN({theta12})", label="crank pin A")
     point(m, "B", "-{b1}-{a4}*SIN({theta14})", "{s1}+{a4}*COS({theta14})", label="rocker pin B")
     point(m, "E", "-{b1}+{c4}*COS({theta14})", "{s1}+{c4}*SIN({theta14})", label="slot foot E")

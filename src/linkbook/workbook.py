@@ -70,8 +70,9 @@ def build(t: Template, windows: dict[str, float] | None = None) -> Built:
     meta["summary"] = _summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1)
     if t.mechanism.grid:
         meta["grid"] = _grid_sheet(wb.create_sheet(GRID), t, model, names)
-        meta["stroke"] = _stroke_sheet(wb.create_sheet(STROKE), t, model, names,
-                                       meta["grid"])
+        # A grid that already samples a whole turn finely enough is its own stroke sweep.
+        meta["stroke"] = (meta["grid"] if grid_is_fine(t) else
+                          _stroke_sheet(wb.create_sheet(STROKE), t, model, names, meta["grid"]))
         meta["grid"]["stroke_row"] = _stroke_row(wb[GRID], t, meta["grid"], meta["stroke"])
     _write_meta(wb.create_sheet(META), meta)
     return Built(wb, model, meta)
@@ -511,21 +512,26 @@ def _stroke_sheet(ws, t: Template, model: Model, names: dict[str, str], grid: di
             "columns": cols}
 
 
+def grid_is_fine(t: Template) -> bool:
+    s = t.sweep
+    return s.step <= t.stroke_step and s.start <= 0 and s.stop >= 360
+
+
 def _stroke_row(ws, t: Template, grid: dict, stroke: dict) -> int:
-    """Under the grid: max − min of the fine sweep, per column."""
+    """Under the grid: max − min of the fine sweep (or of the grid itself), per column."""
     row = grid["rows"][1] + 2
     _text(ws, f"A{row}", f"stroke [{t.length_unit}]", BOLD)
     first, last = stroke["rows"]
-    src = quote_sheetname(STROKE)
+    src = "" if stroke is grid else f"{quote_sheetname(stroke['sheet'])}!"
     for mine, theirs in zip(grid["columns"], stroke["columns"]):
-        rng = f"{src}!{theirs}{first}:{theirs}{last}"
+        rng = f"{src}{theirs}{first}:{theirs}{last}"
         c = ws[f"{mine}{row}"]
         c.value = f"=MAX({rng})-MIN({rng})"
         c.number_format = number_format(LENGTH)
         c.font = BOLD
         c.fill = DERIVED_FILL
-    _text(ws, f"A{row + 1}", f"max − min of the {t.stroke_step:g}° sweep on sheet {STROKE}",
-          NOTE)
+    source = "the grid above" if stroke is grid else f"the {t.stroke_step:g}° sweep on sheet {STROKE}"
+    _text(ws, f"A{row + 1}", f"max − min of {source}", NOTE)
     return row
 
 
