@@ -146,12 +146,19 @@ def quick_return() -> Model:
            length="a5", branch="branch",
            angle=Sym("theta15", "θ15", "link 5, angle of D→C", deg=True),
            position=Sym("s16", "s16", "ram position, x of D"))
-    # The rocker swings over 90° ± α, α = asin(a2/a1); the ram link closes over the whole turn
-    # iff it reaches the ram line at both ends of that swing. Otherwise there is no full stroke.
+    # The rocker swings over 90° ± α, α = asin(a2/a1), and the ram turns back at the swing's ends:
+    # ratio (π + 2α)/(π − 2α). It exists when the ram link closes over the whole turn (it reaches
+    # the ram line at both ends of the swing) and the ram reverses only there, i.e. no dead
+    # centre of the ram dyad (B0, C, D in line: sin θ14 = b1/(a4 ± a5)) lies inside the swing.
     alpha = asin_or_na("{a2}/{a1}")
+    closes = f"MAX(ABS({{b1}}-{{a4}}*COS({alpha})),ABS({{b1}}-{{a4}}))>{{a5}}"
+
+    def dead_centre_in_swing(length: str) -> str:
+        return (f"IFERROR(({{b1}}/({length})>=COS({alpha}))*({{b1}}/({length})<=1),0)")
+
     constant(m, Sym("time_ratio", "Q", "quick-return ratio, forward/return time"), RATIO,
-             f"IF(MAX(ABS({{b1}}-{{a4}}*COS({alpha})),ABS({{b1}}-{{a4}}))>{{a5}},NA(),"
-             f"(PI()+2*{alpha})/(PI()-2*{alpha}))")
+             f"IF(({closes})+{dead_centre_in_swing('{a4}+{a5}')}"
+             f"+{dead_centre_in_swing('{a4}-{a5}')},NA(),(PI()+2*{alpha})/(PI()-2*{alpha}))")
     point(m, "C", "{a4}*COS({theta14})", "{a4}*SIN({theta14})", label="rocker end C")
     point(m, "D", "{s16}", on_loop("{b1}", "s16"), label="ram pin D")
     m.joints = _joints(A0=("0", "{a1}"), A=None, B0=("0", "0"), C=None, D=None)

@@ -537,7 +537,8 @@ def _quick_return_rate(p: dict, t12: float, rocker, ram) -> float:
 
 
 def _quick_return_time_ratio(p: dict, samples: int = 720) -> float:
-    """Forward/return time from the extremes of s16 over a full crank turn.
+    """Forward/return time from the extremes of s16 over a full crank turn; NaN unless the ram
+    reverses exactly twice per turn.
 
     The crank angles where ds16/dθ12 changes sign are bracketed on a grid and bisected (each
     evaluation a Newton solve continued from the bracket), the global max and min of s16 among
@@ -557,7 +558,9 @@ def _quick_return_time_ratio(p: dict, samples: int = 720) -> float:
         elif g0 * g1 < 0.0:
             t0, t1 = float(grid[k]), float(grid[k]) + _TAU / samples
             crit.append(_bisect_rate(p, t0, t1, g0, rocker[k], ram[k]))
-    if len(crit) < 2 or any(math.isnan(c[1]) for c in crit):
+    # One forward and one return stroke per turn means exactly two reversals of the ram; with
+    # more (the ram link passing a dead centre inside the rocker's swing) there is no such pair.
+    if len(crit) != 2 or any(math.isnan(c[1]) for c in crit):
         return math.nan
     t_max = max(crit, key=lambda c: c[1])[0]
     t_min = min(crit, key=lambda c: c[1])[0]

@@ -17,7 +17,6 @@ from . import reference, workbook as layout
 from .templates import InputError, check_value
 
 ABS_TOL = 1e-9
-REL_TOL_LARGE = 1e-12
 ANGLE_UNITS = {"rad": 2 * math.pi, "deg": 360.0}
 
 
@@ -38,6 +37,7 @@ class Check:
     """One column (or grid, or block) of formula cells compared with the reference."""
     block: str
     name: str
+    size: float = math.inf      # the mechanism's size S (sum of its input lengths)
     cells: int = 0
     max_abs: float = 0.0
     na_expected: int = 0
@@ -47,6 +47,16 @@ class Check:
     @property
     def ok(self) -> bool:
         return not self.mismatches
+
+    def limit(self, expected: float, tol: float = ABS_TOL, relative: bool = False) -> float:
+        """|Δ| allowed. `relative` (LibreOffice keeps 15 digits): tol·max(1, |x|). Otherwise tol
+        for every value up to the mechanism's own size S. Larger values only arise near a
+        singular position (the pump's plunger as its slot turns parallel to the plunger line,
+        s15 ~ 1/cos θ14), where the error of any double-precision evaluation grows like |x|²/S:
+        there the bound is tol·(|x|/S)²."""
+        if relative:
+            return tol * max(1.0, abs(expected))
+        return tol * max(1.0, (abs(expected) / self.size) ** 2)
 
     def as_dict(self) -> dict:
         return {"block": self.block, "column": self.name, "cells": self.cells,
@@ -106,6 +116,13 @@ def _number(ws, cell: str, what: str) -> float:
     return float(v)
 
 
+def mechanism_size(meta: dict, params: dict[str, float]) -> float:
+    """S: the sum of the input lengths and offsets (every frame fits in a circle that big)."""
+    kinds = {s: info["kind"] for s, info in meta["inputs"].items()}
+    size = sum(abs(v) for s, v in params.items() if kinds[s] in ("length", "offset"))
+    return max(size, 1e-300)
+
+
 # ---------------------------------------------------------------- comparing
 def _expected(ref: dict, key: str) -> np.ndarray:
     """Reference values for a column key; `_deg` keys are the degree view of a radian key."""
@@ -135,11 +152,7 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
             diff = (diff + period / 2) % period - period / 2
         diff = abs(diff)
         check.max_abs = max(check.max_abs, diff)
-        # Absolute 1e-9 for every value up to 1,000 length units; beyond that (a plunger
-        # running off towards infinity near a singular position) double precision itself
-        # cannot hold 1e-9, so the bound becomes 1e-12 relative.
-        limit = tol * max(1.0, abs(exp)) if relative else max(tol, REL_TOL_LARGE * abs(exp))
-        if diff > limit:
+        if diff > check.limit(exp, tol, relative):
             check.mismatches.append(Mismatch(sheet, cell, exp, float(value)))
 
 
@@ -161,10 +174,11 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     mech = MECHANISMS[meta["mechanism"]]
     model = mech.build()
     params = inputs_of(wb, meta)
+    size = mechanism_size(meta, params)
     checks: list[Check] = []
 
     def run(block, name, sheet, cells, expected, unit):
-        c = Check(block, name)
+        c = Check(block, name, size)
         compare(c, sheet, cells, [values.get((sheet, x)) for x in cells], expected, unit,
                 is_error, error_code, tol, relative)
         checks.append(c)
@@ -214,10 +228,10 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
             info["unit"])
 
     if "closes" in sweep["columns"]:
-        checks += _check_assembly(wb, meta, model, mech, params, angles, ref, values)
+        checks += _check_assembly(wb, meta, model, mech, params, angles, ref, values, size)
     if "grid" in meta:
         checks += _check_grid(wb, meta, mech, params, values, is_error, error_code, tol,
-                              relative)
+                              relative, size)
     return checks
 
 
@@ -233,7 +247,7 @@ def compare_exact(check: Check, sheet: str, cells: list[str], got: list, expecte
             if value != exp:
                 check.mismatches.append(Mismatch(sheet, cell, exp, value))
             continue
-        if not isinstance(value, (int, float)) or abs(float(value) - exp) > ABS_TOL:
+        if not isinstance(value, (int, float)) or abs(float(value) - exp) > check.limit(exp):
             check.mismatches.append(Mismatch(sheet, cell, exp, value))
         else:
             check.max_abs = max(check.max_abs, abs(float(value) - exp))
@@ -249,7 +263,7 @@ def _gaps(angles: np.ndarray, closes: np.ndarray) -> tuple[list, list]:
     return starts, ends
 
 
-def _check_assembly(wb, meta, model, mech, params, angles, ref, values) -> list[Check]:
+def _check_assembly(wb, meta, model, mech, params, angles, ref, values, size) -> list[Check]:
     sweep = meta["sweep"]
     cols, (r0, r1) = sweep["columns"], sweep["rows"]
     closes = np.asarray(ref["assembled"], dtype=bool)
@@ -257,14 +271,14 @@ def _check_assembly(wb, meta, model, mech, params, angles, ref, values) -> list[
     checks = []
     for key, expected in (("closes", [1.0 if c else 0.0 for c in closes]),
                           ("gap_from", starts), ("gap_to", ends)):
-        c = Check(layout.SWEEP, key)
+        c = Check(layout.SWEEP, key, size)
         cells = [f"{cols[key]}{r}" for r in range(r0, r1 + 1)]
         compare_exact(c, sweep["sheet"], cells, [values.get((sweep["sheet"], x)) for x in cells],
                       expected)
         checks.append(c)
     expected = _summary_expected(model, mech, params, ref, closes, starts, ends)
     summary = meta.get("summary", {})
-    c = Check("summary", "geometry")
+    c = Check("summary", "geometry", size)
     for key, info in summary.items():
         compare_exact(c, layout.MECH, [info["cell"]], [values.get((layout.MECH, info["cell"]))],
                       [expected[key]])
@@ -314,7 +328,7 @@ def _grid_reference(mech, params, param, angles, column_values):
     return out
 
 
-def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relative):
+def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relative, size):
     checks = []
     grid, stroke = meta["grid"], meta["stroke"]
     param = grid["param"]
@@ -327,7 +341,7 @@ def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relat
             adjust = [_number(ws, f"{c}{grid['param_row']}", f"{param}") for c in grid["columns"]]
         expected = _grid_reference(mech, params, param, angles, adjust)
         expected_by_block[block["sheet"]] = expected
-        c = Check(block["sheet"], f"{grid['key']} grid")
+        c = Check(block["sheet"], f"{grid['key']} grid", size)
         for j, letter in enumerate(block["columns"]):
             cells = [f"{letter}{r}" for r in range(block["rows"][0], block["rows"][1] + 1)]
             compare(c, block["sheet"], cells, [values.get((block["sheet"], x)) for x in cells],
@@ -335,7 +349,7 @@ def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relat
         checks.append(c)
         if own_sweep and block is stroke:
             heads = [f"{x}{stroke['param_row']}" for x in stroke["columns"]]
-            h = Check(block["sheet"], f"{param} header")
+            h = Check(block["sheet"], f"{param} header", size)
             compare(h, block["sheet"], heads, [values.get((block["sheet"], x)) for x in heads],
                     np.array(adjust), "length", is_error, error_code, tol, relative)
             checks.append(h)
@@ -344,7 +358,7 @@ def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relat
                        np.nanmax(np.where(np.isnan(fine), -np.inf, fine), axis=0)
                        - np.nanmin(np.where(np.isnan(fine), np.inf, fine), axis=0))
     cells = [f"{c}{grid['stroke_row']}" for c in grid["columns"]]
-    s = Check(grid["sheet"], "stroke")
+    s = Check(grid["sheet"], "stroke", size)
     compare(s, grid["sheet"], cells, [values.get((grid["sheet"], x)) for x in cells], strokes,
             "length", is_error, error_code, tol, relative)
     checks.append(s)
