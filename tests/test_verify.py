@@ -189,3 +189,19 @@ def test_build_refuses_a_grid_beyond_excels_columns(tmp_path, capsys):
     many = ",".join(str(i) for i in range(16_400))
     code = main(["build", "pump", "--set", f"s1={many}", "-o", str(tmp_path / "x.xlsx")])
     assert code == 2 and "16,384" in capsys.readouterr().err
+
+
+@pytest.mark.libreoffice
+@pytest.mark.parametrize("name", BUNDLED)
+def test_libreoffice_recalculates_every_bundled_book_like_the_reference(name, tmp_path):
+    """The real application: a full recalculation in LibreOffice, every formula cell against the
+    reference (1e-9 relative: LibreOffice stores 15 significant digits)."""
+    from test_office import require_soffice
+    from linkbook.verify import verify
+    require_soffice()
+    path = tmp_path / f"{name}.xlsx"
+    build.build_file(templates.load(name), path)
+    report = verify(path, "libreoffice")
+    bad = [(c.name, m) for c in report.checks for m in c.mismatches[:2]]
+    assert report.ok, bad[:5]
+    assert report.cells == len(formula_cells(openpyxl.load_workbook(path)))
