@@ -185,6 +185,23 @@ def _sweep(
     return out
 
 
+def _dyad_sweep(n_rows: int, q_at: Callable[[int], tuple[float, float] | None],
+                p_at: Callable[[int], tuple[float, float]], q: float, p: float, branch: int,
+                tol_f: float) -> list[tuple[float, ...] | None]:
+    """One dyad over all rows: R with |QR| = q, |PR| = p; x = (angle(Q→R), angle(P→R)).
+    q_at(i) is None where an earlier loop left Q undefined."""
+    def system(i):
+        qi = q_at(i)
+        return None if qi is None else _dyad_loop(*qi, *p_at(i), q, p)
+
+    return _sweep(
+        n_rows, system, _dyad_starts(branch),
+        lambda i, x: _dyad_side(*q_at(i), *p_at(i), x[0], branch),
+        (1.0, 1.0), (0, 1), tol_f,
+        lambda i: _dyad_closes(math.dist(q_at(i), p_at(i)), p, q),
+    )
+
+
 def _restart(fun, guesses, i, on_branch, scales, angle_slots, tol_f) -> list[float] | None:
     """Multi-start: the first converged root on the requested branch."""
     for x0 in guesses:
@@ -334,14 +351,8 @@ def _fourbar(p: dict, th: np.ndarray) -> dict:
     size = a1 + a2 + a3 + a4
     ax, ay = (a2 * np.cos(th)).tolist(), (a2 * np.sin(th)).tolist()
     # Loop a2·e^{iθ12} + a3·e^{iθ13} = a1 + a4·e^{iθ14}: dyad Q = B0, P = A, x = (θ14, θ13).
-    sols = _sweep(
-        len(th),
-        lambda i: _dyad_loop(a1, 0.0, ax[i], ay[i], a4, a3),
-        _dyad_starts(br),
-        lambda i, x: _dyad_side(a1, 0.0, ax[i], ay[i], x[0], br),
-        (1.0, 1.0), (0, 1), _RES_TOL * size,
-        lambda i: _dyad_closes(math.hypot(ax[i] - a1, ay[i]), a3, a4),
-    )
+    sols = _dyad_sweep(len(th), lambda i: (a1, 0.0), lambda i: (ax[i], ay[i]), a4, a3, br,
+                       _RES_TOL * size)
     ok = _solved(sols)
     t14, t13 = _column(sols, 0), _column(sols, 1)
     xA, yA = a2 * np.cos(th), a2 * np.sin(th)
@@ -397,14 +408,8 @@ def _pump(p: dict, th: np.ndarray) -> dict:
     qx, qy = -b1, s1  # B0
     ax, ay = (a2 * np.cos(th)).tolist(), (a2 * np.sin(th)).tolist()
     # Loop 1, four-bar A0ABB0: A + a3·e^{iθ13} = B0 + a4·e^{i(θ14 + π/2)}, x = (θ14 + π/2, θ13).
-    arm = _sweep(
-        len(th),
-        lambda i: _dyad_loop(qx, qy, ax[i], ay[i], a4, a3),
-        _dyad_starts(br),
-        lambda i, x: _dyad_side(qx, qy, ax[i], ay[i], x[0], br),
-        (1.0, 1.0), (0, 1), _RES_TOL * size,
-        lambda i: _dyad_closes(math.hypot(ax[i] - qx, ay[i] - qy), a3, a4),
-    )
+    arm = _dyad_sweep(len(th), lambda i: (qx, qy), lambda i: (ax[i], ay[i]), a4, a3, br,
+                      _RES_TOL * size)
     t14 = [None if x is None else x[0] - _HALF_PI for x in arm]
     # Loop 2, double slide: c4·e^{iθ14} + i·s4·e^{iθ14} = −i·s1 − s15 + b1, x = (s4, s15).
     slide = _sweep(
@@ -643,25 +648,13 @@ def _garage_door(p: dict, th: np.ndarray) -> dict:
     ax, ay = [a2 * c for c in c12], [a2 * s for s in s12]
     dx, dy = [b2 * c for c in c12], [b2 * s for s in s12]
     # Loop 1, four-bar: dyad Q = B0 = (0, a1), P = A; x = (θ14, θ13).
-    fourbar = _sweep(
-        len(th),
-        lambda i: _dyad_loop(0.0, a1, ax[i], ay[i], a4, a3),
-        _dyad_starts(br),
-        lambda i, x: _dyad_side(0.0, a1, ax[i], ay[i], x[0], br),
-        (1.0, 1.0), (0, 1), tol_f,
-        lambda i: _dyad_closes(math.hypot(ax[i], ay[i] - a1), a3, a4),
-    )
+    fourbar = _dyad_sweep(len(th), lambda i: (0.0, a1), lambda i: (ax[i], ay[i]), a4, a3, br,
+                          tol_f)
     bx = [None if x is None else a4 * math.cos(x[0]) for x in fourbar]
     by = [None if x is None else a1 + a4 * math.sin(x[0]) for x in fourbar]
     # Loop 2, door dyad: Q = B, P = D: B + a5·e^{iθ15} = D + a6·e^{iθ16}; x = (θ15, θ16).
-    door = _sweep(
-        len(th),
-        lambda i: None if bx[i] is None else _dyad_loop(bx[i], by[i], dx[i], dy[i], a5, a6),
-        _dyad_starts(bd),
-        lambda i, x: _dyad_side(bx[i], by[i], dx[i], dy[i], x[0], bd),
-        (1.0, 1.0), (0, 1), tol_f,
-        lambda i: _dyad_closes(math.hypot(dx[i] - bx[i], dy[i] - by[i]), a6, a5),
-    )
+    door = _dyad_sweep(len(th), lambda i: None if bx[i] is None else (bx[i], by[i]),
+                       lambda i: (dx[i], dy[i]), a5, a6, bd, tol_f)
     ok = _solved(door)
     t14, t13 = _column(fourbar, 0), _column(fourbar, 1)
     t15, t16 = _column(door, 0), _column(door, 1)
@@ -691,14 +684,8 @@ def _tk_fourbar(p: dict, th: np.ndarray) -> dict:
     size = a + b + c + math.hypot(x3, y3)
     x1l, y1l = (a * np.cos(th)).tolist(), (a * np.sin(th)).tolist()
     # Loop a·e^{iφ} + b·e^{iθ} = (x3 + i·y3) + c·e^{iψ}: dyad Q = P3, P = P1, x = (ψ, θ).
-    sols = _sweep(
-        len(th),
-        lambda i: _dyad_loop(x3, y3, x1l[i], y1l[i], c, b),
-        _dyad_starts(br),
-        lambda i, x: _dyad_side(x3, y3, x1l[i], y1l[i], x[0], br),
-        (1.0, 1.0), (0, 1), _RES_TOL * size,
-        lambda i: _dyad_closes(math.hypot(x1l[i] - x3, y1l[i] - y3), b, c),
-    )
+    sols = _dyad_sweep(len(th), lambda i: (x3, y3), lambda i: (x1l[i], y1l[i]), c, b, br,
+                       _RES_TOL * size)
     ok = _solved(sols)
     psi, theta = _column(sols, 0), _column(sols, 1)
     x1, y1 = a * np.cos(th), a * np.sin(th)
