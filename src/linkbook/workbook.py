@@ -26,6 +26,7 @@ MECH, SWEEP, CHARTS, GRID, STROKE, META = ("Mechanism", "Sweep", "Charts", "Grid
                                            "Stroke sweep", "linkbook")
 FORMAT_VERSION = 1
 ROW = "\x00"   # stands for the row number in a rendered sweep formula
+COL = "\x01"   # stands for the column letter in a rendered grid formula
 
 TITLE = Font(bold=True, size=14)
 BOLD = Font(bold=True)
@@ -462,19 +463,27 @@ def _grid_sheet(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
         cols.append(letter)
     for i, angle in enumerate(angles, start=first):
         ws.cell(i, 1, angle).number_format = "0.0##"
-    text = _grid_formula(model, names, t.mechanism.input_key, param, out, head_row)
-    for i in range(first, first + len(angles)):
-        for letter in cols:
-            c = ws[f"{letter}{i}"]
-            c.value = text.replace("\x01", letter).replace(ROW, str(i))
-            c.number_format = number_format(LENGTH)
-    ws.freeze_panes = ws.cell(first, 2)
+    _fill_grid(ws, t, model, names, head_row, range(first, first + len(angles)), cols)
     return {"sheet": GRID, "param": param, "key": out, "param_row": head_row,
             "rows": [first, first + len(angles) - 1], "columns": cols}
 
 
+def _fill_grid(ws, t: Template, model: Model, names: dict, param_row: int, rows: range,
+               cols: list[str]) -> None:
+    """One self-contained formula per cell: the row's angle in $A, the column's value in
+    `param_row`; the same text with the row and column put in."""
+    param, out = t.mechanism.grid
+    text = _grid_formula(model, names, t.mechanism.input_key, param, out, param_row)
+    for i in rows:
+        for letter in cols:
+            c = ws[f"{letter}{i}"]
+            c.value = text.replace(COL, letter).replace(ROW, str(i))
+            c.number_format = number_format(LENGTH)
+    ws.freeze_panes = ws.cell(rows.start, 2)
+
+
 def _grid_formula(model, names, input_key, param, out, param_row) -> str:
-    cells = {f"{input_key}_deg": f"$A{ROW}", param: f"\x01${param_row}"}
+    cells = {f"{input_key}_deg": f"$A{ROW}", param: f"{COL}${param_row}"}
     text = Resolver(model, names, cells).formula(out)
     if len(text) > 8000:   # Excel's limit is 8,192 characters
         raise ValueError(f"grid formula of {len(text)} characters is too long for Excel")
@@ -501,13 +510,7 @@ def _stroke_sheet(ws, t: Template, model: Model, names: dict[str, str], grid: di
         cols.append(mine)
     for i in range(count):
         ws.cell(first + i, 1, round(i * step, 10))
-    text = _grid_formula(model, names, t.mechanism.input_key, param, out, head_row)
-    for i in range(first, first + count):
-        for letter in cols:
-            c = ws[f"{letter}{i}"]
-            c.value = text.replace("\x01", letter).replace(ROW, str(i))
-            c.number_format = number_format(LENGTH)
-    ws.freeze_panes = ws.cell(first, 2)
+    _fill_grid(ws, t, model, names, head_row, range(first, first + count), cols)
     return {"sheet": STROKE, "param_row": head_row, "rows": [first, first + count - 1],
             "columns": cols}
 
