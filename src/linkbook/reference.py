@@ -634,9 +634,11 @@ def _shaper(p: dict, th: np.ndarray) -> dict:
     out = {
         "theta2": th, "r3": r3, "theta3": t3, "r4": r4, "r5": r5,
         "xA": r2 * np.cos(th), "yA": r1 + r2 * np.sin(th),
-        "xB": r4 * np.cos(t3), "yB": r4 * np.sin(t3),
+        # The ram pin slides on the ram line (equations III–IV): its y is the line's, its x is r5.
+        # (r4·sin θ3 would lose digits when the lever lies almost along the line and r4 is huge.)
+        "xB": r5, "yB": np.full_like(th, r1 + r6),
     }
-    return _finish(out, ok, "theta2")
+    return _finish(out, ok, "theta2", on_loop=("yB",))
 
 
 def _garage_door(p: dict, th: np.ndarray) -> dict:
