@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import openpyxl
 import pytest
+from openpyxl.utils import get_column_letter
 from openpyxl.workbook.defined_name import DefinedName
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
@@ -397,3 +398,62 @@ def _same_value(a, b) -> bool:
     if engine.is_error(a) or engine.is_error(b):
         return engine.error_code(a) == engine.error_code(b)
     return a == b
+
+
+def numeric_book(rows: int = 600) -> openpyxl.Workbook:
+    """Random finite numbers over many scales (and the edges of each function's domain) for
+    every function that has a numeric form, one column each."""
+    rng = np.random.default_rng(20261122)
+    scales = [1.0, 1e-6, 1e3, 1e150, 1e-300]
+    edges = [0.0, 1.0, -1.0, 2.0, 0.5, -0.0, 1e308, 700.0, 710.0, 3, -2, 0.9999999999999999]
+    a = np.concatenate([rng.uniform(-1, 1, rows) * rng.choice(scales, rows), edges])
+    b = np.concatenate([rng.uniform(-3, 3, rows) * rng.choice(scales, rows), edges[::-1]])
+    b[::7] = np.round(b[::7])                       # integer exponents for ^
+    # A power that never overflows nor divides by zero: positive and negative bases of moderate
+    # size, whole and fractional exponents (a negative base with a fractional one is #NUM!).
+    base = rng.uniform(-1, 1, a.size) * rng.choice([1e-3, 1.0, 50.0], a.size)
+    exponent = np.where(np.arange(a.size) % 2, np.round(b % 7 - 3), b % 7 - 3)
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    forms = sorted(engine.NUMERIC_FORMS)
+    for i, (x, y) in enumerate(zip(a.tolist(), b.tolist())):
+        r = 1 + i
+        ws.cell(row=r, column=1, value=x)
+        ws.cell(row=r, column=2, value=int(y) if i % 11 == 0 else y)
+        ws.cell(row=r, column=3 + len(forms), value=float(base[i]))
+        ws.cell(row=r, column=4 + len(forms), value=float(exponent[i]))
+        powers = f"{get_column_letter(3 + len(forms))}{r}^{get_column_letter(4 + len(forms))}{r}"
+        ws.cell(row=r, column=5 + len(forms), value=f"={powers}")
+        for j, name in enumerate(forms):
+            if name == "u-":
+                text = f"=-A{r}"
+            elif name in "+-*/^":
+                text = f"=A{r}{name}B{r}"
+            else:
+                text = f"={name}(A{r},B{r})" if name == "ATAN2" else f"={name}(A{r})"
+            ws.cell(row=r, column=3 + j, value=text)
+    return wb
+
+
+def test_numeric_forms_give_formulas_own_bits_and_types():
+    """On finite numbers the numeric forms replace formulas' per-element calls: every value
+    (and error) must be the one the per-cell evaluation gives, bit for bit and of the same type."""
+    wb = numeric_book()
+    vector = engine.Engine(wb)
+    got = vector.run()
+    want = engine.Engine(wb, vectorize=False).run()
+    # Every form ran on its column, and ^ on the column of moderate powers; 2^710 in the other ^
+    # column overflows, which makes formulas' own call raise for the whole column, so that node
+    # ran row by row, as a per-cell call does.
+    assert vector.stats["numeric_nodes"] == len(engine.NUMERIC_FORMS)
+    assert vector.stats["row_by_row_nodes"] == 1
+    assert set(got) == set(want)
+    errors = 0
+    for key, w in want.items():
+        g = got[key]
+        if engine.is_error(w) or engine.is_error(g):
+            errors += 1
+            assert engine.error_code(g) == engine.error_code(w), (key, g, w)
+        else:
+            assert type(g) is type(w) and (g == w or (g != g and w != w)), (key, g, w)
+    assert errors > 0        # the domain edges were reached: formulas made those errors

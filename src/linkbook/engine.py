@@ -26,6 +26,10 @@ Method
      the whole array; other nodes (MAX of two cells, AND, ...), and an element-wise node whose
      output collapsed (``formulas`` turns an exception such as an overflow into one #VALUE! for
      the whole call), run row by row on (1, 1) slices, which is exactly what a per-cell call does.
+     Arithmetic and the common math functions (NUMERIC_FORMS) first run as float-array
+     operations on the rows whose arguments are finite numbers, giving the bits formulas' own
+     per-element call gives; the other rows (errors, text, EMPTY, non-finite results) go through
+     formulas' function.
    - ``cell``: ranges or other functions (ROWS, INDEX, SMALL, ``:``, ...).  The group's one
      compiled function is called per member with `formulas` Ranges inputs, as ExcelModel does.
    - ``each``: functions that read the host cell (ROW(), COLUMN(), ``@``), or inputs that are not
@@ -497,9 +501,100 @@ def _shape(formula, spans, refs: References, sheet, row, col) -> tuple[str, list
 
 class _Batch:
     """Rows of the current vector call (1 outside vector calls); shared by a group's nodes.
-    `row_by_row` counts node calls that had to run row by row."""
+    `row_by_row` counts node calls that had to run row by row, `numeric` those that ran on float
+    arrays (NUMERIC_FORMS)."""
     n = 1
     row_by_row = 0
+    numeric = 0
+
+
+# formulas runs an element-wise function through np.vectorize, one Python call per element with
+# an error scan of its arguments (~10 µs): on a 361 × 51 grid of long formulas that is most of the
+# time.  Where every argument is a finite number, the functions below give, element for element,
+# the same bits and type as formulas' own per-element call (its lambda on Python floats, or the
+# numpy ufunc on a scalar); tests/test_engine.py checks that on random and edge values.  An element
+# whose argument is not a finite number, or whose result is not finite (formulas turns it into
+# #NUM!, #DIV/0!, #VALUE!), is left to formulas' own call.
+def _python_floats(fn):
+    return lambda *xs: (fn(*xs), float)
+
+
+def _power(x, y):
+    # Python's float ** (as in formulas' lambda), not np.power: libm pow and numpy's SIMD pow
+    # differ in the last bit.  A complex or overflowing result becomes NaN: formulas decides it.
+    out = np.empty(len(x))
+    for i, (a, b) in enumerate(zip(x.tolist(), y.tolist())):
+        try:
+            v = a ** b
+        except (OverflowError, ZeroDivisionError):
+            v = np.nan
+        out[i] = v if type(v) is float else np.nan
+    return out, float
+
+
+def _divide(x, y):
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(y == 0, np.nan, x / np.where(y == 0, 1.0, y)), float
+
+
+def _atan2(x, y):
+    return np.where((x == 0) & (y == 0), np.nan, np.arctan2(y, x)), np.float64
+
+
+def _ufunc(fn):
+    return lambda *xs: (fn(*xs), np.float64)
+
+
+NUMERIC_FORMS = {
+    "+": _python_floats(np.add), "-": _python_floats(np.subtract),
+    "*": _python_floats(np.multiply), "u-": _python_floats(np.negative),
+    "/": _divide, "^": _power, "ATAN2": _atan2,
+    **{name: _ufunc(fn) for name, fn in {
+        "SIN": np.sin, "COS": np.cos, "TAN": np.tan, "ACOS": np.arccos, "ASIN": np.arcsin,
+        "ATAN": np.arctan, "SQRT": np.sqrt, "RADIANS": np.radians, "DEGREES": np.degrees,
+        "ABS": np.abs, "EXP": np.exp}.items()},
+}
+_NUMBER_TYPES = frozenset({float, int, np.float64, np.int64})
+
+
+def _numeric_call(form, func, args, n: int):
+    """`func` (formulas' node) over n rows: `form` on the rows where it applies, `func` on the
+    rest.  None when an argument is not a plain array or scalar (the caller uses `func`)."""
+    flat = []
+    for a in args:
+        if isinstance(a, np.ndarray) and a.size in (1, n):
+            a = a.reshape(-1)
+        elif type(a) in _NUMBER_TYPES:
+            a = np.array([a], object)
+        else:
+            return None
+        flat.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
+    plain = np.ones(n, bool)
+    for a in flat:
+        plain &= np.fromiter((type(v) in _NUMBER_TYPES for v in a), bool, n)
+    xs = []
+    for a in flat:
+        x = np.zeros(n)
+        x[plain] = a[plain].astype(float)
+        xs.append(x)
+    with np.errstate(all="ignore"):
+        result, kind = form(*xs)
+    plain &= np.isfinite(result)
+    out = np.empty(n, object)
+    out[:] = result.tolist() if kind is float else list(result)
+    if not plain.all():
+        rest = ~plain
+        sub = func(*[a[rest].reshape(-1, 1) if a.size == n and not _is_broadcast(a) else
+                     np.asarray(a[:1], object).reshape(1, 1) for a in flat])
+        k = int(rest.sum())
+        if not isinstance(sub, np.ndarray) or sub.size != k:    # an exception collapsed it
+            return None
+        out[rest] = sub.reshape(-1)
+    return out.reshape(n, 1).view(Array)
+
+
+def _is_broadcast(a: np.ndarray) -> bool:
+    return a.strides == (0,)
 
 
 def _size(x) -> int:
@@ -519,14 +614,20 @@ class _NotScalar(Exception):
     """A row-by-row node returned more than one value: the group cannot be vectorized."""
 
 
-def _vector_node(func, batch: _Batch, elementwise: bool):
-    """Wrap a node of the compiled graph for (n, 1) calls.  Element-wise nodes run once; if their
-    output is not (n, 1) (an exception collapsed it), or the node is not element-wise, it runs
-    row by row on (1, 1) slices, exactly as in a per-cell call."""
+def _vector_node(func, batch: _Batch, elementwise: bool, numeric=None):
+    """Wrap a node of the compiled graph for (n, 1) calls.  A node with a numeric form runs it
+    on the rows of finite numbers.  Element-wise nodes run once; if their output is not (n, 1)
+    (an exception collapsed it), or the node is not element-wise, it runs row by row on (1, 1)
+    slices, exactly as in a per-cell call."""
     def node(*args, **kw):
         n = batch.n
         if n == 1 or not any(_size(a) == n for a in args):
             return func(*args, **kw)
+        if numeric is not None and not kw:
+            out = _numeric_call(numeric, func, args, n)
+            if out is not None:
+                batch.numeric += 1
+                return out
         if elementwise:
             out = func(*args, **kw)
             if isinstance(out, np.ndarray) and out.shape == (n, 1):
@@ -546,7 +647,8 @@ def _compile(builder, batch: _Batch | None = None, host: Ranges | None = None):
     if batch is not None:
         for node_id, node in builder.dsp.function_nodes.items():
             name = re.sub(r"<\d+>$", "", node_id)
-            node["function"] = _vector_node(node["function"], batch, name in ELEMENTWISE)
+            node["function"] = _vector_node(node["function"], batch, name in ELEMENTWISE,
+                                            NUMERIC_FORMS.get(name))
     extra = {CELL: host} if host is not None else {}
     return builder.compile(**extra)
 
@@ -648,6 +750,7 @@ class Engine:
             for component in self._components():
                 self._evaluate_component(component)
         self.stats["row_by_row_nodes"] = sum(g.batch.row_by_row for g in self.groups)
+        self.stats["numeric_nodes"] = sum(g.batch.numeric for g in self.groups)
         return self._values()
 
     # ---- 1. cells
@@ -761,7 +864,7 @@ class Engine:
         cached = _COMPILED.get(key)
         if cached is not None:
             func, g.batch = cached
-            g.batch.row_by_row = 0
+            g.batch.row_by_row = g.batch.numeric = 0
             self.stats["reused"] += 1
             return func
         func = _compile(info.builder, g.batch if g.mode == "vector" else None)
