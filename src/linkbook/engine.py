@@ -515,8 +515,10 @@ class _Batch:
 # numpy ufunc on a scalar); tests/test_engine.py checks that on random and edge values.  An element
 # whose argument is not a finite number, or whose result is not finite (formulas turns it into
 # #NUM!, #DIV/0!, #VALUE!), is left to formulas' own call.
-def _python_floats(fn):
-    return lambda *xs: (fn(*xs), float)
+def _typed(fn, kind):
+    """An array function whose elements formulas gives as `kind` (its lambdas on Python floats
+    give float, a numpy ufunc on a scalar gives np.float64)."""
+    return lambda *xs: (fn(*xs), kind)
 
 
 def _power(x, y):
@@ -541,15 +543,11 @@ def _atan2(x, y):
     return np.where((x == 0) & (y == 0), np.nan, np.arctan2(y, x)), np.float64
 
 
-def _ufunc(fn):
-    return lambda *xs: (fn(*xs), np.float64)
-
-
 NUMERIC_FORMS = {
-    "+": _python_floats(np.add), "-": _python_floats(np.subtract),
-    "*": _python_floats(np.multiply), "u-": _python_floats(np.negative),
+    "+": _typed(np.add, float), "-": _typed(np.subtract, float),
+    "*": _typed(np.multiply, float), "u-": _typed(np.negative, float),
     "/": _divide, "^": _power, "ATAN2": _atan2,
-    **{name: _ufunc(fn) for name, fn in {
+    **{name: _typed(fn, np.float64) for name, fn in {
         "SIN": np.sin, "COS": np.cos, "TAN": np.tan, "ACOS": np.arccos, "ASIN": np.arcsin,
         "ATAN": np.arctan, "SQRT": np.sqrt, "RADIANS": np.radians, "DEGREES": np.degrees,
         "ABS": np.abs, "EXP": np.exp}.items()},
