@@ -470,55 +470,55 @@ def assert_nan_where_open(r, input_key, constants=(), defined=()):
         assert np.all(np.isfinite(val[ok])), f"{key} not finite on closed rows"
 
 
-@pytest.mark.parametrize("br", [1, -1])
-def test_non_grashof_fourbar_mask(br):
+def solve_partly_open(mechanism: str, p: dict, closes) -> tuple[dict, dict]:
+    """Solve a 1° sweep that closes only on some rows; the assembled mask must be the
+    independent distance check `closes`. Returns the solution and its closed rows alone."""
     deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
-    p = dict(NON_GRASHOF, branch=br)
-    r = solve("fourbar", p, deg)
-    want = fourbar_closes(p, deg)
+    r = solve(mechanism, p, deg)
+    want = closes(p, deg)
     assert 0 < want.sum() < len(deg)
     np.testing.assert_array_equal(r["assembled"], want)
-    assert_nan_where_open(r, "theta12", ("gamma",), ("xs", "ys", "s", "phi", "xA", "yA"))
     ok = r["assembled"]
-    check_fourbar(p, {k: (v[ok] if isinstance(v, np.ndarray) else v) for k, v in r.items()}, br)
+    return r, {k: (v[ok] if isinstance(v, np.ndarray) else v) for k, v in r.items()}
+
+
+@pytest.mark.parametrize("br", [1, -1])
+def test_non_grashof_fourbar_mask(br):
+    p = dict(NON_GRASHOF, branch=br)
+    r, closed = solve_partly_open("fourbar", p, fourbar_closes)
+    assert_nan_where_open(r, "theta12", ("gamma",), ("xs", "ys", "s", "phi", "xA", "yA"))
+    check_fourbar(p, closed, br)
 
 
 @pytest.mark.parametrize("br", [1, -1])
 def test_short_coupler_slider_crank_mask(br):
-    deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
     p = dict(SHORT_SLIDER, branch=br)
-    r = solve("slider-crank", p, deg)
-    want = slider_closes(p, deg)
-    assert 0 < want.sum() < len(deg)
-    np.testing.assert_array_equal(r["assembled"], want)
+    r, closed = solve_partly_open("slider-crank", p, slider_closes)
     assert_nan_where_open(r, "theta12", defined=("xA", "yA"))
-    ok = r["assembled"]
-    check_slider_crank(p, {k: v[ok] for k, v in r.items()}, br)
+    check_slider_crank(p, closed, br)
 
 
 def test_inverted_slider_crank_mask():
     """With a4 > a1 − a2 the crank cannot turn fully: open where |B0A| < a4."""
+    def closes(p, deg):
+        th = np.radians(deg)
+        return np.hypot(p["a2"] * np.cos(th) - p["a1"], p["a2"] * np.sin(th)) >= p["a4"]
+
     p = dict(a1=100.0, a2=40.0, a4=80.0, branch=1)
-    deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
-    r = solve("inverted-slider-crank", p, deg)
-    th = np.radians(deg)
-    want = np.hypot(p["a2"] * np.cos(th) - p["a1"], p["a2"] * np.sin(th)) >= p["a4"]
-    assert 0 < want.sum() < len(deg)
-    np.testing.assert_array_equal(r["assembled"], want)
+    r, _ = solve_partly_open("inverted-slider-crank", p, closes)
     assert_nan_where_open(r, "theta12", defined=("xp", "yp", "p", "phi", "xA", "yA"))
 
 
 def test_quick_return_ram_mask():
     """A ram line too high for the ram link at some rocker angles: open where
     |a4 sinθ14 − b1| > a5."""
+    def closes(p, deg):
+        th = np.radians(deg)
+        t14 = np.arctan2(p["a1"] + p["a2"] * np.sin(th), p["a2"] * np.cos(th))
+        return np.abs(p["a4"] * np.sin(t14) - p["b1"]) <= p["a5"]
+
     p = dict(a1=150.0, a2=60.0, a4=400.0, a5=150.0, b1=520.0, branch=1)
-    deg = np.arange(0.0, 360.0 + 1e-9, 1.0)
-    r = solve("quick-return", p, deg)
-    th = np.radians(deg)
-    t14 = np.arctan2(p["a1"] + p["a2"] * np.sin(th), p["a2"] * np.cos(th))
-    want = np.abs(p["a4"] * np.sin(t14) - p["b1"]) <= p["a5"]
-    assert 0 < want.sum() < len(deg)
-    np.testing.assert_array_equal(r["assembled"], want)
+    r, _ = solve_partly_open("quick-return", p, closes)
     assert_nan_where_open(r, "theta12", ("time_ratio",),
                           ("xA", "yA", "s43", "theta14", "xC", "yC"))
     assert math.isnan(r["time_ratio"])
