@@ -2,12 +2,10 @@
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from pathlib import Path
-from typing import Callable
 
 from . import charts, engine, workbook
+from .files import write_atomic
 from .model import COLUMN
 from .templates import Template
 
@@ -32,17 +30,8 @@ def make(t: Template) -> tuple[workbook.Built, dict]:
 def _print_setup(wb) -> None:
     """Page layout for printing and previews; the Mechanism sheet (inputs, current position and
     drawing side by side) prints one page wide, landscape, so no block is cut off."""
-    from openpyxl.worksheet.pagebreak import ColBreak
-
     from .office import apply_print_setup
-    apply_print_setup(wb)
-    ws = wb[workbook.MECH]
-    ws.col_breaks = ColBreak()
-    ws.page_setup.orientation = "landscape"
-    ws.page_setup.scale = None
-    ws.sheet_properties.pageSetUpPr.fitToPage = True
-    ws.page_setup.fitToWidth = 1
-    ws.page_setup.fitToHeight = 0
+    apply_print_setup(wb, fit_to_width=(workbook.MECH,))
 
 
 def degree_windows(built: workbook.Built, values: dict) -> dict[str, float]:
@@ -76,23 +65,6 @@ def _cut(degs: list[float]) -> float:
     if not a < lo < b:
         lo = (a + b) / 2
     return (lo + 180.0) % 360.0 - 180.0
-
-
-def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
-    """Let `write` fill a temporary file beside the target, then rename it into place: an
-    existing file is never left half-written, whatever happens before the rename."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)      # mkstemp makes it private; a workbook is not
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
 
 
 def build_file(t: Template, path: Path, with_values: bool = False) -> workbook.Built:

@@ -17,16 +17,15 @@ from __future__ import annotations
 
 import math
 import numbers
-import os
 import posixpath
 import re
-import tempfile
 import zipfile
 from pathlib import Path
 from xml.sax.saxutils import escape
 
 from defusedxml import ElementTree
 
+from .files import write_atomic
 from .office import error_code
 
 MAIN_NS = "http://schemas.openxmlformats.org/spreadsheetml/2006/main"
@@ -53,11 +52,10 @@ def add_cached_values(path_in, path_out, values: dict) -> int:
     with zipfile.ZipFile(path_in) as zin:
         parts = sheet_parts(zin)
         by_part = _values_by_part(values, parts)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path_out.name}.", suffix=".tmp",
-                                   dir=path_out.parent)
-        os.close(fd)
-        try:
-            written = 0
+        written = 0
+
+        def copy(tmp: Path) -> None:
+            nonlocal written
             with zipfile.ZipFile(tmp, "w") as zout:
                 for info in zin.infolist():
                     if info.filename in by_part:
@@ -66,10 +64,8 @@ def add_cached_values(path_in, path_out, values: dict) -> int:
                         zout.writestr(_same_entry(info), full_calc_on_load(zin.read(info)))
                     else:
                         zout.writestr(_same_entry(info), zin.read(info))
-            os.replace(tmp, path_out)
-        finally:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
+
+        write_atomic(path_out, copy)
     return written
 
 
