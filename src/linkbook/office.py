@@ -196,10 +196,12 @@ DEFAULT_COL_CHARS = 8.54                 # what LibreOffice gives a column of no
 CHAR_CM = 0.0972 * 2.54
 
 
-def apply_print_setup(wb) -> None:
+def apply_print_setup(wb, fit_to_width: tuple[str, ...] = ()) -> None:
     """Landscape or portrait, a scale, page breaks and a footer for every visible sheet, so
     that printed (and previewed) pages are readable and no chart is split across pages.
-    Call after the charts have been added; it changes no cell."""
+    Sheets named in `fit_to_width` print landscape, one page wide (blocks side by side stay
+    together), with the row breaks chosen for them. Call after the charts have been added; it
+    changes no cell."""
     from openpyxl.worksheet.page import PageMargins
     for ws in wb.worksheets:
         if ws.sheet_state != "visible":
@@ -210,6 +212,10 @@ def apply_print_setup(wb) -> None:
         _repeat_frozen_titles(ws)
         sheet = _SheetShape.of(ws)
         orientation, scale, col_breaks, row_breaks = sheet.best_layout()
+        if ws.title in fit_to_width:
+            orientation, scale, col_breaks = "landscape", None, []
+            ws.sheet_properties.pageSetUpPr.fitToPage = True
+            ws.page_setup.fitToWidth, ws.page_setup.fitToHeight = 1, 0
         ws.page_setup.orientation = orientation
         ws.page_setup.scale = scale
         _set_breaks(ws, col_breaks, row_breaks)
