@@ -108,14 +108,12 @@ def _main(argv: list[str] | None) -> int:
 def _verify(args) -> int:
     import json
 
+    from .office import OfficeUnavailable
     from .safety import UnsafeFile
     from .verify import UnusableFile, verify
     try:
         report = verify(Path(args.book), args.engine)
-    except (UnusableFile, UnsafeFile) as exc:
-        print(f"linkbook: error: {exc}", file=sys.stderr)
-        return 2
-    except _office_errors() as exc:
+    except (UnusableFile, UnsafeFile, OfficeUnavailable) as exc:
         print(f"linkbook: error: {exc}", file=sys.stderr)
         return 2
     if args.json:
@@ -140,14 +138,6 @@ def _print_report(report) -> None:
             print(f"  {m.sheet}!{m.cell}: expected {m.expected}, got {m.got}")
     print(f"{'all agree' if report.ok else 'DISAGREES'}: {report.cells} formula cells, "
           f"max |Δ| {report.max_abs:.2e}")
-
-
-def _office_errors() -> tuple:
-    try:
-        from .office import OfficeUnavailable
-    except ImportError:
-        return ()
-    return (OfficeUnavailable,)
 
 
 def _preview(args) -> int:
