@@ -100,13 +100,8 @@ def inputs_of(wb, meta: dict) -> dict[str, float]:
 
 
 def _angles(ws, column: str, rows: list[int]) -> np.ndarray:
-    out = []
-    for r in range(rows[0], rows[1] + 1):
-        v = ws[f"{column}{r}"].value
-        if not isinstance(v, (int, float)) or isinstance(v, bool):
-            raise UnusableFile(f"{ws.title}!{column}{r}: input angle must be a number (got {v!r})")
-        out.append(float(v))
-    return np.array(out)
+    return np.array([_number(ws, f"{column}{r}", "input angle")
+                     for r in range(rows[0], rows[1] + 1)])
 
 
 def _number(ws, cell: str, what: str) -> float:
@@ -405,9 +400,9 @@ def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relat
         expected = _grid_reference(mech, params, param, angles, adjust)
         expected_by_block[block["sheet"]] = expected
         c = Check(block["sheet"], f"{grid['key']} grid", size)
+        slope = _slope(mech.name, params, angles, mech.grid[1], "length", param, adjust)
         for j, letter in enumerate(block["columns"]):
             cells = [f"{letter}{r}" for r in range(block["rows"][0], block["rows"][1] + 1)]
-            slope = _slope(mech.name, params, angles, mech.grid[1], "length", param, adjust)
             compare(c, block["sheet"], cells, [values.get((block["sheet"], x)) for x in cells],
                     expected[:, j], "length", is_error, error_code, tol, relative,
                     lambda i, j=j, slope=slope: slope(i, j))
@@ -419,9 +414,7 @@ def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relat
                     np.array(adjust), "length", is_error, error_code, tol, relative)
             checks.append(h)
     fine = expected_by_block[stroke["sheet"]]
-    strokes = np.where(np.isnan(fine).any(axis=0), np.nan,
-                       np.nanmax(np.where(np.isnan(fine), -np.inf, fine), axis=0)
-                       - np.nanmin(np.where(np.isnan(fine), np.inf, fine), axis=0))
+    strokes = np.ptp(fine, axis=0)          # NaN where some angle cannot close
     cells = [f"{c}{grid['stroke_row']}" for c in grid["columns"]]
     s = Check(grid["sheet"], "stroke", size)
     compare(s, grid["sheet"], cells, [values.get((grid["sheet"], x)) for x in cells], strokes,
@@ -431,28 +424,23 @@ def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relat
 
 
 # ---------------------------------------------------------------- the command
-def open_book(path: Path):
-    from .safety import load_workbook_safely
-    return load_workbook_safely(path)
-
-
 def verify(path: Path, engine: str = "vector") -> Report:
-    wb = open_book(path)
+    from .safety import load_workbook_safely
+    wb = load_workbook_safely(path)
     meta = layout.read_meta(wb)
     if meta is None or meta.get("format") != layout.FORMAT_VERSION:
         raise UnusableFile(f"{path}: not a linkbook workbook (no build record sheet)")
     from . import engine as engines
+    is_error, error_code, relative = engines.is_error, engines.error_code, False
     if engine == "vector":
         values = engines.evaluate(wb)
-        checks = check_book(wb, meta, values, engines.is_error, engines.error_code)
     elif engine == "formulas":
         values = engines.evaluate_formulas_model(path)
-        checks = check_book(wb, meta, values, engines.is_error, engines.error_code)
     elif engine == "libreoffice":
         from . import office
         values = office.recalculated_values(path)
-        checks = check_book(wb, meta, values, office.is_error, office.error_code,
-                            relative=True)
+        is_error, error_code, relative = office.is_error, office.error_code, True
     else:
         raise UnusableFile(f"unknown engine {engine!r}")
+    checks = check_book(wb, meta, values, is_error, error_code, relative=relative)
     return Report(str(path), meta["mechanism"], engine, checks)
