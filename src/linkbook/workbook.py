@@ -393,18 +393,19 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
             f'=IFERROR(SMALL({rng("gap_from")},{k}),"{DASH}")', DEG, "number_or_dash")
         put(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"{DASH}")', DEG,
             "number_or_dash")
+
+    def extremes(prefix: str, what: str, column: str, unit: str) -> None:
+        # MINIFS/MAXIFS over numbers only: the #N/A rows of a column are skipped.
+        for suffix, fn, word in (("min", MINIFS, "smallest"), ("max", MAXIFS, "largest")):
+            put(f"{prefix}_{suffix}", f"{word} {what}",
+                f'=IF(COUNT({column})=0,"{DASH}",{fn}({column},{column},">-1E+300"))', unit,
+                "number_or_dash")
+
     if model.output:
         q = model.get(model.output)
-        o = rng(model.output)
-        for key, fn, word in (("output_min", MINIFS, "smallest"), ("output_max", MAXIFS,
-                                                                    "largest")):
-            put(key, f"{word} {q.symbol} ({q.label})",
-                f'=IF(COUNT({o})=0,"{DASH}",{fn}({o},{o},">-1E+300"))', q.unit, "number_or_dash")
+        extremes("output", f"{q.symbol} ({q.label})", rng(model.output), q.unit)
     if model.transmission:
-        m = rng(f"{model.transmission}_deg")
-        for key, fn, word in (("mu_min", MINIFS, "smallest"), ("mu_max", MAXIFS, "largest")):
-            put(key, f"{word} transmission angle μ",
-                f'=IF(COUNT({m})=0,"{DASH}",{fn}({m},{m},">-1E+300"))', DEG, "number_or_dash")
+        extremes("mu", "transmission angle μ", rng(f"{model.transmission}_deg"), DEG)
     if model.fourbar:
         _fourbar_summary(put, model, names)
     return cells
