@@ -1,7 +1,8 @@
 """Speed of verification, measured in one run on this machine (a script, not a test).
 
-For each case (four-bar at 5°, 1°, 0.1°; pump grid 20° × 6 and 1° × 51) it measures, each in a
-fresh Python process (wall time and peak memory of that process):
+For each case (four-bar at 5°, 1°, 0.1°; pump grid 20° × 6 and 1° × 51; with --templates, also
+every bundled template at its default step) it measures, each in a fresh Python process (wall time
+and peak memory of that process):
   build      linkbook build (layout, one evaluation for chart scales, save)
   vector     linkbook verify --engine vector (load, evaluate every formula cell, reference, compare)
   excelmodel formulas' ExcelModel on the same file (skipped where a per-cell cost calibrated in
@@ -10,7 +11,7 @@ fresh Python process (wall time and peak memory of that process):
   reference  the numpy reference alone, for the same angles and adjustments
 and prints a table with ratios against ExcelModel and against the reference.
 
-    python benchmarks/verify_speed.py [--json results.json] [--only fourbar-1]
+    python benchmarks/verify_speed.py [--json results.json] [--only fourbar-1] [--templates]
 """
 from __future__ import annotations
 
@@ -59,18 +60,18 @@ with tempfile.TemporaryDirectory() as d:
     recalculate(Path(BOOK), Path(d))
 """,
     "reference": """
-from linkbook import reference
 from linkbook.safety import load_workbook_safely
-from linkbook.verify import inputs_of
+from linkbook.verify import Reference, inputs_of
 from linkbook.workbook import read_meta
 wb = load_workbook_safely(Path(BOOK))
 meta = read_meta(wb)
 params = inputs_of(wb, meta)
 t0 = time.perf_counter()
+reference = Reference(meta)
 ws = wb[meta["sweep"]["sheet"]]
 r0, r1 = meta["sweep"]["rows"]
 angles = [ws[f"A{r}"].value for r in range(r0, r1 + 1)]
-reference.solve(meta["mechanism"], params, angles)
+reference.solve(params, angles)
 if "grid" in meta:
     g = wb["Grid"]
     for block in (meta["grid"], meta["stroke"]):
@@ -78,7 +79,7 @@ if "grid" in meta:
         a = [bws[f"A{r}"].value for r in range(block["rows"][0], block["rows"][1] + 1)]
         for c in meta["grid"]["columns"]:
             s1 = g[f"{c}{meta['grid']['param_row']}"].value
-            reference.solve(meta["mechanism"], {**params, "s1": s1}, a)
+            reference.solve({**params, meta["grid"]["param"]: s1}, a)
 EXTRA["solve_seconds"] = time.perf_counter() - t0
 """,
 }
@@ -92,7 +93,7 @@ sys.path.insert(0, {src!r})
 import formulas, numpy, openpyxl
 from formulas.functions import get_functions
 get_functions()
-import linkbook.cli, linkbook.engine, linkbook.verify, linkbook.reference
+import linkbook.cli, linkbook.engine, linkbook.verify
 NAME, ARGS, BOOK = {name!r}, {args!r}, {book!r}
 EXTRA = {{}}
 t0 = time.perf_counter()
@@ -133,12 +134,17 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", help="also write the results to this file")
     ap.add_argument("--only", action="append", help="run only these cases")
+    ap.add_argument("--templates", action="store_true",
+                    help="also every bundled template at its default step")
     opts = ap.parse_args()
+    cases = dict(CASES)
+    if opts.templates:
+        cases.update({p.stem: (p.stem, []) for p in sorted((ROOT / "templates").glob("*.toml"))})
     have_office = bool(__import__("shutil").which("soffice"))
     results = {}
     seconds_per_cell = None    # ExcelModel cost, calibrated on the first case it runs
     with tempfile.TemporaryDirectory() as tmp:
-        for case, (name, args) in CASES.items():
+        for case, (name, args) in cases.items():
             if opts.only and case not in opts.only:
                 continue
             book = Path(tmp) / f"{case}.xlsx"
@@ -180,9 +186,9 @@ def print_row(case: str, r: dict, flush: bool = False) -> None:
 
 
 def print_table(results: dict) -> None:
-    head = (f"{'case':12} {'cells':>7} {'build':>7} {'vector':>7} {'peakMB':>7} {'Excel-':>9} "
+    head = (f"{'case':21} {'cells':>7} {'build':>7} {'vector':>7} {'peakMB':>7} {'Excel-':>9} "
             f"{'Libre-':>7} {'refer-':>7} {'ExcelModel/':>12} {'vector/':>8} {'verify':>7}")
-    sub = (f"{'':12} {'':>7} {'[s]':>7} {'[s]':>7} {'':>7} {'Model [s]':>9} {'Office':>7} "
+    sub = (f"{'':21} {'':>7} {'[s]':>7} {'[s]':>7} {'':>7} {'Model [s]':>9} {'Office':>7} "
            f"{'ence [s]':>7} {'vector':>12} {'reference':>8} {'':>7}")
     print(head)
     print(sub)
@@ -193,7 +199,7 @@ def print_table(results: dict) -> None:
         ratio_ref = (f"{vec['seconds'] / ref['seconds']:.1f}x" if "seconds" in ref
                      and "seconds" in vec else "-")
         verdict = "ok" if vec.get("ok") else "FAIL"
-        print(f"{case:12} {r['cells']:7d} {_s(r['build']):>7} {_s(vec):>7} "
+        print(f"{case:21} {r['cells']:7d} {_s(r['build']):>7} {_s(vec):>7} "
               f"{vec.get('peak_mb', 0):7.0f} {_s(xl):>9} {_s(r['office']):>7} {_s(ref):>7} "
               f"{ratio_xl:>12} {ratio_ref:>8} {verdict:>7}")
     print("\nSeconds of work in a process whose libraries are already loaded (the same warm-up for "

@@ -40,8 +40,10 @@ COMMAND_LINE = [
 
 TOML_CASES = [
     ("TOML that does not parse", "mechanism = \n", "not valid TOML"),
-    ("mechanism missing", FOURBAR_TOML.replace('mechanism = "fourbar"', ""), "mechanism"),
-    ("unknown mechanism", FOURBAR_TOML.replace('"fourbar"', '"fivebar"'), "fivebar"),
+    ("mechanism missing", FOURBAR_TOML.replace("[mechanism]", "[mechanisms]"),
+     "mechanism.ground: is missing"),
+    ("unknown mechanism", 'mechanism = "fivebar"\n' + FOURBAR_TOML[:FOURBAR_TOML.index(
+        "[mechanism]")], "fivebar"),
     ("title missing", FOURBAR_TOML.replace('title = ', 'xtitle = '), "title"),
     ("sweep missing", FOURBAR_TOML.replace("[sweep]", "[sweeps]"), "sweep"),
     ("sweep step is text", FOURBAR_TOML.replace("step = 5", 'step = "5"'), "step"),
@@ -96,6 +98,17 @@ def test_bad_template_file(tmp_path, capsys, what, text, must_hold):
     (tmp_path / "mine.toml").write_text(text, encoding="utf-8")
     code, err = _run(tmp_path, ["build", "mine.toml", "-o", "mine.xlsx"], capsys)
     _assert_refused(tmp_path, code, err, must_hold, ["mine.toml"])
+
+
+def test_the_older_form_names_a_bundled_mechanism(tmp_path, capsys):
+    """A template written before the mechanism language (`mechanism = "fourbar"`, parameters
+    without kinds) still builds: the name stands for the bundled description."""
+    old = 'mechanism = "fourbar"\n' + FOURBAR_TOML[:FOURBAR_TOML.index("[mechanism]")]
+    old = old.replace(', kind = "branch"', "")
+    (tmp_path / "old.toml").write_text(old, encoding="utf-8")
+    code, err = _run(tmp_path, ["build", "old.toml", "-o", "old.xlsx", "--set", "a2=30"], capsys)
+    assert code == 0, err
+    assert (tmp_path / "old.xlsx").is_file()
 
 
 def test_at_least_25_kinds_of_bad_input_are_tried():

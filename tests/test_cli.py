@@ -19,12 +19,15 @@ def run(*args, cwd=None):
                           capture_output=True, text=True, timeout=300)
 
 
-def test_list_shows_all_eight_templates():
+def test_list_shows_every_bundled_template():
     out = run("list")
     assert out.returncode == 0
     names = [line.split()[0] for line in out.stdout.splitlines()]
     assert names == sorted(["fourbar", "slider-crank", "pump", "inverted-slider-crank",
-                            "quick-return", "shaper", "garage-door", "tk-fourbar"])
+                            "quick-return", "shaper", "garage-door", "tk-fourbar",
+                            "jansen", "watt-sixbar", "whitworth", "toggle-press", "hoeken"])
+    assert "[crank, dyad, point]" in next(line for line in out.stdout.splitlines()
+                                          if line.startswith("fourbar "))
 
 
 def test_help_teaches(tmp_path):

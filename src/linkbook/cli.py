@@ -15,7 +15,7 @@ EPILOG = """examples:
   linkbook build fourbar --set a2=40 --branch crossed -o crossed.xlsx
   linkbook build slider-crank --step 1          # one row per degree
   linkbook build pump --set s1=20,50,100        # the grid's adjustments s1
-  linkbook build my-linkage.toml                # a copy of a template with your numbers
+  linkbook build my-linkage.toml                # your own mechanism (docs/language.md)
   linkbook build --all --outdir output          # every bundled template
 
 KEY in --set is the parameter's symbol as `linkbook list -v` shows it (a2, gamma3, ...).
@@ -27,7 +27,9 @@ def _parser() -> argparse.ArgumentParser:
         prog="linkbook",
         description="Turn a planar mechanism into an Excel workbook of live formulas: named "
                     "inputs, one row of RADIANS/ATAN2/ACOS steps per crank angle, the current "
-                    "position drawn as a chart, and #N/A wherever the loop cannot close.",
+                    "position drawn as a chart, and #N/A wherever the loop cannot close. A "
+                    "mechanism is a TOML file of the textbook's steps (crank, dyad, slider, "
+                    "slide, point, slot, ...): see docs/language.md, or copy a bundled template.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--version", action="version", version=f"linkbook {__version__}")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND", required=True)
@@ -38,7 +40,9 @@ def _parser() -> argparse.ArgumentParser:
 
     b = sub.add_parser("build", help="write a workbook from a template",
                        description="Write a workbook from a bundled template (by name) or a "
-                                   "TOML file of your own.",
+                                   "TOML file of your own: a copy of a template with your numbers, "
+                                   "or a mechanism of your own in the mechanism language "
+                                   "(docs/language.md).",
                        epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     b.add_argument("template", nargs="?", metavar="NAME_OR_TOML",
                    help="a bundled template name (see `linkbook list`) or a .toml file")
@@ -159,7 +163,8 @@ def _preview(args) -> int:
 def _list(verbose: bool) -> int:
     for path in templates.bundled():
         t = templates.load(str(path))
-        print(f"{t.name:24} {t.mechanism.name:22} {t.title}")
+        steps = ", ".join(dict.fromkeys(s["type"] for s in t.mechanism.description["steps"]))
+        print(f"{t.name:24} {t.title}  [{steps}]")
         if verbose:
             for p in t.parameters:
                 print(f"    {p.symbol:12} = {p.value:<10g} {p.unit:4} {p.label}")

@@ -78,7 +78,7 @@ class Model:
     links: list[tuple[str, ...]] = field(default_factory=list)   # polylines through joint names
     charts: list[Chart] = field(default_factory=list)
     path: tuple[str, str] | None = None    # (x key, y key) of a traced point drawn on the mechanism
-    closes: str = ""          # a quantity that is a number exactly where every loop closes
+    closes: tuple[str, ...] = ()   # quantities that are all numbers exactly where every loop closes
     output: str = ""          # the main output, whose swing the summary reports
     transmission: str = ""    # the transmission angle, if the mechanism has one
     fourbar: FourBarLoop | None = None

@@ -20,11 +20,12 @@ class Sym:
     label: str = ""
     deg: bool = False      # an output angle: also shown in degrees
     wrap: bool = False     # show that degree value in [0°, 360°)
+    shown: bool = True     # a column of its own, or only written into the formulas that use it
 
 
 def _q(sym: Sym, unit: str, formula: str) -> Quantity:
-    return Quantity(sym.key, sym.symbol, unit, formula, label=sym.label, in_degrees=sym.deg,
-                    wrap_360=sym.wrap)
+    return Quantity(sym.key, sym.symbol, unit, formula, COLUMN if sym.shown else ALIAS,
+                    label=sym.label, in_degrees=sym.deg and sym.shown, wrap_360=sym.wrap)
 
 
 def acos_or_na(arg: str) -> str:
@@ -88,16 +89,23 @@ def triangle(model: Model, *, side: str, angle: str, p: str, q: str, branch: str
 
 
 def slider(model: Model, *, pin_x: str, pin_y: str, line_y: str, length: str, branch: str,
-           angle: Sym, position: Sym) -> None:
-    """The slider-crank step: slider S on the line y = {line_y}, |S pin| = {length}.
+           angle: Sym, position: Sym, direction: str = "") -> None:
+    """The slider-crank step: slider S on a line, |S pin| = {length}. pin_x, pin_y: the pin in
+    the line's frame (x along the line); line_y: the line's y in that frame (Excel text, "0" for a
+    line through the frame's origin); direction: the line's angle (radians, Excel text; "" for a
+    horizontal line, whose frame is the mechanism's own).
 
-    angle = angle(S→pin): π − asin(…) on branch 1 (S right of the pin), asin(…) on branch −1,
-    written as π/2 + branch·(π/2 − asin(…)) so that the argument appears once.
+    angle = angle(S→pin): π − asin(…) on branch 1 (S ahead of the pin), asin(…) on branch −1,
+    written as π/2 + branch·(π/2 − asin(…)) so that the argument appears once; the position is
+    S's x in the line's frame.
     """
+    rise = pin_y if line_y == "0" else f"({pin_y}-{line_y})"
+    turn = f"{direction}+" if direction else ""
+    relative = f"({{{angle.key}}}-{direction})" if direction else f"{{{angle.key}}}"
     model.add(
-        _q(angle, RAD, f"PI()/2+{{{branch}}}*(PI()/2-"
-                       + asin_or_na(f"({pin_y}-{{{line_y}}})/{{{length}}}") + ")"),
-        _q(position, LENGTH, f"{pin_x}-{{{length}}}*COS({{{angle.key}}})"),
+        _q(angle, RAD, f"{turn}PI()/2+{{{branch}}}*(PI()/2-"
+                       + asin_or_na(f"{rise}/{{{length}}}") + ")"),
+        _q(position, LENGTH, f"{pin_x}-{{{length}}}*COS({relative})"),
     )
 
 

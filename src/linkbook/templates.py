@@ -12,7 +12,7 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MECHANISMS, Mechanism
+from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, Mechanism
 
 def _template_dir() -> Path:
     """Installed: templates/ is packaged inside linkbook; from a checkout: the repo's templates/."""
@@ -100,8 +100,10 @@ def excel_name_problem(name: str) -> str | None:
 
 
 def default_name(symbol: str) -> str:
-    """a2 -> a_2, gamma3 -> gamma_3: never a cell-like name such as A2 or B3."""
-    return re.sub(r"^([A-Za-z]+)(\d+)$", r"\1_\2", symbol)
+    """a2 -> a_2, gamma3 -> gamma_3: never a cell-like name such as A2 or B3; a symbol that is
+    still one (c, r: columns and rows in R1C1) gets a prefix: p_c."""
+    name = re.sub(r"^([A-Za-z]+)(\d+)$", r"\1_\2", symbol)
+    return f"p_{name}" if excel_name_problem(name) else name
 
 
 # ---------------------------------------------------------------- values
@@ -183,17 +185,13 @@ def _need(data: dict, key: str, origin: str, kind: type | tuple = str):
 
 
 def from_data(name: str, data: dict, origin: str = "template") -> Template:
-    mech_name = _need(data, "mechanism", origin)
-    if mech_name not in MECHANISMS:
-        raise InputError(f"{origin}: mechanism",
-                         f"unknown mechanism {mech_name!r}; known: {', '.join(MECHANISMS)}")
-    mech = MECHANISMS[mech_name]
+    mech = _mechanism(name, data, origin)
     length_unit = _need(data, "length_unit", origin)
     table = _need(data, "parameters", origin, dict)
     unknown = [s for s in table if s not in mech.parameters]
     if unknown:
         raise InputError(f"{origin}: parameters.{unknown[0]}",
-                         f"is not a parameter of {mech_name}; it has {', '.join(mech.parameters)}")
+                         f"is not a parameter of {mech.name}; it has {', '.join(mech.parameters)}")
     params = []
     for symbol, kind in mech.parameters.items():
         field = f"{origin}: parameters.{symbol}"
@@ -226,6 +224,11 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
     if mech.grid:
         grid_param = mech.grid[0]
         grid = _need(data, "grid", origin, dict)
+        allowed = {"values", "stroke_step", "parameter", "output"}
+        for k in grid:
+            if k not in allowed:
+                raise InputError(f"{origin}: grid.{k}", f"is not a key here; known: "
+                                                        f"{', '.join(sorted(allowed))}")
         grid_values = parse_list(f"{origin}: grid.values", mech.parameters[grid_param],
                                  _need(grid, "values", f"{origin}: grid", list))
         stroke_step = parse_number(f"{origin}: grid.stroke_step", grid.get("stroke_step", 1.0))
@@ -236,6 +239,48 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         stroke_step=stroke_step)
     check_sweep(template)
     return template
+
+
+def _mechanism(name: str, data: dict, origin: str) -> Mechanism:
+    """The mechanism the template describes (docs/language.md). The older form names a bundled
+    template's mechanism (`mechanism = "fourbar"`): its description and parameter kinds."""
+    from .language import DescriptionError, compile_mechanism, parameter_kinds
+    raw = data.get("mechanism")
+    table = _need(data, "parameters", origin, dict)
+    kinds = {}
+    if isinstance(raw, str):
+        bundled_data = bundled_template_data(raw)
+        if bundled_data is None:
+            known = ", ".join(p.stem for p in bundled())
+            raise InputError(f"{origin}: mechanism", f"unknown mechanism {raw!r}; known: {known}")
+        raw = bundled_data["mechanism"]
+        kinds = {s: e.get("kind", LENGTH_KIND) for s, e in bundled_data["parameters"].items()}
+    elif not isinstance(raw, dict):
+        raise InputError(f"{origin}: mechanism", "is missing: a [mechanism] table "
+                                                 "(docs/language.md) or a bundled name")
+    grid = data.get("grid")
+    grid_keys = None
+    if isinstance(grid, dict) and ("parameter" in grid or "output" in grid):
+        grid_keys = (_need(grid, "parameter", f"{origin}: grid"),
+                     _need(grid, "output", f"{origin}: grid"))
+    elif isinstance(data.get("mechanism"), str) and bundled_data.get("grid"):
+        grid_keys = (bundled_data["grid"]["parameter"], bundled_data["grid"]["output"])
+    try:
+        user = parameter_kinds(origin, table)
+        kinds = {s: (table[s].get("kind") if isinstance(table[s], dict) and "kind" in table[s]
+                     else kinds.get(s, k)) for s, k in user.items()}
+        return compile_mechanism(name, raw, kinds, origin, grid_keys)
+    except DescriptionError as exc:
+        raise InputError(exc.field, exc.message) from None
+
+
+def bundled_template_data(name: str) -> dict | None:
+    """The TOML data of the bundled template `name`, if it describes a mechanism."""
+    path = TEMPLATE_DIR / f"{name}.toml"
+    if not path.is_file():
+        return None
+    data = tomllib.loads(path.read_text(encoding="utf-8"))
+    return data if isinstance(data.get("mechanism"), dict) else None
 
 
 def _check_unique_names(params: list[Parameter], origin: str) -> None:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import reference, workbook as layout
+from . import generic, workbook as layout
 from .templates import InputError, check_value
 
 ABS_TOL = 1e-9
@@ -176,11 +176,35 @@ def column_unit(model, key: str) -> str:
     return model.get(key).unit
 
 
+# ---------------------------------------------------------------- the reference of a book
+class Reference:
+    """The independent solver of one book's mechanism: the generic reference (generic.py), given
+    the description the book records, with the book's own input values."""
+
+    def __init__(self, meta: dict):
+        from .language import DescriptionError, from_record
+        try:
+            self.mechanism = from_record(meta)
+        except (DescriptionError, KeyError, TypeError, AttributeError) as exc:
+            raise UnusableFile(f"the mechanism recorded in the book is unusable: {exc}") \
+                from None
+        self.description = self.mechanism.description
+
+    def solve(self, params: dict, angles) -> dict:
+        return generic.solve(self.description, params, angles)
+
+    def fourbar_loop(self, params: dict):
+        return generic.fourbar_loop(self.description, params)
+
+    def limit_angles(self, params: dict, length: float) -> list[float]:
+        return generic.limit_angles(self.description, params, length)
+
+
 # ---------------------------------------------------------------- blocks
 def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float = ABS_TOL,
                relative: bool = False) -> list[Check]:
-    from .mechanisms import MECHANISMS
-    mech = MECHANISMS[meta["mechanism"]]
+    solver = Reference(meta)
+    mech = solver.mechanism
     model = mech.build()
     params = inputs_of(wb, meta)
     size = mechanism_size(meta, params)
@@ -197,33 +221,28 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     ws = wb[sweep["sheet"]]
     rows = sweep["rows"]
     angles = _angles(ws, "A", rows)
-    ref = reference.solve(mech.name, params, angles)
+    ref = solver.solve(params, angles)
     for key, letter in sweep["columns"].items():
         if key == f"{mech.input_key}_deg" or key in ASSEMBLY_COLUMNS:
             continue
         cells = [f"{letter}{r}" for r in range(rows[0], rows[1] + 1)]
         unit = column_unit(model, key)
         run(layout.SWEEP, key, sweep["sheet"], cells, _expected(ref, key), unit,
-            _slope(mech.name, params, angles, key, unit))
+            _slope(solver, params, angles, key, unit))
 
     # The current position, the joints and the drawing rows.
     pos = meta["position"]
     angle = _number(wb[pos["sheet"]], pos["input_cell"], "the current input angle")
-    one = reference.solve(mech.name, params, np.array([angle]))
+    one = solver.solve(params, np.array([angle]))
     for key, cell in pos["cells"].items():
         unit = column_unit(model, key)
         run("position", key, pos["sheet"], [cell], _expected(one, key), unit,
-            _slope(mech.name, params, np.array([angle]), key, unit))
-    pivots = reference.pivots(mech.name, params)
-    joint_values = {}
+            _slope(solver, params, np.array([angle]), key, unit))
+    joint_values = {name: (float(x[0]), float(y[0])) for name, (x, y) in one["points"].items()}
     for joint in model.joints:
         x_cell, y_cell = pos["joints"][joint.name]
-        if joint.name in pivots:
-            xy = pivots[joint.name]
-        else:
-            xy = (float(one[joint.x.strip("{}")][0]), float(one[joint.y.strip("{}")][0]))
-        joint_values[joint.name] = xy
-        run("joints", joint.name, pos["sheet"], [x_cell, y_cell], np.array(xy), "length")
+        run("joints", joint.name, pos["sheet"], [x_cell, y_cell],
+            np.array(joint_values[joint.name]), "length")
     drawing_cells, drawing_expected = [], []
     for link in pos["drawing"]:
         for i, name in enumerate(link["joints"]):
@@ -239,9 +258,9 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
             info["unit"])
 
     if "closes" in sweep["columns"]:
-        checks += _check_assembly(wb, meta, model, mech, params, angles, ref, values, size)
+        checks += _check_assembly(wb, meta, model, solver, params, angles, ref, values, size)
     if "grid" in meta:
-        checks += _check_grid(wb, meta, mech, params, values, is_error, error_code, tol,
+        checks += _check_grid(wb, meta, solver, params, values, is_error, error_code, tol,
                               relative, size)
     return checks
 
@@ -276,7 +295,7 @@ def _gaps(angles: np.ndarray, closes: np.ndarray) -> tuple[list, list]:
     return starts, ends
 
 
-def _check_assembly(wb, meta, model, mech, params, angles, ref, values, size) -> list[Check]:
+def _check_assembly(wb, meta, model, solver, params, angles, ref, values, size) -> list[Check]:
     sweep = meta["sweep"]
     cols, (r0, r1) = sweep["columns"], sweep["rows"]
     closes = np.asarray(ref["assembled"], dtype=bool)
@@ -289,7 +308,7 @@ def _check_assembly(wb, meta, model, mech, params, angles, ref, values, size) ->
         compare_exact(c, sweep["sheet"], cells, [values.get((sweep["sheet"], x)) for x in cells],
                       expected)
         checks.append(c)
-    expected = _summary_expected(model, mech, params, ref, closes, starts, ends)
+    expected = _summary_expected(model, solver, params, ref, closes, starts, ends)
     slack = _edge_slack(model, ref, closes)
     summary = meta.get("summary", {})
     c = Check("summary", "geometry", size)
@@ -324,7 +343,7 @@ def _extreme(values: np.ndarray, fn) -> object:
     return DASH if values.size == 0 else float(fn(values))
 
 
-def _summary_expected(model, mech, params, ref, closes, starts, ends) -> dict:
+def _summary_expected(model, solver, params, ref, closes, starts, ends) -> dict:
     from .workbook import GAPS_SHOWN
     out: dict[str, object] = {
         "assembles_all": "yes" if closes.all() else "no",
@@ -341,19 +360,33 @@ def _summary_expected(model, mech, params, ref, closes, starts, ends) -> dict:
     if model.transmission:
         m = np.degrees(np.asarray(ref[model.transmission], dtype=float))
         out["mu_min"], out["mu_max"] = _extreme(m, np.min), _extreme(m, np.max)
-    loop = reference.fourbar_loop(mech.name, params)
+    loop = solver.fourbar_loop(params)
     if loop:
         g, c, k, r = loop
         out.update(fb_ground=g, fb_crank=c, fb_coupler=k, fb_rocker=r,
-                   grashof=reference.grashof_class(g, c, k, r))
+                   grashof=grashof_class(g, c, k, r))
         for name, length in (("stretched", k + r), ("folded", abs(k - r))):
-            roots = reference.limit_angles(mech.name, params, length)
+            roots = solver.limit_angles(params, length)
             lo, hi = (roots[0], roots[-1]) if roots else ("none", "none")
             out[f"limit_{name}_1"], out[f"limit_{name}_2"] = lo, hi
     return out
 
 
-def _slope(mechanism: str, params: dict, angles: np.ndarray, key: str, unit: str,
+def grashof_class(ground: float, crank: float, coupler: float, rocker: float) -> str:
+    """Grashof's rule, s + l against p + q, and which link is the shortest."""
+    links = {"ground": ground, "crank": crank, "coupler": coupler, "rocker": rocker}
+    s, l = min(links.values()), max(links.values())
+    pq = sum(links.values()) - s - l
+    if s + l > pq * (1 + 1e-12):
+        return "non-Grashof: triple rocker"
+    if s + l >= pq * (1 - 1e-12):
+        return "change point"
+    shortest = min(links, key=links.get)
+    return {"ground": "Grashof: double crank", "crank": "Grashof: crank-rocker",
+            "coupler": "Grashof: double rocker", "rocker": "Grashof: rocker-crank"}[shortest]
+
+
+def _slope(solver: Reference, params: dict, angles: np.ndarray, key: str, unit: str,
            param: str | None = None, column_values=()):
     """|∂x/∂θ| per row (per column value, for a grid) by a central difference of the reference,
     computed for one row when asked."""
@@ -363,7 +396,7 @@ def _slope(mechanism: str, params: dict, angles: np.ndarray, key: str, unit: str
     def at(i: int, j: int = 0) -> float:
         p = {**params, param: column_values[j]} if param else params
         deg = float(angles[i]) + np.degrees(np.array([-h, 0.0, h]))
-        x = _expected(reference.solve(mechanism, p, deg), key)
+        x = _expected(solver.solve(p, deg), key)
         pairs = [(a, b, span) for a, b, span in ((0, 2, 2 * h), (0, 1, h), (1, 2, h))
                  if np.isfinite(x[a]) and np.isfinite(x[b])]
         if not pairs:
@@ -378,15 +411,14 @@ def _slope(mechanism: str, params: dict, angles: np.ndarray, key: str, unit: str
     return at
 
 
-def _grid_reference(mech, params, param, angles, column_values):
+def _grid_reference(solver, params, param, angles, column_values):
     out = np.empty((len(angles), len(column_values)))
     for j, v in enumerate(column_values):
-        out[:, j] = reference.solve(mech.name, {**params, param: v}, angles)[
-            mech.grid[1]]
+        out[:, j] = solver.solve({**params, param: v}, angles)[solver.mechanism.grid[1]]
     return out
 
 
-def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relative, size):
+def _check_grid(wb, meta, solver, params, values, is_error, error_code, tol, relative, size):
     checks = []
     grid, stroke = meta["grid"], meta["stroke"]
     param = grid["param"]
@@ -397,10 +429,11 @@ def _check_grid(wb, meta, mech, params, values, is_error, error_code, tol, relat
         angles = _angles(ws, "A", block["rows"])
         if block is grid:
             adjust = [_number(ws, f"{c}{grid['param_row']}", f"{param}") for c in grid["columns"]]
-        expected = _grid_reference(mech, params, param, angles, adjust)
+        expected = _grid_reference(solver, params, param, angles, adjust)
         expected_by_block[block["sheet"]] = expected
         c = Check(block["sheet"], f"{grid['key']} grid", size)
-        slope = _slope(mech.name, params, angles, mech.grid[1], "length", param, adjust)
+        slope = _slope(solver, params, angles, solver.mechanism.grid[1], "length", param,
+                       adjust)
         for j, letter in enumerate(block["columns"]):
             cells = [f"{letter}{r}" for r in range(block["rows"][0], block["rows"][1] + 1)]
             compare(c, block["sheet"], cells, [values.get((block["sheet"], x)) for x in cells],

@@ -64,6 +64,8 @@ def build(t: Template, windows: dict[str, float] | None = None) -> Built:
     meta = {"format": FORMAT_VERSION, "linkbook": __version__, "template": t.name,
             "mechanism": t.mechanism.name, "title": t.title, "length_unit": t.length_unit,
             "input": t.mechanism.input_key}
+    if t.mechanism.description is not None:
+        meta["description"] = t.mechanism.description
 
     names, meta["inputs"], meta["constants"], next_row = _inputs_block(wb, ws_mech, t, model)
     meta["position"] = _position_block(wb, ws_mech, t, model, names, windows)
@@ -325,12 +327,11 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str], windows: 
     return {"sheet": SWEEP, "rows": [first, last], "columns": letters}
 
 
-def _assembly_columns(ws, letters: dict, witness: str, first: int, last: int,
+def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int, last: int,
                       head_row: int) -> dict:
     """Bookkeeping for the summary: does the row close (1/0), and where do gaps start and end."""
     col = len(letters) + 1
     closes, start, end = (get_column_letter(col + i) for i in range(3))
-    w = letters[witness]
     for i, (text, label) in enumerate((("closes [1/0]", "1 where every loop closes"),
                                        ("gap from [deg]", "first angle of a gap"),
                                        ("gap to [deg]", "last angle of a gap"))):
@@ -338,7 +339,8 @@ def _assembly_columns(ws, letters: dict, witness: str, first: int, last: int,
         _text(ws, f"{get_column_letter(col + i)}3", label, NOTE)
         ws.column_dimensions[get_column_letter(col + i)].width = 11
     for r in range(first, last + 1):
-        ws[f"{closes}{r}"] = f"=IF(ISNUMBER({w}{r}),1,0)"
+        every = "*".join(f"ISNUMBER({letters[w]}{r})" for w in witnesses)
+        ws[f"{closes}{r}"] = f"=IF({every},1,0)"
         # (x=0)*(y=1) rather than AND(): the same truth in every application, and element-wise
         # for the vector engine (AND aggregates, so it would run row by row).
         before = f"{closes}{r}=0" if r == first else f"({closes}{r}=0)*({closes}{r - 1}=1)"
@@ -384,10 +386,10 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         row += 1
         return f"$C${row - 1}"
 
-    w = rng(model.closes)
+    w = rng("closes")
     put("assembles_all", "assembles at every angle of the sweep",
-        f'=IF(COUNT({w})=ROWS({w}),"yes","no")', kind="text")
-    put("not_closing", "angles where the loop cannot close", f"=ROWS({w})-COUNT({w})")
+        f'=IF(SUM({w})=ROWS({w}),"yes","no")', kind="text")
+    put("not_closing", "angles where the loop cannot close", f"=ROWS({w})-SUM({w})")
     for k in range(1, GAPS_SHOWN + 1):
         put(f"gap{k}_from", f"gap {k}: cannot close from",
             f'=IFERROR(SMALL({rng("gap_from")},{k}),"{DASH}")', DEG, "number_or_dash")
@@ -483,11 +485,26 @@ def _fill_grid(ws, t: Template, model: Model, names: dict, param_row: int, rows:
     ws.freeze_panes = ws.cell(rows.start, 2)
 
 
+EXCEL_FORMULA_CHARS, EXCEL_NESTING = 8192, 64
+
+
 def _grid_formula(model, names, input_key, param, out, param_row) -> str:
+    """The self-contained grid formula, refused (before any file is written) where Excel could
+    not open it: over 8,192 characters or 64 levels of nested functions."""
+    from .templates import InputError
     cells = {f"{input_key}_deg": f"$A{ROW}", param: f"{COL}${param_row}"}
     text = Resolver(model, names, cells).formula(out)
-    if len(text) > 8000:   # Excel's limit is 8,192 characters
-        raise ValueError(f"grid formula of {len(text)} characters is too long for Excel")
+    depth = deepest = 0
+    for ch in text:
+        depth += (ch == "(") - (ch == ")")
+        deepest = max(deepest, depth)
+    # The cell's own text is a little longer (row and column put in): keep a margin.
+    if len(text) > EXCEL_FORMULA_CHARS - 200 or deepest > EXCEL_NESTING:
+        raise InputError("grid.output", f"the self-contained formula of {out} in each grid cell "
+                                        f"would have {len(text):,} characters and {deepest} "
+                                        f"nested parentheses; Excel allows "
+                                        f"{EXCEL_FORMULA_CHARS:,} and {EXCEL_NESTING}: grid an "
+                                        "earlier column, or leave out the [grid]")
     return text
 
 

@@ -1,0 +1,1245 @@
+"""Generic independent reference: any mechanism described in the mechanism language.
+
+The description is the ``[mechanism]`` table of a template (docs/language.md): ground points, an
+input angle and an ordered list of steps, each placing one new point from points already known.
+This module reads the same description as the workbook writer but shares no formula with it (and
+imports nothing from linkbook): every step is turned into the geometric constraints it implies and
+its unknown is found by Newton–Raphson, row after row:
+
+* ``crank`` — the pin is a function of the input angle alone: evaluated directly;
+* ``dyad`` — R = (x, y) with |R − P| = p and |R − Q| = q (two circle residuals), the branch
+  fixed by the sign of cross(R − Q, P − Q);
+* ``slider`` — R = T + s·d on its line with |R − P| = l (one residual in s), the branch by the
+  sign of (R − P)·d; R is then put exactly on the line;
+* ``slide`` — the link angle θ with (P − Q)·e^{iθ} = offset (the slide line, perpendicular to the
+  link at the offset, passes through P), the branch by the sign of cross(e^{iθ}, P − Q);
+* ``slot`` — P on the slot and on the fixed line (two linear residuals in the positions along
+  them: Newton lands on the root in one step);
+* ``point`` — by ``distances``: the two circles again (solved once, in the frame's own
+  coordinates, when the frame is a rigid link of known length: then γ is a constant); by
+  ``local`` or ``distance``/``angle``: placed directly;
+* ``vector``, ``distance`` — measured; ``expression`` — the user's formula, evaluated by this
+  module's own parser (Excel's functions, errors as NaN).
+
+Newton continues from the previous row's root. On the first row, after a row that could not
+close, or when the continued root is on the wrong branch, it restarts from a spread of first
+guesses and keeps the first root on the requested branch; a row where none is found is NaN. An
+independent existence check (the triangle inequality of a dyad, ...) is used only to decide to
+try a denser spread of first guesses, never to produce a value. Next to a limit position (a
+double root) Newton converges only linearly and, in plain doubles, stalls on a plateau of width
+√ε where the residual rounds to zero: such a root is polished with residuals carried in
+double-double (or written in a form that keeps its digits), so that a dead centre reached
+exactly by the data is found to round-off, not to √ε.
+
+Every column is then measured on the solved points: distances (hypot), np.arctan2 of
+joint-to-joint vectors, interior angles from dot and cross products. An angle is returned in the
+window of the doc's definition (theta_q = ϕ − b·ψ in [ϕ − π, ϕ] or [ϕ, ϕ + π], ...), so that the
+smallest and largest value of an angle column mean the same as in the workbook.
+
+Pure-Python scalar arithmetic is used inside Newton (1×1 and 2×2 systems are much faster that way
+than with small numpy calls); the columns are then measured with vectorised numpy.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable, Iterable, Mapping, Sequence
+
+import numpy as np
+
+__all__ = ["solve", "pivots", "fourbar_loop", "limit_angles", "evaluate"]
+
+_TAU = 2.0 * math.pi
+_HALF_PI = 0.5 * math.pi
+_WRAP_AT = 4.0 * math.pi
+
+# Newton stops once every step is below _STEP_TOL × the unknown's scale (1 rad for angles, the
+# mechanism's size for lengths); quadratic convergence then leaves an error of order _STEP_TOL²
+# (round-off). The residual (a length) must also be below _RES_TOL × size: a constraint with no
+# real solution keeps a residual at least as large as its gap, so it can never pass.
+_STEP_TOL = 1e-10
+_RES_TOL = 1e-9
+_MAX_ITER = 40
+_STARTS = 8          # first guesses for a restart
+_DENSE_STARTS = 48   # ... when the existence check says the step should close but Newton failed
+# Next to a double root (a limit position: |sin| of the angle between the two constraints'
+# gradients below _NEAR_DOUBLE) Newton converges only linearly and stops early: the root is
+# polished with a careful residual, up to _POLISH_ITER more steps, down to steps of _POLISH_TOL.
+_NEAR_DOUBLE = 1e-4
+_POLISH_TOL = 1e-15
+_POLISH_ITER = 100
+# There the two branches meet: a root less than _TANGENT (relative) off the dead-centre line is
+# taken as on either branch.
+_TANGENT = 1e-12
+
+Fun = Callable[[Sequence[float]], tuple[tuple[float, ...], tuple[tuple[float, ...], ...]]]
+Point = tuple[np.ndarray, np.ndarray]
+
+
+# --------------------------------------------------------------------------------------------
+# Expressions: a small recursive-descent parser and an evaluator over floats and numpy arrays
+# (never eval). Any error Excel would show (#NUM!, #DIV/0!, #N/A) is NaN.
+# --------------------------------------------------------------------------------------------
+
+_TOKEN = re.compile(
+    r"\s*(?:(?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
+    r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
+    r"|(?P<op>\*\*|>=|<=|<>|==|!=|[-+*/^(),<>=]))"
+)
+_COMPARE_OPS = {">", ">=", "<", "<=", "=", "==", "<>", "!="}
+
+
+def _clean(v):
+    """Excel has no inf or NaN: an overflow, a division by zero or a domain error is an error
+    value, NaN here."""
+    v = np.asarray(v, dtype=float)
+    return np.where(np.isfinite(v), v, math.nan) if v.ndim else (
+        v if math.isfinite(float(v)) else np.asarray(math.nan))
+
+
+def _np1(f: Callable) -> Callable:
+    return lambda x: _clean(f(x))
+
+
+def _atan2(x, y):                  # Excel's ATAN2(x, y): x first; ATAN2(0, 0) is #DIV/0!
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+    return _clean(np.where((x == 0.0) & (y == 0.0), math.nan, np.arctan2(y, x)))
+
+
+def _if(c, a, b):
+    c = np.asarray(c, dtype=float)
+    return _clean(np.where(np.isnan(c), math.nan, np.where(c != 0.0, a, b)))
+
+
+def _iferror(a, b):
+    a = np.asarray(a, dtype=float)
+    return _clean(np.where(np.isnan(a), b, a))
+
+
+def _extreme(fn):
+    def f(*args):
+        out = np.asarray(args[0], dtype=float)
+        for a in args[1:]:
+            out = fn(out, np.asarray(a, dtype=float))   # NaN (an error) propagates
+        return _clean(out)
+    return f
+
+
+# name → (number of arguments, None: one or more; function); Excel's spelling, case-insensitive.
+_FUNCTIONS: dict[str, tuple[int | None, Callable]] = {
+    "SQRT": (1, _np1(np.sqrt)),
+    "ABS": (1, _np1(np.abs)),
+    "SIN": (1, _np1(np.sin)),
+    "COS": (1, _np1(np.cos)),
+    "TAN": (1, _np1(np.tan)),
+    "ASIN": (1, _np1(np.arcsin)),
+    "ACOS": (1, _np1(np.arccos)),
+    "ATAN": (1, _np1(np.arctan)),
+    "ATAN2": (2, _atan2),
+    "RADIANS": (1, _np1(np.radians)),
+    "DEGREES": (1, _np1(np.degrees)),
+    "PI": (0, lambda: np.asarray(math.pi)),
+    "MIN": (None, _extreme(np.minimum)),
+    "MAX": (None, _extreme(np.maximum)),
+    "IF": (3, _if),
+    "IFERROR": (2, _iferror),
+    "NA": (0, lambda: np.asarray(math.nan)),
+}
+
+
+def _binary(op: str, a, b):
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if op == "+":
+        return _clean(a + b)
+    if op == "-":
+        return _clean(a - b)
+    if op == "*":
+        return _clean(a * b)
+    if op == "/":
+        return _clean(a / b)
+    if op == "^":                  # Excel: 0^0 is #NUM!, (−8)^(1/3) is #NUM!
+        return _clean(np.where((a == 0.0) & (b == 0.0), math.nan, np.power(a, b)))
+    nan = np.isnan(a) | np.isnan(b)
+    res = {">": a > b, ">=": a >= b, "<": a < b, "<=": a <= b, "=": a == b, "==": a == b,
+           "<>": a != b, "!=": a != b}[op]
+    return np.where(nan, math.nan, res.astype(float))
+
+
+class _Parser:
+    """Precedence as in algebra (and in Python, whose `**`, `==` and `!=` are accepted too):
+    compare := sum (op sum)?;  sum := product (('+'|'-') product)*;
+    product := unary (('*'|'/') unary)*;  unary := ('+'|'-') unary | power;
+    power := atom ('^' unary)?  (so −a^2 = −(a^2) and a^b^c = a^(b^c));
+    atom := number | name | NAME '(' args ')' | '(' compare ')'.
+    The tree: ('num', v) | ('name', n) | ('neg', t) | ('bin', op, l, r) | ('call', NAME, args)."""
+
+    def __init__(self, text: str):
+        self.text = text
+        self.tokens: list[tuple[str, str]] = []
+        pos, end = 0, len(text.rstrip())
+        while pos < end:
+            m = _TOKEN.match(text, pos)
+            if m is None or m.end() == pos:
+                raise ValueError(f"expression {text!r}: unexpected character at {pos + 1}")
+            self.tokens.append((m.lastgroup, m.group(m.lastgroup)))
+            pos = m.end()
+        self.k = 0
+
+    def error(self, what: str) -> ValueError:
+        return ValueError(f"expression {self.text!r}: {what}")
+
+    def peek(self) -> tuple[str, str] | None:
+        return self.tokens[self.k] if self.k < len(self.tokens) else None
+
+    def is_op(self, *ops: str) -> bool:
+        tok = self.peek()
+        return tok is not None and tok[0] == "op" and tok[1] in ops
+
+    def take(self, op: str | None = None) -> tuple[str, str]:
+        tok = self.peek()
+        if tok is None:
+            raise self.error("unexpected end")
+        if op is not None and tok != ("op", op):
+            raise self.error(f"expected {op!r}, got {tok[1]!r}")
+        self.k += 1
+        return tok
+
+    def parse(self) -> tuple:
+        tree = self.compare()
+        if self.peek() is not None:
+            raise self.error(f"unexpected {self.peek()[1]!r}")
+        return tree
+
+    def compare(self) -> tuple:
+        tree = self.sum()
+        if self.is_op(*_COMPARE_OPS):
+            op = self.take()[1]
+            tree = ("bin", op, tree, self.sum())
+            if self.is_op(*_COMPARE_OPS):
+                raise self.error("chained comparisons are not allowed")
+        return tree
+
+    def sum(self) -> tuple:
+        tree = self.product()
+        while self.is_op("+", "-"):
+            op = self.take()[1]
+            tree = ("bin", op, tree, self.product())
+        return tree
+
+    def product(self) -> tuple:
+        tree = self.unary()
+        while self.is_op("*", "/"):
+            op = self.take()[1]
+            tree = ("bin", op, tree, self.unary())
+        return tree
+
+    def unary(self) -> tuple:
+        if self.is_op("-"):
+            self.take()
+            return ("neg", self.unary())
+        if self.is_op("+"):
+            self.take()
+            return self.unary()
+        return self.power()
+
+    def power(self) -> tuple:
+        tree = self.atom()
+        if self.is_op("^", "**"):
+            self.take()
+            return ("bin", "^", tree, self.unary())
+        return tree
+
+    def atom(self) -> tuple:
+        kind, text = self.take()
+        if kind == "num":
+            return ("num", float(text))
+        if kind == "op":
+            if text != "(":
+                raise self.error(f"unexpected {text!r}")
+            tree = self.compare()
+            self.take(")")
+            return tree
+        if not self.is_op("("):
+            return ("name", text)
+        self.take()                       # a function call
+        fn = _FUNCTIONS.get(text.upper())
+        if fn is None:
+            raise self.error(f"unknown function {text!r}")
+        args: list[tuple] = []
+        if not self.is_op(")"):
+            args.append(self.compare())
+            while self.is_op(","):
+                self.take()
+                args.append(self.compare())
+        self.take(")")
+        count = fn[0]
+        if (len(args) != count) if count is not None else not args:
+            raise self.error(f"{text.upper()} takes {count if count is not None else 'one or more'}"
+                             f" argument(s), got {len(args)}")
+        return ("call", text.upper(), tuple(args))
+
+
+def _lookup(env: Mapping[str, object], name: str, text: str):
+    if name in env:
+        value = env[name]
+    else:                                  # Excel names are case-insensitive
+        matches = [k for k in env if isinstance(k, str) and k.lower() == name.lower()]
+        if len(matches) != 1:
+            raise ValueError(f"expression {text!r}: unknown name {name!r}")
+        value = env[matches[0]]
+    if isinstance(value, bool):
+        raise ValueError(f"expression {text!r}: {name!r} is not a number: {value!r}")
+    return np.asarray(value, dtype=float)
+
+
+def _run(tree: tuple, env: Mapping[str, object], text: str):
+    kind = tree[0]
+    if kind == "num":
+        return np.asarray(tree[1])
+    if kind == "name":
+        return _lookup(env, tree[1], text)
+    if kind == "neg":
+        return -_run(tree[1], env, text)
+    if kind == "bin":
+        return _binary(tree[1], _run(tree[2], env, text), _run(tree[3], env, text))
+    return _FUNCTIONS[tree[1]][1](*(_run(a, env, text) for a in tree[2]))
+
+
+def evaluate(expr: object, env: Mapping[str, object]):
+    """Value of an expression of the mechanism language: a number, or text in Excel syntax
+    (symbols, numbers, + - * / ^, comparisons, parentheses and SQRT ABS SIN COS TAN ASIN ACOS
+    ATAN ATAN2(x, y) RADIANS DEGREES PI() MIN MAX IF IFERROR NA()) over env: {name: number or
+    array}. A float when every name it uses is a number, else an array. A domain error (SQRT of
+    a negative, a division by zero, ...) gives NaN, as Excel shows an error; a malformed
+    expression or an unknown name raises ValueError."""
+    if isinstance(expr, bool):
+        raise ValueError(f"expected a number or an expression, got {expr!r}")
+    if isinstance(expr, (int, float)):
+        return float(expr)
+    if not isinstance(expr, str) or not expr.strip():
+        raise ValueError(f"expected a number or an expression, got {expr!r}")
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        value = _run(_Parser(expr).parse(), env, expr)
+    return float(value) if value.ndim == 0 else value
+
+
+def _scalar(expr: object, params: Mapping[str, float]) -> float:
+    """An expression of the parameters alone: a float."""
+    value = evaluate(expr, params)
+    if not isinstance(value, float):
+        raise ValueError(f"expression {expr!r} must depend on the parameters alone")
+    return value
+
+
+def _branch(value: object, params: Mapping[str, float], what: str) -> int:
+    b = _scalar(value, params)
+    if b not in (1.0, -1.0):
+        raise ValueError(f"{what} must be 1 or -1, got {value!r} = {b!r}")
+    return int(b)
+
+
+# --------------------------------------------------------------------------------------------
+# Newton–Raphson and the continuation sweep (after reference.py)
+# --------------------------------------------------------------------------------------------
+
+def _linear_solve(jac: Sequence[Sequence[float]], rhs: Sequence[float]) -> list[float] | None:
+    """Solve jac · x = rhs for 1×1 and 2×2 systems; None if singular."""
+    if len(rhs) == 1:
+        d = jac[0][0]
+        return None if d == 0.0 else [rhs[0] / d]
+    (a, b), (c, d) = jac
+    det = a * d - b * c
+    if det == 0.0:
+        return None
+    return [(d * rhs[0] - b * rhs[1]) / det, (a * rhs[1] - c * rhs[0]) / det]
+
+
+def _newton(fun: Fun, x0: Sequence[float], scales: Sequence[float], tol_f: float,
+            angle_slots: Sequence[int] = ()) -> list[float] | None:
+    """Newton–Raphson from x0. Returns the root, or None when it does not converge."""
+    x = list(x0)
+    n = len(x)
+    for _ in range(_MAX_ITER):
+        f, jac = fun(x)
+        dx = _linear_solve(jac, f)
+        if dx is None:
+            # An exactly singular Jacobian at an exact root (a double root met exactly): done.
+            return x if max(abs(v) for v in f) == 0.0 else None
+        worst = 0.0
+        for k in range(n):
+            x[k] -= dx[k]
+            r = abs(dx[k]) / scales[k]
+            if r > worst or r != r:  # r != r: NaN, which then sticks
+                worst = r
+        if not worst < math.inf:  # NaN or overflow: diverged
+            return None
+        for k in angle_slots:
+            # a wild early step can throw an angle many turns away: bring it back
+            if abs(x[k]) > _WRAP_AT:
+                x[k] = math.remainder(x[k], _TAU)
+        if worst <= _STEP_TOL:
+            # f was taken before this (tiny) step, so it bounds the final residual from above.
+            return x if max(abs(v) for v in f) <= tol_f else None
+    return None
+
+
+def _polish(fun: Fun, x: Sequence[float], scales: Sequence[float], tol_f: float) -> list[float]:
+    """More Newton steps on a root found next to a double root (a limit position), where Newton
+    converges only linearly and stops early: until the step reaches round-off (_POLISH_TOL) or
+    stops shrinking (the noise floor of the residual). `fun` evaluates the residual carefully, so
+    that floor is far below the usual one."""
+    x = list(x)
+    n = len(x)
+    last = math.inf
+    for _ in range(_POLISH_ITER):
+        f, jac = fun(x)
+        if not max(abs(v) for v in f) <= tol_f:
+            break
+        dx = _linear_solve(jac, f)
+        if dx is None:
+            break
+        worst = max(abs(dx[k]) / scales[k] for k in range(n))
+        if not worst < last:
+            break
+        x = [x[k] - dx[k] for k in range(n)]
+        last = worst
+        if worst <= _POLISH_TOL:
+            break
+    return x
+
+
+def _sweep(
+    n_rows: int,
+    system: Callable[[int], Fun | None],
+    starts: Callable[[int, int], Iterable[Sequence[float]]],
+    on_branch: Callable[[int, Sequence[float]], bool],
+    scales: Sequence[float],
+    angle_slots: Sequence[int],
+    tol_f: float,
+    closes: Callable[[int], bool] | None = None,
+    careful: Callable[[int], Fun] | None = None,
+    near_double: Callable[[int, Sequence[float]], bool] | None = None,
+) -> list[tuple[float, ...] | None]:
+    """Solve one step row after row by Newton with continuation; None where it cannot close.
+
+    system(i): row i's residual function (None: skip the row, a known point is undefined there);
+    starts(i, k): first guesses (k of them); on_branch(i, x): the branch invariant; closes(i),
+    optional: the independent existence check, used only to decide on a denser restart;
+    careful(i), optional: the same residual evaluated with less round-off, used by that denser
+    restart and to polish a root where near_double(i, x) says it is close to a double root.
+    """
+    out: list[tuple[float, ...] | None] = [None] * n_rows
+    prev: tuple[float, ...] | None = None
+
+    def attempt(fun: Fun, i: int, x0: Sequence[float]) -> list[float] | None:
+        x = _newton(fun, x0, scales, tol_f, angle_slots)
+        if x is None:
+            return None
+        if near_double is not None and near_double(i, x):
+            x = _polish(careful(i) if careful else fun, x, scales, tol_f)
+        return x if on_branch(i, x) else None
+
+    def restart(fun: Fun, i: int, guesses) -> list[float] | None:
+        for x0 in guesses:     # multi-start: the first root on the requested branch
+            x = attempt(fun, i, x0)
+            if x is not None:
+                return x
+        return None
+
+    for i in range(n_rows):
+        fun = system(i)
+        if fun is None:
+            prev = None
+            continue
+        x = attempt(fun, i, prev) if prev is not None else None
+        if x is None:
+            x = restart(fun, i, starts(i, _STARTS))
+        if x is None and closes is not None and closes(i):
+            x = restart(careful(i) if careful else fun, i, starts(i, _DENSE_STARTS))
+        if x is not None:
+            for k in angle_slots:
+                x[k] = math.remainder(x[k], _TAU)
+            prev = tuple(x)
+        else:
+            prev = None
+        out[i] = prev
+    return out
+
+
+def _directions(k: int) -> list[float]:
+    """k first-guess angles around the circle, offset so none is a special angle."""
+    return [0.1 + _TAU * j / k for j in range(k)]
+
+
+def _column(sols: list, k: int) -> np.ndarray:
+    return np.array([math.nan if x is None else x[k] for x in sols], dtype=float)
+
+
+def _finite(*values: float) -> bool:
+    return all(v == v and abs(v) != math.inf for v in values)
+
+
+# Error-free transformations (Dekker, Knuth): a residual such as |R − P|² − p² near a double root
+# is a difference of nearly equal squares; in plain doubles it is exactly 0 on a whole plateau
+# of width √ε around the root. Carried in double-double it is not.
+_SPLITTER = 134217729.0  # 2^27 + 1
+
+
+def _two_sum(a: float, b: float) -> tuple[float, float]:
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+def _two_square(a: float) -> tuple[float, float]:
+    p = a * a
+    t = _SPLITTER * a
+    hi = t - (t - a)
+    lo = a - hi
+    return p, ((hi * hi - p) + 2.0 * hi * lo) + lo * lo
+
+
+def _square_gap(x: float, y: float, px: float, py: float, r: float) -> float:
+    """(x − px)² + (y − py)² − r², with the differences and squares carried exactly."""
+    dx, ex = _two_sum(x, -px)
+    dy, ey = _two_sum(y, -py)
+    a, ea = _two_square(dx)
+    b, eb = _two_square(dy)
+    c, ec = _two_square(r)
+    s, es = _two_sum(a, b)
+    s, es2 = _two_sum(s, -c)
+    return s + (((es + es2) + (ea + eb - ec)) + 2.0 * (dx * ex + dy * ey))
+
+
+# --------------------------------------------------------------------------------------------
+# Constraint systems
+# --------------------------------------------------------------------------------------------
+
+def _circles(px: float, py: float, p: float, qx: float, qy: float, q: float) -> Fun:
+    """R = (x, y) with |R − P| = p and |R − Q| = q: residuals (|R − P|² − p²)/(2p) and
+    (|R − Q|² − q²)/(2q) (lengths, ≈ |R − P| − p near the root)."""
+    ip, iq = 1.0 / p, 1.0 / q
+    hp, hq = 0.5 * p, 0.5 * q
+
+    def fun(x):
+        ux, uy = x[0] - px, x[1] - py
+        vx, vy = x[0] - qx, x[1] - qy
+        return (((ux * ux + uy * uy) * 0.5 * ip - hp, (vx * vx + vy * vy) * 0.5 * iq - hq),
+                ((ux * ip, uy * ip), (vx * iq, vy * iq)))
+
+    return fun
+
+
+def _circles_careful(px: float, py: float, p: float, qx: float, qy: float, q: float) -> Fun:
+    """_circles with the residuals carried in double-double (see _square_gap)."""
+    ip, iq = 1.0 / p, 1.0 / q
+
+    def fun(x):
+        return ((_square_gap(x[0], x[1], px, py, p) * 0.5 * ip,
+                 _square_gap(x[0], x[1], qx, qy, q) * 0.5 * iq),
+                (((x[0] - px) * ip, (x[1] - py) * ip), ((x[0] - qx) * iq, (x[1] - qy) * iq)))
+
+    return fun
+
+
+def _two_circles(P: Point, Q: Point, p: float, q: float, branch: int, size: float,
+                 tol_f: float) -> Point:
+    """Per row: R with |R − P| = p, |R − Q| = q and branch·cross(R − Q, P − Q) > 0; NaN where no
+    such point is found. (At a limit position the two branches meet: a root whose side is
+    below _TANGENT of the lengths is on both.)"""
+    n = len(P[0])
+    nan = np.full(n, math.nan)
+    if not (_finite(p, q) and p > 0.0 and q > 0.0):
+        return nan, nan.copy()
+    pxl, pyl, qxl, qyl = P[0].tolist(), P[1].tolist(), Q[0].tolist(), Q[1].tolist()
+    slack = _RES_TOL * size
+
+    def system(i):
+        if not _finite(pxl[i], pyl[i], qxl[i], qyl[i]):
+            return None
+        return _circles(pxl[i], pyl[i], p, qxl[i], qyl[i], q)
+
+    def careful(i):
+        return _circles_careful(pxl[i], pyl[i], p, qxl[i], qyl[i], q)
+
+    def side(i, x):
+        qx, qy = qxl[i], qyl[i]
+        return ((x[0] - qx) * (pyl[i] - qy) - (x[1] - qy) * (pxl[i] - qx),
+                math.hypot(x[0] - qx, x[1] - qy) * math.hypot(pxl[i] - qx, pyl[i] - qy))
+
+    def on_branch(i, x):
+        cross, scale = side(i, x)
+        return branch * cross > -_TANGENT * scale
+
+    def near_double(i, x):   # R, P, Q nearly in line: the Jacobian is nearly singular
+        ux, uy, vx, vy = x[0] - pxl[i], x[1] - pyl[i], x[0] - qxl[i], x[1] - qyl[i]
+        return abs(ux * vy - uy * vx) <= _NEAR_DOUBLE * math.hypot(ux, uy) * math.hypot(vx, vy)
+
+    def starts(i, k):
+        qx, qy, px, py = qxl[i], qyl[i], pxl[i], pyl[i]
+        ring = [(qx + q * math.cos(a), qy + q * math.sin(a)) for a in _directions(k)]
+        if k > _STARTS:  # dense: also around P, and half-way rings
+            ring += [(px + p * math.cos(a), py + p * math.sin(a)) for a in _directions(k)]
+            ring += [(qx + 0.5 * q * math.cos(a), qy + 0.5 * q * math.sin(a))
+                     for a in _directions(k)]
+        # the guesses on the requested side first
+        first = [g for g in ring if branch * side(i, g)[0] > 0.0]
+        return first + [g for g in ring if not branch * side(i, g)[0] > 0.0]
+
+    def closes(i):
+        d = math.hypot(pxl[i] - qxl[i], pyl[i] - qyl[i])
+        return abs(p - q) - slack <= d <= p + q + slack
+
+    sols = _sweep(n, system, starts, on_branch, (size, size), (), tol_f, closes, careful,
+                  near_double)
+    return _column(sols, 0), _column(sols, 1)
+
+
+def _slider_system(h: float, w: float, length: float) -> Fun:
+    """R = T + s·d, P = T + h·d + w·d⊥: residual (|R − P|² − l²)/(2l) in the unknown s, written
+    ((s − h)² + (w − l)(w + l))/(2l) so that it keeps its digits next to a double root."""
+    il = 1.0 / length
+    c = (w - length) * (w + length)
+
+    def fun(x):
+        u = x[0] - h
+        return ((u * u + c) * 0.5 * il,), ((u * il,),)
+
+    return fun
+
+
+def _slide_system(vx: float, vy: float, offset: float) -> Fun:
+    """Link angle θ with (P − Q)·e^{iθ} = offset, V = P − Q (the slide line, at the offset from
+    the pivot and perpendicular to the link, passes through P). The residual V·e^{iθ} − offset
+    is written in the polar form of the dot product about the direction ψ0 where it is largest
+    in the offset's sign, σ(|V| − |offset|) − 2σ|V|·sin²((θ − ψ0)/2), so that it keeps its
+    digits next to a double root (|V| = |offset|)."""
+    r = math.hypot(vx, vy)
+    sig = 1.0 if offset >= 0.0 else -1.0
+    psi0 = math.atan2(vy, vx) if sig > 0.0 else math.atan2(-vy, -vx)
+    gap = sig * (r - abs(offset))
+
+    def fun(x):
+        d = x[0] - psi0
+        h = math.sin(0.5 * d)
+        return (gap - 2.0 * sig * r * h * h,), ((-sig * r * math.sin(d),),)
+
+    return fun
+
+
+def _slider_positions(P: Point, T: Point, dx: float, dy: float, length: float, branch: int,
+                      size: float, tol_f: float) -> np.ndarray:
+    """Per row: the position s of R = T + s·d with |R − P| = length and
+    branch·((R − P)·d) > 0; NaN where no such point is found."""
+    n = len(P[0])
+    if not (_finite(length, dx, dy) and length > 0.0):
+        return np.full(n, math.nan)
+    vx, vy = P[0] - T[0], P[1] - T[1]
+    hl = (vx * dx + vy * dy).tolist()   # P's foot on the line, along d
+    wl = (dx * vy - dy * vx).tolist()   # P's distance from the line, to the left of d
+    slack = _RES_TOL * size
+
+    def system(i):
+        return _slider_system(hl[i], wl[i], length) if _finite(hl[i], wl[i]) else None
+
+    def starts(i, k):
+        h = hl[i]
+        if k <= _STARTS:
+            return [(h + branch * length * c,) for c in (1.0, 0.5, 2.0, 0.1)]
+        return [(h + branch * length * c,) for c in np.linspace(0.02, 4.0, k).tolist()]
+
+    sols = _sweep(n, system, starts,
+                  lambda i, x: branch * (x[0] - hl[i]) > -_TANGENT * length,
+                  (size,), (), tol_f, lambda i: abs(wl[i]) <= length + slack, system,
+                  lambda i, x: abs(x[0] - hl[i]) <= _NEAR_DOUBLE * length)
+    return _column(sols, 0)
+
+
+def _slide_angles(P: Point, Q: Point, offset: float, branch: int, size: float,
+                  tol_f: float) -> np.ndarray:
+    """Per row: the link angle θ with (P − Q)·e^{iθ} = offset and
+    branch·cross(e^{iθ}, P − Q) > 0; NaN where no such angle is found."""
+    n = len(P[0])
+    if not math.isfinite(offset):
+        return np.full(n, math.nan)
+    vxl, vyl = (P[0] - Q[0]).tolist(), (P[1] - Q[1]).tolist()
+    slack = _RES_TOL * size
+
+    def system(i):
+        return _slide_system(vxl[i], vyl[i], offset) if _finite(vxl[i], vyl[i]) else None
+
+    def on_branch(i, x):
+        cross = math.cos(x[0]) * vyl[i] - math.sin(x[0]) * vxl[i]
+        return branch * cross > -_TANGENT * math.hypot(vxl[i], vyl[i])
+
+    def near_double(i, x):   # the link nearly along P − Q
+        cross = math.cos(x[0]) * vyl[i] - math.sin(x[0]) * vxl[i]
+        return abs(cross) <= _NEAR_DOUBLE * math.hypot(vxl[i], vyl[i])
+
+    def starts(i, k):
+        return [(a,) for a in _directions(k)]
+
+    return _column(_sweep(n, system, starts, on_branch, (1.0,), (0,), tol_f,
+                          lambda i: math.hypot(vxl[i], vyl[i]) >= abs(offset) - slack,
+                          system, near_double), 0)
+
+
+def _slot_crossing(E: Point, T: Point, ux, uy, dx: float, dy: float) -> Point:
+    """Per row: (a, b) with E + a·u = T + b·d, the crossing of a slot (through E along u) and a
+    fixed line (through T along d). The constraints are linear, so Newton from (0, 0) lands on
+    the root in one step; a second step refines it. NaN where the lines are parallel."""
+    ex, ey, tx, ty = E[0].tolist(), E[1].tolist(), T[0].tolist(), T[1].tolist()
+    uxl, uyl = np.broadcast_to(ux, E[0].shape).tolist(), np.broadcast_to(uy, E[0].shape).tolist()
+    a_out, b_out = [math.nan] * len(ex), [math.nan] * len(ex)
+    for i in range(len(ex)):
+        if not _finite(ex[i], ey[i], tx[i], ty[i], uxl[i], uyl[i]):
+            continue
+        jac = ((uxl[i], -dx), (uyl[i], -dy))
+        x = [0.0, 0.0]
+        for _ in range(2):
+            f = (ex[i] + x[0] * uxl[i] - tx[i] - x[1] * dx,
+                 ey[i] + x[0] * uyl[i] - ty[i] - x[1] * dy)
+            step = _linear_solve(jac, f)
+            if step is None:
+                break
+            x = [x[0] - step[0], x[1] - step[1]]
+        else:
+            if _finite(*x):
+                a_out[i], b_out[i] = x
+    return np.array(a_out), np.array(b_out)
+
+
+def _triangle_apex(base: float, left: float, right: float) -> tuple[float, float]:
+    """C = (x, y), y ≥ 0, with |AC| = left and |BC| = right, A = (0, 0), B = (base, 0): found by
+    Newton (the residuals carried carefully, so that a flat triangle is found too); (NaN, NaN)
+    if there is no such triangle."""
+    if not (_finite(base, left, right) and base > 0.0 and left > 0.0 and right > 0.0):
+        return math.nan, math.nan
+    size = base + left + right
+    fun = _circles_careful(0.0, 0.0, left, base, 0.0, right)
+    guesses = [(0.5 * base, size), (0.0, left), (base, right)]
+    guesses += [(left * math.cos(a), left * math.sin(a)) for a in _directions(_DENSE_STARTS)]
+    for x0 in guesses:
+        x = _newton(fun, x0, (size, size), _RES_TOL * size)
+        if x is not None:
+            if abs(x[1]) <= _NEAR_DOUBLE * size:
+                x = _polish(fun, x, (size, size), _RES_TOL * size)
+            return x[0], abs(x[1])
+    return math.nan, math.nan
+
+
+# --------------------------------------------------------------------------------------------
+# Geometry on solved points (vectorised)
+# --------------------------------------------------------------------------------------------
+
+def _interior(ux, uy, vx, vy):
+    """Interior angle between vectors u and v, in [0, π]."""
+    return np.arctan2(np.abs(ux * vy - uy * vx), ux * vx + uy * vy)
+
+
+def _cos_sin_deg(deg: float) -> tuple[float, float]:
+    """cos and sin of an angle in degrees, exact at multiples of 90° (a horizontal line stays
+    exactly horizontal)."""
+    if deg == deg and abs(deg) != math.inf and deg % 90.0 == 0.0:
+        k = int(deg // 90.0) % 4
+        return ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[k]
+    r = math.radians(deg)
+    return math.cos(r), math.sin(r)
+
+
+# --------------------------------------------------------------------------------------------
+# The description
+# --------------------------------------------------------------------------------------------
+
+_LOOP_STEPS = ("dyad", "slider", "slide", "slot")   # steps that may fail to close
+_STEP_TYPES = _LOOP_STEPS + ("crank", "point", "vector", "distance", "expression")
+# fields holding a length or an offset: their sum is the mechanism's size
+_LENGTH_FIELDS = ("length", "p_length", "q_length", "offset", "distance")
+
+
+def _steps(description: Mapping) -> list[Mapping]:
+    steps = description.get("steps", [])
+    if not isinstance(steps, list):
+        raise ValueError("mechanism.steps must be a list of tables")
+    for k, step in enumerate(steps):
+        if not isinstance(step, Mapping) or step.get("type") not in _STEP_TYPES:
+            kind = step.get("type") if isinstance(step, Mapping) else step
+            raise ValueError(f"steps[{k}]: unknown or missing type {kind!r}")
+    return steps
+
+
+def pivots(description: Mapping, params: Mapping[str, float]) -> dict[str, tuple[float, float]]:
+    """The ground points of the description, evaluated: {name: (x, y)}."""
+    ground = description.get("ground", {})
+    if not isinstance(ground, Mapping):
+        raise ValueError("mechanism.ground must be a table of [x, y] pairs")
+    out = {}
+    for name, xy in ground.items():
+        if not isinstance(xy, (list, tuple)) or len(xy) != 2:
+            raise ValueError(f"ground point {name!r} must be [x, y]")
+        out[str(name)] = (_scalar(xy[0], params), _scalar(xy[1], params))
+    return out
+
+
+def _size(steps: list[Mapping], params: Mapping[str, float],
+          ground: Mapping[str, tuple[float, float]]) -> float:
+    """The mechanism's size: the sum of |every length and offset| of the description (ground
+    coordinates, link lengths, offsets, carried points' distances and local coordinates)."""
+    total = 0.0
+    for x, y in ground.values():
+        total += abs(x) + abs(y)
+    for step in steps:
+        for field in _LENGTH_FIELDS:
+            if field in step and step["type"] != "distance":
+                total += abs(_scalar(step[field], params))
+        for field in ("local", "distances"):
+            if isinstance(step.get(field), (list, tuple)):
+                total += sum(abs(_scalar(v, params)) for v in step[field])
+    return total if total > 0.0 and math.isfinite(total) else 1.0
+
+
+def _near(angle, center):
+    """The angle (radians, any turn) brought into [center − π, center + π)."""
+    return center + (np.remainder(angle - center + math.pi, _TAU) - math.pi)
+
+
+class _Solver:
+    """One pass over the steps, in order: each step's points and columns, for every row.
+
+    Besides the values it keeps what the workbook's layout depends on: which points move with
+    the input angle, the angle of each known link (for a point placed at an angle to it), and
+    which keys are fixed (hidden, or a constant, and independent of the input angle), so that a
+    carried point's gamma or theta and an expression come back as a float exactly where the
+    workbook makes them one named constant cell."""
+
+    def __init__(self, description: Mapping, params: Mapping[str, float], angles: np.ndarray):
+        inp = description.get("input")
+        if not isinstance(inp, Mapping) or not isinstance(inp.get("key"), str):
+            raise ValueError("mechanism.input must be a table with a key")
+        self.input_key = inp["key"]
+        self.params = params
+        self.steps = _steps(description)
+        self.th = np.radians(angles)
+        self.n = n = len(angles)
+        ground = pivots(description, params)
+        self.size = _size(self.steps, params, ground)
+        self.tol_f = _RES_TOL * self.size
+        self.points: dict[str, Point] = {name: (np.full(n, x), np.full(n, y))
+                                         for name, (x, y) in ground.items()}
+        self.moving: set[str] = set()             # points that move with the input angle
+        self.coords: dict[str, tuple[str, str]] = {}   # a step point's x and y keys
+        # pairs of points a fixed, known distance apart (a rigid link of known length)
+        self.rigid: dict[frozenset, float] = {}
+        # the angle of a known link A→B, as the workbook writes it: (values, key or None)
+        self.link: dict[tuple[str, str], tuple[np.ndarray, str | None]] = {}
+        for a, (x1, y1) in ground.items():
+            for b, (x2, y2) in ground.items():
+                if a != b:
+                    self.rigid[frozenset((a, b))] = math.hypot(x2 - x1, y2 - y1)
+                    self.link[(a, b)] = (np.full(n, math.atan2(y2 - y1, x2 - x1)), None)
+        self.out: dict[str, object] = {self.input_key: self.th}
+        self.fixed: dict[str, bool] = {}
+        # what an expression step may name: parameters, the input angle, every earlier key
+        self.env: dict[str, object] = {k: v for k, v in params.items()}
+        self.env[self.input_key] = self.th
+        self.env[f"{self.input_key}_deg"] = np.asarray(angles, dtype=float)
+        self.reserved = {self.input_key, "assembled", "points"}
+        self.assembled = np.ones(n, dtype=bool)
+
+    # -- helpers
+    def run(self) -> dict:
+        for k, step in enumerate(self.steps):
+            self.where = f"steps[{k}] ({step['type']} {step.get('point', step.get('key', ''))})"
+            getattr(self, f"step_{step['type']}")(step)
+        self.out["assembled"] = self.assembled
+        self.out["points"] = self.points
+        return self.out
+
+    def known(self, step: Mapping, field: str) -> Point:
+        name = step.get(field)
+        if not isinstance(name, str) or name not in self.points:
+            raise ValueError(f"{self.where}.{field}: {name!r} is not a known point")
+        return self.points[name]
+
+    def pair(self, step: Mapping, field: str) -> tuple[str, str]:
+        names = step.get(field)
+        if not isinstance(names, (list, tuple)) or len(names) != 2:
+            raise ValueError(f"{self.where}.{field} must be [A, B]")
+        for nm in names:
+            if not isinstance(nm, str) or nm not in self.points:
+                raise ValueError(f"{self.where}.{field}: {nm!r} is not a known point")
+        return names[0], names[1]
+
+    def num(self, step: Mapping, field: str, default: float | None = None) -> float:
+        if field not in step:
+            if default is None:
+                raise ValueError(f"{self.where}: missing {field}")
+            return float(default)
+        return _scalar(step[field], self.params)
+
+    def branch(self, step: Mapping, field: str = "branch") -> int:
+        return _branch(step.get(field, 1), self.params, f"{self.where}.{field}")
+
+    def moves(self, *names: str) -> bool:
+        return any(nm in self.moving for nm in names)
+
+    def coords_fixed(self, name: str) -> bool:
+        """The workbook writes the point's coordinates as fixed values (a ground point's
+        expressions, or hidden columns independent of the input angle)."""
+        if name not in self.coords:
+            return name not in self.moving
+        return all(self.fixed.get(k, False) for k in self.coords[name])
+
+    def put(self, key: str, value, fixed: bool) -> None:
+        if key in self.out or key in self.reserved:
+            raise ValueError(f"{self.where}: column key {key!r} is written twice")
+        self.out[key] = value
+        self.env[key] = value
+        self.fixed[key] = fixed
+
+    def column(self, step: Mapping, col: str, default: str, value, moving: bool,
+               shown_by_default: bool = True) -> str:
+        """A column under its key: the default, or the `key` its `columns` entry gives
+        (`false` or `shown = false` hides it from the sheets, not from here)."""
+        spec = (step.get("columns") or {}).get(col)
+        key, shown = default, shown_by_default
+        if spec is False:
+            shown = False
+        elif spec is True:
+            shown = True
+        elif isinstance(spec, Mapping):
+            key = str(spec.get("key") or default)
+            shown = bool(spec.get("shown", True))
+        if isinstance(value, float):        # a constant: one named cell
+            fixed = True
+        else:
+            value = np.asarray(value, dtype=float)
+            fixed = not moving and not shown
+        self.put(key, value, fixed)
+        return key
+
+    def point_columns(self, step: Mapping, values: Mapping[str, object], moving: bool,
+                      hidden: tuple[str, ...] = ()) -> dict[str, str]:
+        """Columns of a step that places point N: f"{col}_{N}", x → xN, y → yN (`hidden`:
+        columns shown only when the step's `columns` asks for them)."""
+        name = step["point"]
+        return {col: self.column(step, col, f"{col}{name}" if col in ("x", "y") else
+                                 f"{col}_{name}", value, moving, col not in hidden)
+                for col, value in values.items()}
+
+    def new_point(self, step: Mapping, keys: Mapping[str, str], moving: bool, loop: bool) -> None:
+        name = step.get("point")
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"{self.where}: missing point")
+        if name in self.points:
+            raise ValueError(f"{self.where}: point {name!r} is defined twice")
+        x, y = self.out[keys["x"]], self.out[keys["y"]]
+        self.points[name] = (x, y)
+        self.coords[name] = (keys["x"], keys["y"])
+        if moving:
+            self.moving.add(name)
+        if loop:    # a loop step closes exactly where its point exists
+            self.assembled &= np.isfinite(x) & np.isfinite(y)
+
+    def add_link(self, a: str, b: str, angle: np.ndarray, key: str | None,
+                 length: float | None = None) -> None:
+        self.link.setdefault((a, b), (angle, key))
+        if length is not None:
+            self.rigid[frozenset((a, b))] = abs(length)
+
+    def angle_of(self, a: str, b: str) -> tuple[np.ndarray, bool]:
+        """angle(A→B) as the workbook takes it (a known link's angle column, or the angle of
+        the points), and whether that is a fixed value."""
+        if (a, b) in self.link:
+            angle, key = self.link[(a, b)]
+        elif (b, a) in self.link:
+            angle, key = self.link[(b, a)]
+            angle = angle + math.pi
+        else:
+            (ax, ay), (bx, by) = self.points[a], self.points[b]
+            return np.arctan2(by - ay, bx - ax), self.coords_fixed(a) and self.coords_fixed(b)
+        fixed = self.fixed.get(key, False) if key is not None else \
+            self.coords_fixed(a) and self.coords_fixed(b)
+        return angle, fixed
+
+    # -- step types
+    def step_crank(self, step: Mapping) -> None:
+        P = self.known(step, "pivot")
+        length = self.num(step, "length")
+        t = self.th + math.radians(self.num(step, "phase", 0.0))
+        keys = self.point_columns(step, {"x": P[0] + length * np.cos(t),
+                                         "y": P[1] + length * np.sin(t)}, True)
+        self.new_point(step, keys, True, loop=False)
+        self.add_link(step["pivot"], step["point"], t, None, length)
+
+    def step_dyad(self, step: Mapping) -> None:
+        P, Q = self.known(step, "p"), self.known(step, "q")
+        pl, ql = self.num(step, "p_length"), self.num(step, "q_length")
+        b = self.branch(step)
+        x, y = _two_circles(P, Q, pl, ql, b, self.size, self.tol_f)
+        xs, ys = P[0] - Q[0], P[1] - Q[1]
+        phi = np.arctan2(ys, xs)
+        # angles measured on the solved points, each in the window of the doc's definition:
+        # theta_q = ϕ − b·ψ; theta_p = theta_q − b·μ, or ϕ + π + b·∠QPR where the workbook
+        # shows the angle at P in place of μ
+        theta_q = _near(np.arctan2(y - Q[1], x - Q[0]), phi - b * _HALF_PI)
+        given = step.get("columns") or {}
+
+        def shown(col: str) -> bool:
+            spec = given.get(col, {} if col != "p_interior" else None)
+            return isinstance(spec, Mapping) and spec.get("shown", True) or spec is True
+
+        centre = phi + math.pi + b * _HALF_PI if not shown("mu") and shown("p_interior") \
+            else theta_q - b * _HALF_PI
+        theta_p = _near(np.arctan2(y - P[1], x - P[0]), centre)
+        moving = self.moves(step["p"], step["q"])
+        keys = self.point_columns(step, {
+            "xs": xs, "ys": ys, "s": np.hypot(xs, ys), "phi": phi,
+            "psi": _interior(xs, ys, x - Q[0], y - Q[1]),
+            "mu": _interior(Q[0] - x, Q[1] - y, P[0] - x, P[1] - y),
+            "p_interior": _interior(Q[0] - P[0], Q[1] - P[1], x - P[0], y - P[1]),
+            "theta_q": theta_q, "theta_p": theta_p, "x": x, "y": y}, moving, ("p_interior",))
+        self.new_point(step, keys, moving, loop=True)
+        self.add_link(step["q"], step["point"], theta_q, keys["theta_q"], ql)
+        self.add_link(step["p"], step["point"], theta_p, keys["theta_p"], pl)
+
+    def step_slider(self, step: Mapping) -> None:
+        P, T = self.known(step, "p"), self.known(step, "through")
+        length = self.num(step, "length")
+        direction = self.num(step, "direction", 0.0)
+        dx, dy = _cos_sin_deg(direction)
+        b = self.branch(step)
+        s = _slider_positions(P, T, dx, dy, length, b, self.size, self.tol_f)
+        # R exactly on its line, R = T + s·d: a horizontal line keeps y = T_y to the last digit
+        x, y = T[0] + s * dx, T[1] + s * dy
+        # angle(R→P), in the window of the doc's branches: R ahead of P's foot (b = 1) or behind
+        theta = _near(np.arctan2(P[1] - y, P[0] - x), math.radians(direction) + (1 + b) * _HALF_PI)
+        moving = self.moves(step["p"], step["through"])
+        keys = self.point_columns(step, {"theta": theta, "s": s, "x": x, "y": y}, moving)
+        self.new_point(step, keys, moving, loop=True)
+        self.add_link(step["point"], step["p"], theta, keys["theta"], length)
+
+    def step_slide(self, step: Mapping) -> None:
+        P, Q = self.known(step, "p"), self.known(step, "pivot")
+        offset = self.num(step, "offset")
+        b = self.branch(step)
+        xs, ys = P[0] - Q[0], P[1] - Q[1]
+        phi = np.arctan2(ys, xs)
+        theta = _near(_slide_angles(P, Q, offset, b, self.size, self.tol_f), phi - b * _HALF_PI)
+        ux, uy = np.cos(theta), np.sin(theta)
+        x, y = Q[0] + offset * ux, Q[1] + offset * uy
+        tx, ty = P[0] - x, P[1] - y
+        travel = np.hypot(tx, ty)
+        # The slide line is fixed to the link at right angles, on P's side (the branch): its
+        # direction is θ + b·π/2, which is angle(B→P) wherever the travel is not zero, and stays
+        # defined at a limit position where B and P meet (atan2 of a rounding-sized vector).
+        slide = np.where(np.isnan(travel), np.nan, theta + b * _HALF_PI)
+        moving = self.moves(step["p"], step["pivot"])
+        keys = self.point_columns(step, {
+            "xs": xs, "ys": ys, "s": np.hypot(xs, ys), "phi": phi,
+            "psi": _interior(ux, uy, xs, ys), "travel": travel, "theta": theta,
+            "theta_slide": slide, "x": x, "y": y}, moving)
+        self.new_point(step, keys, moving, loop=True)
+        self.add_link(step["point"], step["p"], slide, keys["theta_slide"])
+
+    def step_point(self, step: Mapping) -> None:
+        a, b = self.pair(step, "frame")
+        A, B = self.points[a], self.points[b]
+        name = step.get("point")
+        moving = self.moves(a, b)
+        if "local" in step:
+            pair = step["local"]
+            if not isinstance(pair, (list, tuple)) or len(pair) != 2:
+                raise ValueError(f"{self.where}.local must be [u, v]")
+            u, v = (_scalar(e, self.params) for e in pair)
+            ex, ey = B[0] - A[0], B[1] - A[1]
+            ab = np.hypot(ex, ey)
+            ex, ey = ex / ab, ey / ab
+            keys = self.point_columns(step, {"x": A[0] + u * ex - v * ey,
+                                             "y": A[1] + u * ey + v * ex}, moving)
+        elif "distances" in step:
+            pair = step["distances"]
+            if not isinstance(pair, (list, tuple)) or len(pair) != 2:
+                raise ValueError(f"{self.where}.distances must be [|AC|, |BC|]")
+            da, db = (_scalar(e, self.params) for e in pair)
+            side = self.branch(step, "side")
+            base = self.rigid.get(frozenset((a, b)))
+            if base is None and self.coords_fixed(a) and self.coords_fixed(b):
+                base = float(math.hypot(B[0][0] - A[0][0], B[1][0] - A[1][0])) if self.n else None
+            if base is not None:
+                # A rigid frame of known length: the triangle is solved once, in the frame's own
+                # coordinates (C = A + cx·ê + side·cy·ê⊥), and γ is a constant.
+                cx, cy = _triangle_apex(base, da, db)
+                gamma = math.atan2(cy, cx)
+                ex, ey = B[0] - A[0], B[1] - A[1]
+                ab = np.hypot(ex, ey)
+                ex, ey = ex / ab, ey / ab
+                x = A[0] + cx * ex - side * cy * ey
+                y = A[1] + cx * ey + side * cy * ex
+            else:
+                # side·cross(B − A, C − A) > 0 is the dyad over Q = A, P = B on branch −side
+                x, y = _two_circles(B, A, db, da, -side, self.size, self.tol_f)
+                gamma = _interior(B[0] - A[0], B[1] - A[1], x - A[0], y - A[1])
+            keys = self.point_columns(step, {"gamma": gamma, "x": x, "y": y}, moving)
+        elif "distance" in step:
+            d = self.num(step, "distance")
+            base, fixed = self.angle_of(a, b)
+            theta = base + math.radians(self.num(step, "angle", 0.0))
+            x, y = A[0] + d * np.cos(theta), A[1] + d * np.sin(theta)
+            if fixed and self.n and np.all(theta == theta[0]):
+                theta = float(theta[0])            # one named cell in the workbook
+            keys = self.point_columns(step, {"theta": theta, "x": x, "y": y}, moving,
+                                      ("theta",))
+            self.add_link(a, name, np.broadcast_to(theta, (self.n,)), keys["theta"], d)
+        else:
+            raise ValueError(f"{self.where}: needs local, distances or distance")
+        self.new_point(step, keys, moving, loop=False)
+
+    def step_slot(self, step: Mapping) -> None:
+        E = self.known(step, "slot_through")
+        a, b = self.pair(step, "slot_frame")
+        A, B = self.points[a], self.points[b]
+        T = self.known(step, "through")
+        # the slot: through E along angle(A→B) + slot_angle; the line: through T along d
+        c, s = _cos_sin_deg(self.num(step, "slot_angle", 0.0))
+        fx, fy = B[0] - A[0], B[1] - A[1]
+        f = np.hypot(fx, fy)
+        fx, fy = fx / f, fy / f
+        ux, uy = fx * c - fy * s, fx * s + fy * c
+        dx, dy = _cos_sin_deg(self.num(step, "direction", 0.0))
+        s_slot, pos = _slot_crossing(E, T, ux, uy, dx, dy)
+        moving = self.moves(step["slot_through"], a, b, step["through"])
+        keys = self.point_columns(step, {"s_slot": s_slot, "s": pos,
+                                         "x": T[0] + pos * dx,     # exactly on the fixed line
+                                         "y": T[1] + pos * dy}, moving)
+        self.new_point(step, keys, moving, loop=True)
+
+    def step_vector(self, step: Mapping) -> None:
+        key = step.get("key")
+        if not isinstance(key, str) or not key:
+            raise ValueError(f"{self.where}: missing key")
+        F, T = self.known(step, "from"), self.known(step, "to")
+        moving = self.moves(step["from"], step["to"])
+        xs, ys = T[0] - F[0], T[1] - F[1]
+        phi = np.arctan2(ys, xs)
+        for col, value in (("xs", xs), ("ys", ys), ("s", np.hypot(xs, ys)), ("phi", phi)):
+            k = self.column(step, col, f"{col}_{key}", value, moving)
+        self.add_link(step["from"], step["to"], phi, k)
+
+    def step_distance(self, step: Mapping) -> None:
+        key = step.get("key")
+        if not isinstance(key, str) or not key:
+            raise ValueError(f"{self.where}: missing key")
+        a, b = self.pair(step, "between")
+        (x1, y1), (x2, y2) = self.points[a], self.points[b]
+        self.column(step, "d", key, np.hypot(x2 - x1, y2 - y1), self.moves(a, b))
+
+    def step_expression(self, step: Mapping) -> None:
+        key = step.get("key")
+        if not isinstance(key, str) or not key:
+            raise ValueError(f"{self.where}: missing key")
+        if "formula" not in step:
+            raise ValueError(f"{self.where}: missing formula")
+        # The workbook makes it one named cell when every name it uses is fixed (a parameter, a
+        # constant, a hidden value independent of the input angle); such names are passed as
+        # floats, so that the value comes back as a float.
+        env = {k: (float(np.asarray(v).flat[0]) if self.fixed.get(k) and np.ndim(v) and self.n
+                   else v) for k, v in self.env.items()}
+        value = evaluate(step["formula"], env)
+        if isinstance(value, float):
+            self.put(key, value, True)
+        else:
+            self.put(key, np.broadcast_to(value, (self.n,)).astype(float), False)
+
+
+# --------------------------------------------------------------------------------------------
+# Public API
+# --------------------------------------------------------------------------------------------
+
+def solve(description: Mapping, params: Mapping[str, float], angles_deg) -> dict:
+    """Position analysis of a described mechanism at each input angle (degrees, 1-D array-like).
+
+    description: the [mechanism] table of a template as parsed by tomllib (input, ground, steps,
+    links, ...); params: {parameter symbol: value} (angle-kind parameters in degrees, branch
+    parameters ±1).
+
+    Returns {column key: np.ndarray} for every column of every step, hidden ones included
+    (radians, lengths; NaN where the step cannot close or a point it uses is undefined), the
+    input key (radians), constants as floats (a carried point's gamma on a rigid frame of known
+    length, an expression of the parameters alone), 'assembled': a bool array (every loop step —
+    dyad, slider, slide, slot — closes on that row) and 'points': {point name: (x ndarray,
+    y ndarray)} for every ground and step point.
+
+    Raises ValueError for a malformed description (unknown step type, unknown point, unknown
+    parameter, a branch not ±1, a key written twice, ...).
+    """
+    angles = np.atleast_1d(np.asarray(angles_deg, dtype=float))
+    if angles.ndim != 1:
+        raise ValueError("angles_deg must be one-dimensional")
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        return _Solver(description, params, angles).run()
+
+
+# --------------------------------------------------------------------------------------------
+# The four-bar loop of a description (Grashof class, input limit angles)
+# --------------------------------------------------------------------------------------------
+
+def _fourbar_parts(description: Mapping, params: Mapping[str, float]):
+    """(crank pivot (x, y), output pivot (x, y), crank length, phase in degrees, coupler, output
+    link) of the first dyad whose q is a ground point and whose p is the pin of a crank turning
+    about a ground point; None if there is none."""
+    ground = pivots(description, params)
+    cranks = {}
+    for step in _steps(description):
+        kind = step["type"]
+        if kind == "crank" and step.get("pivot") in ground and step.get("point"):
+            cranks.setdefault(step["point"], step)
+        elif kind == "dyad" and step.get("q") in ground and step.get("p") in cranks:
+            crank = cranks[step["p"]]
+            return (ground[crank["pivot"]], ground[step["q"]],
+                    _scalar(crank["length"], params), _scalar(crank.get("phase", 0), params),
+                    _scalar(step["p_length"], params), _scalar(step["q_length"], params))
+    return None
+
+
+def fourbar_loop(description: Mapping, params: Mapping[str, float]
+                 ) -> tuple[float, float, float, float] | None:
+    """(ground, crank, coupler, output link) lengths of the description's four-bar loop — the
+    first dyad whose q is a ground point and whose p is the pin of a crank about a ground point —
+    or None."""
+    parts = _fourbar_parts(description, params)
+    if parts is None:
+        return None
+    (ax, ay), (qx, qy), crank, _, coupler, rocker = parts
+    return math.hypot(qx - ax, qy - ay), crank, coupler, rocker
+
+
+def limit_angles(description: Mapping, params: Mapping[str, float], length: float) -> list[float]:
+    """Input angles (degrees, [0, 360), ascending) where the four-bar loop's output pivot Q is
+    exactly `length` from the crank pin A(θ) (the crank's phase included): found by sampling
+    |Q − A(θ)| − length and bisecting each sign change. [] if the description has no such loop."""
+    parts = _fourbar_parts(description, params)
+    if parts is None:
+        return []
+    (ax, ay), (qx, qy), r, phase, _, _ = parts
+
+    def f(deg: float) -> float:
+        t = math.radians(deg + phase)
+        return math.hypot(qx - ax - r * math.cos(t), qy - ay - r * math.sin(t)) - length
+
+    roots = []
+    grid = [i * 0.25 for i in range(1441)]
+    values = [f(x) for x in grid]
+    for x0, x1, f0, f1 in zip(grid, grid[1:], values, values[1:]):
+        if f0 == 0.0:
+            roots.append(x0)
+        elif f0 * f1 < 0:
+            for _ in range(200):
+                xm = 0.5 * (x0 + x1)
+                fm = f(xm)
+                if xm in (x0, x1):
+                    break
+                x0, f0, x1 = (xm, fm, x1) if f0 * fm > 0 else (x0, f0, xm)
+            roots.append(0.5 * (x0 + x1))
+    return sorted({round(x % 360.0, 12) for x in roots})

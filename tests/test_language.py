@@ -1,0 +1,230 @@
+"""The mechanism language (docs/language.md): bad descriptions are refused with one line naming the
+step and the field; expressions mean what the doc says; every template fits the JSON Schema; a
+user's new step needs no Python."""
+from __future__ import annotations
+
+import copy
+import json
+import subprocess
+import sys
+import tomllib
+
+import pytest
+
+from conftest import ROOT, checks_of, formula_cells
+from linkbook import build, engine, templates
+from linkbook.templates import InputError
+
+
+def fourbar_data() -> dict:
+    return tomllib.loads((templates.TEMPLATE_DIR / "fourbar.toml").read_text(encoding="utf-8"))
+
+
+def step(data: dict, point: str) -> dict:
+    return next(s for s in data["mechanism"]["steps"] if s.get("point") == point)
+
+
+def _set(path: str, value):
+    def change(d):
+        *head, last = path.split(".")
+        for k in head:
+            d = d[k]
+        d[last] = value
+    return change
+
+
+def _step(point: str, key: str, value):
+    def change(d):
+        s = step(d, point)
+        if value is _DELETE:
+            del s[key]
+        else:
+            s[key] = value
+    return change
+
+
+_DELETE = object()
+
+
+def _add_step(new: dict, at: int | None = None):
+    def change(d):
+        steps = d["mechanism"]["steps"]
+        steps.insert(len(steps) if at is None else at, new)
+    return change
+
+
+def _move_first_last(d):
+    steps = d["mechanism"]["steps"]
+    steps.append(steps.pop(0))
+
+
+# (what is wrong, the change, words the one-line message must hold)
+BAD = [
+    ("a point used before it is defined", _move_first_last, ["steps[0] (dyad B).p",
+                                                              "defined by a later step"]),
+    ("an unknown point", _step("B", "q", "B9"), ["(dyad B).q", "'B9' is not defined"]),
+    ("an unknown symbol", _step("B", "p_length", "a3*k9"), ["(dyad B).p_length",
+                                                             "unknown symbol 'k9'"]),
+    ("a missing key", _step("B", "q_length", _DELETE), ["(dyad B).q_length", "is missing"]),
+    ("an unknown key", _step("B", "lenght", 3), ["(dyad B).lenght", "is not a key here"]),
+    ("a duplicate point", _add_step({"type": "crank", "point": "A", "pivot": "A0",
+                                     "length": "a2"}), ["point 'A' is defined twice"]),
+    ("a duplicate column key", _step("C", "columns", {"x": {"key": "xA"}}),
+     ["(point C).columns", "'xA' defined twice"]),
+    ("a cyclic definition", _step("B", "p", "B"), ["(dyad B).p", "cyclic"]),
+    ("a branch other than ±1", _step("B", "branch", 2), ["(dyad B).branch", "must be 1, -1"]),
+    ("a branch that is a length", _step("B", "branch", "a1"), ["(dyad B).branch",
+                                                                "not a branch"]),
+    ("a name Excel would reject", _set("parameters.a1.name", "AB12"),
+     ["parameters.a1.name", "cell reference"]),
+    ("a link through an undefined point", _set("mechanism.links", [["A0", "Q"]]),
+     ["links[0][1]", "'Q' is not defined"]),
+    ("an unknown step type", _step("B", "type", "triad"), ["type", "must be one of"]),
+    ("an expression that does not parse", _step("B", "p_length", "a3*(a4"),
+     ["(dyad B).p_length", "is not an expression"]),
+    ("an unknown function", _step("B", "p_length", "EXP(a3)"), ["unknown function EXP"]),
+    ("a dyad over one point twice", _step("B", "q", "A"), ["(dyad B).q", "must differ"]),
+    ("a point frame of one point", _step("C", "frame", ["A", "A"]),
+     ["(point C).frame", "two different points"]),
+    ("two forms of a carried point", _step("C", "local", [1, 2]),
+     ["(point C)", "exactly one of local, distances or distance"]),
+    ("an unknown column name", _step("B", "columns", {"theta": {"key": "t"}}),
+     ["(dyad B).columns.theta", "writes no such column"]),
+    ("a column key taken by a parameter", _step("C", "columns", {"x": {"key": "a1"}}),
+     ["(point C).columns.x.key", "is taken"]),
+    ("a chart of an unknown column", _set("mechanism.charts", [{"title": "t", "x": "xQ",
+                                                                "y": ["yC"]}]),
+     ["charts[0]", "'xQ' is not a column"]),
+    ("a fixed point that is not a pair", _set("mechanism.ground.B0", ["a1"]),
+     ["ground.B0", "must be [x, y]"]),
+    ("a trace of a fixed point", _set("mechanism.trace", "A0"), ["trace", "moving point"]),
+    ("an unknown parameter kind", _set("parameters.a1.kind", "distance"),
+     ["parameters.a1.kind", "must be one of"]),
+    ("an input without a symbol", _set("mechanism.input", {"key": "theta12"}),
+     ["input.symbol", "is missing"]),
+    ("a column order that forgets a column", _set("mechanism.columns", ["xs"]),
+     ["mechanism.columns", "must list every shown column once"]),
+    ("a slider through a moving point", _add_step({"type": "slider", "point": "S", "p": "C",
+                                                   "length": "a3", "through": "A",
+                                                   "branch": 1}),
+     ["(slider S).through", "must be a fixed point"]),
+]
+
+
+@pytest.mark.parametrize("what,change,words", BAD, ids=[b[0] for b in BAD])
+def test_bad_description_names_the_step_and_field(what, change, words):
+    data = fourbar_data()
+    change(data)
+    with pytest.raises(InputError) as caught:
+        templates.from_data("bad", data, origin="bad.toml")
+    message = str(caught.value)
+    assert "\n" not in message
+    for w in words:
+        assert w in message, (what, message)
+
+
+def test_bad_description_on_the_command_line_writes_nothing(tmp_path):
+    data = (templates.TEMPLATE_DIR / "fourbar.toml").read_text(encoding="utf-8")
+    bad = tmp_path / "bad.toml"
+    bad.write_text(data.replace('q = "B0"', 'q = "B7"'), encoding="utf-8")
+    out = tmp_path / "bad.xlsx"
+    run = subprocess.run([sys.executable, "-m", "linkbook", "build", str(bad), "-o", str(out)],
+                         capture_output=True, text=True, cwd=tmp_path,
+                         env={"PYTHONPATH": str(ROOT / "src"), "PATH": "/usr/bin:/bin"})
+    assert run.returncode == 2
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and "steps[1] (dyad B).q" in lines[0] and "B7" in lines[0], run.stderr
+    assert "Traceback" not in run.stderr
+    assert not out.exists() and list(tmp_path.iterdir()) == [bad]
+
+
+def _expression_book(formula: str, **extra):
+    data = fourbar_data()
+    data["mechanism"]["steps"].append({"type": "expression", "key": "probe", "formula": formula,
+                                       **extra})
+    data["mechanism"].pop("columns")
+    return build.make(templates.from_data("probe", data))
+
+
+@pytest.mark.parametrize("formula,expected", [
+    ("-a2^2", -35.0 ** 2),          # algebra's precedence, not Excel's (-a)^2
+    ("a1-(a2-a3)", 70.0 - (35.0 - 62.3)),
+    ("2^3^2", 2.0 ** 9),            # right-associative, as in algebra
+    ("a1/(a2*a4)", 70.0 / (35.0 * 56.0)),
+    ("IF(a1 > a2, 1, 2) + MAX(a2, a3, a4)", 1 + 62.3),
+    ("ASIN(2)", None),              # a domain error shows #N/A
+])
+def test_expression_means_what_the_doc_says(formula, expected):
+    b, values = _expression_book(formula)
+    cell = b.meta["constants"]["probe"]["cell"]
+    got = values[("Mechanism", cell)]
+    if expected is None:
+        assert engine.error_code(got) == "#N/A", got
+    else:
+        assert got == pytest.approx(expected, rel=1e-15), got
+
+
+def test_every_template_fits_the_json_schema():
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = json.loads((ROOT / "docs" / "mechanism.schema.json").read_text(encoding="utf-8"))
+    jsonschema.Draft7Validator.check_schema(schema)
+    for path in templates.bundled():
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        errors = list(jsonschema.Draft7Validator(schema).iter_errors(data))
+        assert not errors, (path.name, [e.message for e in errors[:3]])
+    broken = fourbar_data()
+    step(broken, "B")["branch"] = 3
+    assert list(jsonschema.Draft7Validator(schema).iter_errors(broken))
+
+
+def test_a_new_step_in_a_copied_template_needs_no_python():
+    """A user's change: a second dyad hung on the coupler point C, and a point on its link."""
+    data = copy.deepcopy(fourbar_data())
+    data["parameters"]["a5"] = {"label": "link |CD|", "unit": "mm", "value": 90.0}
+    data["parameters"]["a6"] = {"label": "output |D0D|", "unit": "mm", "value": 80.0}
+    data["mechanism"]["ground"]["D0"] = [150, 60]
+    data["mechanism"]["steps"] += [
+        {"type": "dyad", "point": "D", "p": "C", "q": "D0", "p_length": "a5",
+         "q_length": "a6", "branch": 1},
+        {"type": "point", "point": "E", "frame": ["D0", "D"], "local": [40, 10]}]
+    data["mechanism"]["links"] += [["C", "D"], ["D0", "D", "E"]]
+    data["mechanism"].pop("columns")
+    b, values = build.make(templates.from_data("mine", data))
+    checks = checks_of(b, values)
+    bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
+    assert not bad, bad[:5]
+    assert sum(c.cells for c in checks) == len(formula_cells(b.workbook))
+    assert "xE" in b.meta["sweep"]["columns"] and "theta_q_D" in b.meta["sweep"]["columns"]
+    assert any(c.name == "xE" and c.cells > 0 for c in checks)
+
+
+def _jansen_with_grid(output: str, extra_steps=()) -> dict:
+    data = tomllib.loads((templates.TEMPLATE_DIR / "jansen.toml").read_text(encoding="utf-8"))
+    data["grid"] = {"parameter": "m", "output": output, "values": [12.0, 15.0, 19.0],
+                    "stroke_step": 10.0}
+    data["mechanism"]["steps"] += list(extra_steps)
+    return data
+
+
+def test_a_grid_of_any_described_mechanism_is_verified():
+    """The textbook's adjustment-by-angle grid for Jansen's leg: the foot's height for three
+    crank lengths, one self-contained formula per cell, every cell against the reference."""
+    b, values = build.make(templates.from_data("jansen-grid", _jansen_with_grid("yF")))
+    checks = checks_of(b, values)
+    bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
+    assert not bad, bad[:5]
+    assert sum(c.cells for c in checks) == len(formula_cells(b.workbook))
+    grid = b.meta["grid"]
+    assert [c.name for c in checks if c.block == "Grid"] == ["yF grid", "stroke"]
+    assert all("Mechanism!" not in str(b.workbook["Grid"][f"{c}{grid['rows'][0]}"].value)
+               for c in grid["columns"])        # self-contained: names and its own row only
+
+
+def test_a_grid_formula_excel_could_not_open_is_refused():
+    deeper = [{"type": "dyad", "point": "G", "p": "F", "q": "Z", "p_length": "h",
+               "q_length": "k", "branch": 1},
+              {"type": "dyad", "point": "H", "p": "G", "q": "E", "p_length": "h",
+               "q_length": "k", "branch": 1}]
+    with pytest.raises(InputError) as caught:
+        build.make(templates.from_data("deep", _jansen_with_grid("yH", deeper)))
+    assert "grid.output" in str(caught.value) and "Excel allows 8,192" in str(caught.value)
