@@ -355,7 +355,7 @@ def test_stale_cached_values_are_recalculated(tmp_path):
 @pytest.mark.libreoffice
 @pytest.mark.parametrize("case", ["default", "non-grashof"])
 def test_libreoffice_matches_reference(lo_books, case):
-    """Every formula cell as LibreOffice computes it, against reference.solve: the sweep table
+    """Every formula cell as LibreOffice computes it, against the generic reference: the sweep table
     directly here, and every block that verify knows (position, joints, constants) through it."""
     b, _, values = lo_books[case]
     formulas = _formula_cells(b.workbook)
@@ -377,12 +377,11 @@ def _sweep_against_reference(b, values) -> tuple[float, int]:
     """The largest relative difference over the sweep columns the reference also computes
     (angles compared modulo a turn), and how many rows the reference says cannot close."""
     import numpy as np
-    from linkbook import reference
     sweep = b.meta["sweep"]
     first, last = sweep["rows"]
     ws = b.workbook[sweep["sheet"]]
     angles = np.array([ws[f"A{r}"].value for r in range(first, last + 1)], dtype=float)
-    ref = reference.solve(b.meta["mechanism"], verify.inputs_of(b.workbook, b.meta), angles)
+    ref = verify.Reference(b.meta).solve(verify.inputs_of(b.workbook, b.meta), angles)
     worst, compared = 0.0, 0
     for key, letter in sweep["columns"].items():
         degrees = key.endswith("_deg")

@@ -17,7 +17,7 @@ from linkbook import engine, templates, workbook
 from linkbook.language import STEP_KEYS
 from linkbook.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND
 
-EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "200"))
+EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
 TALLY: Counter = Counter()
 FAMILIES = sorted(p.stem for p in templates.bundled())
 

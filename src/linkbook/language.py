@@ -306,18 +306,19 @@ class Compiler:
             return raw
         if isinstance(raw, bool) or raw not in (1, -1):
             raise DescriptionError(field, f"must be 1, -1 or a branch parameter (got {raw!r})")
-        name = "plus_one" if raw == 1 else "minus_one"
+        name = "_plus_one" if raw == 1 else "_minus_one"   # no user symbol starts with _
         if not any(q.key == name for q in self.model.quantities):
             self.model.add(Quantity(name, str(int(raw)), "-", str(int(raw)), ALIAS))
         return name
 
     def operand(self, hint: str, e: Expr) -> str:
-        """A key standing for an expression: the parameter itself, or an alias of the text."""
+        """A key standing for an expression: the parameter itself, or an alias of the text (its
+        key starts with _, which no user symbol or column key does)."""
         inner = e.text[1:-1]
         if e.text.startswith("{") and e.text.endswith("}") and inner in self.symbols:
             return inner
-        self.model.add(Quantity(hint, hint, LENGTH, e.text, ALIAS))
-        return hint
+        self.model.add(Quantity(f"_{hint}", hint, LENGTH, e.text, ALIAS))
+        return f"_{hint}"
 
     def columns(self, field: str, step: dict, defaults: list[Column]) -> dict[str, Sym]:
         """The step's columns after its `columns` table renamed or hid them."""
@@ -427,14 +428,6 @@ class Compiler:
                 raise DescriptionError(where, f"must be [x, y] (got {xy!r})")
             self.points[name] = (self.expr(f"{where}[0]", xy[0]), self.expr(f"{where}[1]", xy[1]))
             self.ground.add(name)
-        for a in self.ground:            # two fixed points are a rigid pair: the frame
-            for b in self.ground:
-                if a != b:
-                    self.rigid[(a, b)] = (None, self.angle_of_points(a, b))
-
-    def angle_of_points(self, a: str, b: str) -> Expr:
-        (ax, ay), (bx, by) = self.points[a], self.points[b]
-        return Expr(f"ATAN2({minus(bx, ax).text},{minus(by, ay).text})")
 
     def check_new_point(self, field: str, name: object) -> None:
         if not isinstance(name, str) or not _POINT.match(name):
@@ -652,8 +645,8 @@ class Compiler:
                                    f"/(2*{{{k_ab}}}*{{{k_a}}})")
                 self.model.add(Quantity(g.key, g.symbol, RAD, gamma, self.role(gamma, g),
                                         g.label))
-                turn = f"+{{{g.key}}}" if side == "plus_one" else \
-                    f"-{{{g.key}}}" if side == "minus_one" else f"+{{{side}}}*{{{g.key}}}"
+                turn = f"+{{{g.key}}}" if side == "_plus_one" else \
+                    f"-{{{g.key}}}" if side == "_minus_one" else f"+{{{side}}}*{{{g.key}}}"
                 angle = f"{base.at_least(SUM)}{turn}"
                 d = da.at_least(PRODUCT)
             else:

@@ -1,6 +1,7 @@
 """The textbook's step types: each solves one triangle of a loop and adds named quantities.
 
-A mechanism is an ordered list of these steps (see mechanisms.py). Formulas are Excel text with
+A mechanism is an ordered list of these steps, described as data (docs/language.md) and compiled
+by language.py. Formulas are Excel text with
 {key} placeholders; model.render resolves them. Guards: an ACOS/ASIN whose argument leaves [-1, 1]
 means the loop cannot close, so it becomes #N/A (never #NUM!, never a clamped wrong number), and
 #N/A then propagates to every cell that depends on it.
@@ -9,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .model import ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Model, Quantity
+from .model import ALIAS, COLUMN, LENGTH, RAD, Model, Quantity
 
 
 @dataclass(frozen=True)
@@ -39,13 +40,6 @@ def asin_or_na(arg: str) -> str:
 def input_angle(model: Model, key: str, symbol: str) -> None:
     """The input angle in radians, from its degree value `{key}_deg` (a constant or an input cell)."""
     model.add(Quantity(key, symbol, RAD, f"RADIANS({{{key}_deg}})", label="input angle"))
-
-
-def point(model: Model, name: str, x: str, y: str, *, shown: bool = True, label: str = "") -> None:
-    """Coordinates xName, yName of a joint: columns (its trajectory), or inlined where used."""
-    role = COLUMN if shown else ALIAS
-    model.add(Quantity(f"x{name}", f"x{name}", LENGTH, x, role, label or f"x of {name}"),
-              Quantity(f"y{name}", f"y{name}", LENGTH, y, role, label or f"y of {name}"))
 
 
 def polar(model: Model, dx: str, dy: str, x: Sym, y: Sym, length: Sym, angle: Sym) -> None:
@@ -121,26 +115,3 @@ def offset_slide(model: Model, *, p: str, angle: str, offset: str, branch: str,
         _q(link_angle, RAD, f"{{{angle}}}-{{{branch}}}*{{{psi.key}}}"),
         _q(slide_angle, RAD, f"{{{link_angle.key}}}+{{{branch}}}*PI()/2"),
     )
-
-
-def column(model: Model, sym: Sym, unit: str, formula: str) -> None:
-    """Any other step: one named column."""
-    model.add(_q(sym, unit, formula))
-
-
-def constant(model: Model, sym: Sym, unit: str, formula: str) -> None:
-    """A quantity of the dimensions alone (γ of a coupler, a time ratio): one named cell."""
-    model.add(Quantity(sym.key, sym.symbol, unit, formula, CONSTANT, sym.label))
-
-
-def four_bar_loop(model: Model, dx: str, dy: str, *, coupler: str, rocker: str,
-                  branch: str = "branch") -> None:
-    """The four-bar loop A0ABB0 in the textbook's steps: B0→A from its components, then Raven's
-    triangle A-B-B0 for ψ, the transmission angle μ, the rocker θ14 and the coupler θ13."""
-    polar(model, dx, dy, Sym("xs", "xs", "B0→A, x"), Sym("ys", "ys", "B0→A, y"),
-          Sym("s", "s", "|B0A|"), Sym("phi", "ϕ", "angle of B0→A"))
-    triangle(model, side="s", angle="phi", p=coupler, q=rocker, branch=branch,
-             psi=Sym("psi", "ψ", "∠AB0B"),
-             mu=Sym("mu", "μ", "transmission angle ∠ABB0", deg=True),
-             q_angle=Sym("theta14", "θ14", "rocker, angle of B0→B", deg=True),
-             p_angle=Sym("theta13", "θ13", "coupler, angle of A→B", deg=True))
