@@ -228,3 +228,90 @@ def test_a_grid_formula_excel_could_not_open_is_refused():
     with pytest.raises(InputError) as caught:
         build.make(templates.from_data("deep", _jansen_with_grid("yH", deeper)))
     assert "grid.output" in str(caught.value) and "Excel allows 8,192" in str(caught.value)
+
+
+# Every option of every step type at least once, with values no bundled template has: a crank
+# phase, a slider line at a slant, a slot at a non-quarter angle, a branch and a side given by
+# parameters, a carried point by distance and angle, an expression over columns.
+EVERY_OPTION = """
+title = "Every option"
+length_unit = "mm"
+[sweep]
+start = 0
+stop = 360
+step = 15
+[parameters]
+a1 = { label = "ground", unit = "mm", value = 70.0 }
+a2 = { label = "crank", unit = "mm", value = 25.0 }
+a3 = { label = "coupler", unit = "mm", value = 80.0 }
+a4 = { label = "rocker", unit = "mm", value = 60.0 }
+ph = { label = "phase of the second crank", unit = "deg", value = 35.0, kind = "angle" }
+d5 = { label = "slider rod", unit = "mm", value = 90.0 }
+dir = { label = "slider line direction", unit = "deg", value = 25.0, kind = "angle" }
+e6 = { label = "offset of the slide", unit = "mm", value = 10.0, kind = "offset" }
+side = { label = "side of C", unit = "-", value = -1, kind = "branch" }
+br = { label = "branch", unit = "-", value = 1, kind = "branch" }
+[mechanism]
+input = { key = "t", symbol = "t" }
+ground = { O = [0, 0], Q = ["a1", "a1/7"], L = [-20, -40], R = [-60, 30] }
+links = [["O", "A", "A2"], ["A", "B", "C"], ["Q", "B"], ["C", "S"], ["R", "F", "A2"], ["B", "P"]]
+trace = "C"
+output = "s_S"
+steps = [
+  { type = "crank", point = "A", pivot = "O", length = "a2" },
+  { type = "crank", point = "A2", pivot = "O", length = "0.8*a2", phase = "ph" },
+  { type = "dyad", point = "B", p = "A", q = "Q", p_length = "a3", q_length = "a4", branch = "br" },
+  { type = "point", point = "C", frame = ["A", "B"], distances = ["a3/2", "a3*0.7"], side = "side" },
+  { type = "point", point = "C2", frame = ["B", "Q"], distance = "a4/3", angle = "-ph/2", columns = { theta = { key = "theta_C2" } } },
+  { type = "point", point = "C3", frame = ["A", "B"], local = ["a3/3", "-a2/4"] },
+  { type = "slider", point = "S", p = "C", length = "d5", through = "L", direction = "dir", branch = -1 },
+  { type = "slide", point = "F", p = "A2", pivot = "R", offset = "e6", branch = "br" },
+  { type = "slot", point = "P", slot_through = "B", slot_frame = ["Q", "B"], slot_angle = 70, through = "L", direction = "dir" },
+  { type = "vector", from = "C", to = "S", key = "rod" },
+  { type = "distance", between = ["C3", "S"], key = "d_CS" },
+  { type = "expression", key = "ratio", formula = "d_CS/s_rod + IF(s_S > 0, 1, -1)" },
+  { type = "expression", key = "k", formula = "SQRT(a1^2 + a2^2)/MAX(a3, a4)", unit = "-" },
+]
+"""
+
+
+def _every_option(**values) -> templates.Template:
+    data = tomllib.loads(EVERY_OPTION)
+    for k, v in values.items():
+        data["parameters"][k]["value"] = v
+    return templates.from_data("every-option", data)
+
+
+def test_every_option_of_every_step_type_is_verified():
+    t = _every_option()
+    assert {s["type"] for s in t.mechanism.description["steps"]} == set(
+        __import__("linkbook.language", fromlist=["STEP_KEYS"]).STEP_KEYS)
+    b, values = build.make(t)
+    checks = checks_of(b, values)
+    bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
+    assert not bad, bad[:5]
+    assert sum(c.cells for c in checks) == len(formula_cells(b.workbook))
+    assert "k" in b.meta["constants"] and "ratio" in b.meta["sweep"]["columns"]
+
+
+def test_every_option_on_random_dimensions():
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+    from linkbook import workbook
+
+    @settings(max_examples=30, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.too_slow])
+    @given(st.fixed_dictionaries({
+        "a2": st.floats(5, 60), "a3": st.floats(20, 120), "a4": st.floats(20, 120),
+        "ph": st.floats(-180, 180), "d5": st.floats(10, 150), "dir": st.floats(-180, 180),
+        "e6": st.floats(-40, 40), "side": st.sampled_from([1, -1]),
+        "br": st.sampled_from([1, -1])}))
+    def check(values):
+        b = workbook.build(_every_option(**values))
+        computed = engine.evaluate(b.workbook)
+        checks = checks_of(b, computed)
+        bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
+        assert not bad, (values, bad[:5])
+        assert sum(c.cells for c in checks) == len(formula_cells(b.workbook))
+
+    check()
