@@ -1,0 +1,73 @@
+"""Build and verify time of every bundled template at its default step, whole process (Python
+start-up and imports included), medians of --runs runs. With --against DIR (another checkout of
+linkbook, e.g. a git worktree of an older commit) the same commands run from that tree too,
+interleaved in the same run, and the table gives both medians and their ratio.
+
+    python benchmarks/templates_speed.py [--runs 5] [--against /tmp/old-linkbook]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def timed(tree: Path, args: list[str]) -> float:
+    env = {**os.environ, "PYTHONPATH": str(tree / "src"), "TQDM_DISABLE": "1"}
+    start = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "linkbook", *args], env=env,
+                          capture_output=True, text=True)
+    seconds = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise SystemExit(f"{tree}: linkbook {' '.join(args)} failed:\n{proc.stderr}")
+    return seconds
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--against", type=Path, help="another linkbook checkout to compare with")
+    opts = ap.parse_args()
+    trees = {"now": ROOT} | ({"other": opts.against.resolve()} if opts.against else {})
+    names = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
+    results: dict[tuple[str, str, str], list[float]] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in names:
+            for _ in range(opts.runs):
+                for label, tree in trees.items():       # interleaved: same machine state
+                    if not (tree / "templates" / f"{name}.toml").is_file():
+                        continue
+                    book = str(Path(tmp) / f"{label}-{name}.xlsx")
+                    results.setdefault((name, label, "build"), []).append(
+                        timed(tree, ["build", name, "-o", book]))
+                    results.setdefault((name, label, "verify"), []).append(
+                        timed(tree, ["verify", book]))
+            print(f"{name}: done", file=sys.stderr, flush=True)
+    cols = [(label, job) for label in trees for job in ("build", "verify")]
+    print(f"{'template':22}" + "".join(f"{label + ' ' + job:>14}" for label, job in cols)
+          + ("".join(f"{'now/other ' + job:>18}" for job in ("build", "verify"))
+             if opts.against else ""))
+    for name in names:
+        med = {k: statistics.median(v) for k, v in results.items() if k[0] == name}
+        row = f"{name:22}" + "".join(
+            f"{med[(name, label, job)]:13.2f}s" if (name, label, job) in med else f"{'-':>14}"
+            for label, job in cols)
+        if opts.against:
+            for job in ("build", "verify"):
+                a, b = med.get((name, "now", job)), med.get((name, "other", job))
+                row += f"{a / b:17.2f}x" if a and b else f"{'-':>18}"
+        print(row)
+    print(f"\nmedians of {opts.runs} whole-process runs (start-up and imports included)"
+          + (f"; other = {opts.against}" if opts.against else ""))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
