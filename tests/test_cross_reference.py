@@ -14,11 +14,11 @@ from functools import lru_cache
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 
 import legacy_reference
 from linkbook import generic, templates
-from linkbook.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND
+from linkbook.mechanisms import ANGLE_KIND, BRANCH_KIND
+from test_properties import dimensions
 
 EXAMPLES = int(os.environ.get("LINKBOOK_CROSS_EXAMPLES", "60"))
 ANGLES = np.arange(0.0, 360.0, 7.5)
@@ -27,21 +27,6 @@ ANGLES = np.arange(0.0, 360.0, 7.5)
 @lru_cache(maxsize=None)
 def template(name: str) -> templates.Template:
     return templates.load(name)
-
-
-def dimensions(t: templates.Template):
-    scale = max(abs(p.value) for p in t.parameters if p.kind == LENGTH_KIND)
-    draws = {}
-    for p in t.parameters:
-        if p.kind == LENGTH_KIND:
-            draws[p.symbol] = st.floats(0.2, 3.0).map(lambda f, v=p.value: f * v)
-        elif p.kind == BRANCH_KIND:
-            draws[p.symbol] = st.sampled_from([1.0, -1.0])
-        elif p.kind == ANGLE_KIND:
-            draws[p.symbol] = st.floats(-180.0, 180.0)
-        else:
-            draws[p.symbol] = st.floats(-1.0, 1.0).map(lambda f, v=p.value: v + f * scale)
-    return st.fixed_dictionaries(draws)
 
 
 def _same(name: str, key: str, old, new, size: float) -> None:

@@ -1215,6 +1215,20 @@ def fourbar_loop(description: Mapping, params: Mapping[str, float]
     return math.hypot(qx - ax, qy - ay), crank, coupler, rocker
 
 
+def grashof_class(ground: float, crank: float, coupler: float, rocker: float) -> str:
+    """Grashof's rule, s + l against p + q, and which link is the shortest."""
+    links = {"ground": ground, "crank": crank, "coupler": coupler, "rocker": rocker}
+    s, l = min(links.values()), max(links.values())
+    pq = sum(links.values()) - s - l
+    if s + l > pq * (1 + 1e-12):
+        return "non-Grashof: triple rocker"
+    if s + l >= pq * (1 - 1e-12):
+        return "change point"
+    shortest = min(links, key=links.get)
+    return {"ground": "Grashof: double crank", "crank": "Grashof: crank-rocker",
+            "coupler": "Grashof: double rocker", "rocker": "Grashof: rocker-crank"}[shortest]
+
+
 def limit_angles(description: Mapping, params: Mapping[str, float], length: float) -> list[float]:
     """Input angles (degrees, [0, 360), ascending) where the four-bar loop's output pivot Q is
     exactly `length` from the crank pin A(θ) (the crank's phase included): found by sampling

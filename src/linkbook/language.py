@@ -220,6 +220,14 @@ class Column:
     shown: bool = True
 
 
+def polar_columns(n: str, a: str, b: str, degrees: bool = False) -> list[Column]:
+    """The textbook's rectangular-to-polar columns of the vector a→b, keyed by `n`."""
+    return [Column("xs", f"xs_{n}", f"xs_{n}", f"{a}→{b}, x", LENGTH),
+            Column("ys", f"ys_{n}", f"ys_{n}", f"{a}→{b}, y", LENGTH),
+            Column("s", f"s_{n}", f"s_{n}", f"|{a}{b}|", LENGTH),
+            Column("phi", f"phi_{n}", f"ϕ_{n}", f"angle of {a}→{b}", RAD, degrees)]
+
+
 STEP_KEYS = {
     "crank": ({"point", "pivot", "length"}, {"phase"}),
     "dyad": ({"point", "p", "q", "p_length", "q_length", "branch"}, set()),
@@ -484,10 +492,7 @@ class Compiler:
         branch = self.branch(f"{field}.branch", s["branch"])
         n = name
         cols = self.columns(field, s, [
-            Column("xs", f"xs_{n}", f"xs_{n}", f"{q}→{p}, x", LENGTH),
-            Column("ys", f"ys_{n}", f"ys_{n}", f"{q}→{p}, y", LENGTH),
-            Column("s", f"s_{n}", f"s_{n}", f"|{q}{p}|", LENGTH),
-            Column("phi", f"phi_{n}", f"ϕ_{n}", f"angle of {q}→{p}", RAD),
+            *polar_columns(n, q, p),
             Column("psi", f"psi_{n}", f"ψ_{n}", f"∠{p}{q}{n}", RAD),
             Column("mu", f"mu_{n}", f"μ_{n}", f"transmission angle ∠{q}{n}{p}", RAD, True),
             Column("p_interior", f"p_interior_{n}", f"∠{q}{p}{n}", f"∠{q}{p}{n}", RAD,
@@ -565,10 +570,7 @@ class Compiler:
         offset = self.expr(f"{field}.offset", s["offset"])
         branch = self.branch(f"{field}.branch", s["branch"])
         cols = self.columns(field, s, [
-            Column("xs", f"xs_{n}", f"xs_{n}", f"{pivot}→{p}, x", LENGTH),
-            Column("ys", f"ys_{n}", f"ys_{n}", f"{pivot}→{p}, y", LENGTH),
-            Column("s", f"s_{n}", f"s_{n}", f"|{pivot}{p}|", LENGTH),
-            Column("phi", f"phi_{n}", f"ϕ_{n}", f"angle of {pivot}→{p}", RAD),
+            *polar_columns(n, pivot, p),
             Column("psi", f"psi_{n}", f"ψ_{n}", f"∠{p}{pivot}{n}", RAD),
             Column("travel", f"travel_{n}", f"|{n}{p}|", f"slide travel |{n}{p}|", LENGTH),
             Column("theta", f"theta_{n}", f"θ({pivot}{n})", f"link, angle of {pivot}→{n}", RAD,
@@ -743,11 +745,7 @@ class Compiler:
         b = self.known_point(f"{field}.to", s["to"])
         if a == b:
             raise DescriptionError(f"{field}.to", "must differ from from")
-        cols = self.columns(field, s, [
-            Column("xs", f"xs_{k}", f"xs_{k}", f"{a}→{b}, x", LENGTH),
-            Column("ys", f"ys_{k}", f"ys_{k}", f"{a}→{b}, y", LENGTH),
-            Column("s", f"s_{k}", f"s_{k}", f"|{a}{b}|", LENGTH),
-            Column("phi", f"phi_{k}", f"ϕ_{k}", f"angle of {a}→{b}", RAD, True)])
+        cols = self.columns(field, s, polar_columns(k, a, b, degrees=True))
         (ax, ay), (bx, by) = self.points[a], self.points[b]
         polar(self.model, minus(bx, ax).text, minus(by, ay).text,
               cols["xs"], cols["ys"], cols["s"], cols["phi"])

@@ -364,26 +364,12 @@ def _summary_expected(model, solver, params, ref, closes, starts, ends) -> dict:
     if loop:
         g, c, k, r = loop
         out.update(fb_ground=g, fb_crank=c, fb_coupler=k, fb_rocker=r,
-                   grashof=grashof_class(g, c, k, r))
+                   grashof=generic.grashof_class(g, c, k, r))
         for name, length in (("stretched", k + r), ("folded", abs(k - r))):
             roots = solver.limit_angles(params, length)
             lo, hi = (roots[0], roots[-1]) if roots else ("none", "none")
             out[f"limit_{name}_1"], out[f"limit_{name}_2"] = lo, hi
     return out
-
-
-def grashof_class(ground: float, crank: float, coupler: float, rocker: float) -> str:
-    """Grashof's rule, s + l against p + q, and which link is the shortest."""
-    links = {"ground": ground, "crank": crank, "coupler": coupler, "rocker": rocker}
-    s, l = min(links.values()), max(links.values())
-    pq = sum(links.values()) - s - l
-    if s + l > pq * (1 + 1e-12):
-        return "non-Grashof: triple rocker"
-    if s + l >= pq * (1 - 1e-12):
-        return "change point"
-    shortest = min(links, key=links.get)
-    return {"ground": "Grashof: double crank", "crank": "Grashof: crank-rocker",
-            "coupler": "Grashof: double rocker", "rocker": "Grashof: rocker-crank"}[shortest]
 
 
 def _slope(solver: Reference, params: dict, angles: np.ndarray, key: str, unit: str,
