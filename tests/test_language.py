@@ -315,3 +315,23 @@ def test_every_option_on_random_dimensions():
         assert sum(c.cells for c in checks) == len(formula_cells(b.workbook))
 
     check()
+
+
+def test_a_long_description_fits_the_build_record(tmp_path):
+    """The record (with the description) is split across cells: Excel holds 32,767 characters in
+    one. Forty extra steps make it longer than that; the saved book still verifies."""
+    from linkbook.verify import verify
+    data = fourbar_data()
+    data["mechanism"].pop("columns")
+    for i in range(40):
+        data["mechanism"]["steps"].append(
+            {"type": "point", "point": f"K{i}", "frame": ["A", "B"], "local": [i, -i],
+             "columns": {"x": {"label": "a long label " * 20}, "y": {"label": "y " * 100}}})
+    t = templates.from_data("long", data)
+    path = tmp_path / "long.xlsx"
+    build.build_file(t, path)
+    import openpyxl
+    record = openpyxl.load_workbook(path)["linkbook"]
+    assert isinstance(record["A3"].value, str)       # the record did need a second cell
+    assert all(len(c.value) <= 32_767 for c in record["A"] if isinstance(c.value, str))
+    assert verify(path).ok

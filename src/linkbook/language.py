@@ -894,15 +894,19 @@ class Compiler:
         return charts
 
 
-def parameter_kinds(origin: str, table: dict) -> dict[str, str]:
-    """Each parameter's kind: `kind` of its entry, or a length."""
+def parameter_kinds(origin: str, table: dict, defaults: dict[str, str] | None = None
+                    ) -> dict[str, str]:
+    """Each parameter's kind: `kind` of its entry, else its default (an older template's symbol
+    takes the bundled template's kind), else a length."""
+    defaults = defaults or {}
     kinds = {}
     for symbol, entry in table.items():
         field = f"{origin}: parameters.{symbol}"
         if not _IDENT.match(symbol) or keyword.iskeyword(symbol):
             raise DescriptionError(field, "a symbol must be letters, digits and _, starting with "
                                           "a letter")
-        kind = entry.get("kind", LENGTH_KIND) if isinstance(entry, dict) else LENGTH_KIND
+        kind = defaults.get(symbol, LENGTH_KIND)
+        kind = entry.get("kind", kind) if isinstance(entry, dict) else kind
         if kind not in KINDS:
             raise DescriptionError(f"{field}.kind", f"must be one of {', '.join(KINDS)} "
                                                     f"(got {kind!r})")

@@ -266,10 +266,8 @@ def _mechanism(name: str, data: dict, origin: str) -> Mechanism:
     elif isinstance(data.get("mechanism"), str) and bundled_data.get("grid"):
         grid_keys = (bundled_data["grid"]["parameter"], bundled_data["grid"]["output"])
     try:
-        user = parameter_kinds(origin, table)
-        kinds = {s: (table[s].get("kind") if isinstance(table[s], dict) and "kind" in table[s]
-                     else kinds.get(s, k)) for s, k in user.items()}
-        return compile_mechanism(name, raw, kinds, origin, grid_keys)
+        return compile_mechanism(name, raw, parameter_kinds(origin, table, kinds), origin,
+                                 grid_keys)
     except DescriptionError as exc:
         raise InputError(exc.field, exc.message) from None
 

@@ -556,19 +556,28 @@ def _stroke_row(ws, t: Template, grid: dict, stroke: dict) -> int:
     return row
 
 
+CELL_TEXT = 30_000    # Excel holds at most 32,767 characters in a cell
+
+
 def _write_meta(ws, meta: dict) -> None:
+    """The record as JSON in A2, continued in A3, A4, … when a large description needs it."""
     ws.sheet_state = "hidden"
     ws["A1"] = "linkbook build record: which template, branch and layout this workbook has."
     ws["A1"].data_type = "s"
-    ws["A2"] = json.dumps(meta, ensure_ascii=False, sort_keys=True)
-    ws["A2"].data_type = "s"
+    text = json.dumps(meta, ensure_ascii=False, sort_keys=True)
+    for i in range(0, len(text), CELL_TEXT):
+        cell = ws.cell(2 + i // CELL_TEXT, 1, text[i:i + CELL_TEXT])
+        cell.data_type = "s"
 
 
 def read_meta(wb) -> dict | None:
     if META not in wb.sheetnames:
         return None
-    text = wb[META]["A2"].value
+    ws, parts, row = wb[META], [], 2
+    while isinstance(part := ws.cell(row, 1).value, str):
+        parts.append(part)
+        row += 1
     try:
-        return json.loads(text) if isinstance(text, str) else None
+        return json.loads("".join(parts)) if parts else None
     except json.JSONDecodeError:
         return None
