@@ -290,6 +290,16 @@ class Compiler:
     def expr(self, field: str, raw: object) -> Expr:
         return expression(field, raw, self.symbols)
 
+    def frame(self, field: str, raw: object, defining: str) -> tuple[str, str]:
+        """[A, B]: two different known points (a link's frame)."""
+        if not isinstance(raw, list) or len(raw) != 2:
+            raise DescriptionError(field, f"must be [A, B], two known points (got {raw!r})")
+        a = self.known_point(f"{field}[0]", raw[0], defining)
+        b = self.known_point(f"{field}[1]", raw[1], defining)
+        if a == b:
+            raise DescriptionError(field, "needs two different points")
+        return a, b
+
     def known_point(self, field: str, name: object, defining: str = "") -> str:
         if not isinstance(name, str):
             raise DescriptionError(field, f"must be a point name (got {name!r})")
@@ -594,14 +604,7 @@ class Compiler:
 
     def step_point(self, field: str, s: dict) -> None:
         n = s["point"]
-        frame = s["frame"]
-        if not isinstance(frame, list) or len(frame) != 2:
-            raise DescriptionError(f"{field}.frame", f"must be [A, B], two known points "
-                                                     f"(got {frame!r})")
-        a = self.known_point(f"{field}.frame[0]", frame[0], n)
-        b = self.known_point(f"{field}.frame[1]", frame[1], n)
-        if a == b:
-            raise DescriptionError(f"{field}.frame", "needs two different points")
+        a, b = self.frame(f"{field}.frame", s["frame"], n)
         forms = [k for k in ("local", "distances", "distance") if k in s]
         if len(forms) != 1:
             raise DescriptionError(field, "needs exactly one of local, distances or distance "
@@ -668,14 +671,7 @@ class Compiler:
     def step_slot(self, field: str, s: dict) -> None:
         n = s["point"]
         e = self.known_point(f"{field}.slot_through", s["slot_through"], n)
-        frame = s["slot_frame"]
-        if not isinstance(frame, list) or len(frame) != 2:
-            raise DescriptionError(f"{field}.slot_frame", f"must be [A, B], two known points "
-                                                          f"(got {frame!r})")
-        a = self.known_point(f"{field}.slot_frame[0]", frame[0], n)
-        b = self.known_point(f"{field}.slot_frame[1]", frame[1], n)
-        if a == b:
-            raise DescriptionError(f"{field}.slot_frame", "needs two different points")
+        a, b = self.frame(f"{field}.slot_frame", s["slot_frame"], n)
         through = self.known_point(f"{field}.through", s["through"], n)
         if through not in self.ground:
             raise DescriptionError(f"{field}.through", f"{through!r} must be a fixed point")

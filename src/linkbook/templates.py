@@ -247,7 +247,9 @@ def _mechanism(name: str, data: dict, origin: str) -> Mechanism:
     from .language import DescriptionError, compile_mechanism, parameter_kinds
     raw = data.get("mechanism")
     table = _need(data, "parameters", origin, dict)
-    kinds = {}
+    kinds: dict[str, str] = {}
+    grid_keys = None
+    grid = data.get("grid")
     if isinstance(raw, str):
         bundled_data = bundled_template_data(raw)
         if bundled_data is None:
@@ -255,16 +257,14 @@ def _mechanism(name: str, data: dict, origin: str) -> Mechanism:
             raise InputError(f"{origin}: mechanism", f"unknown mechanism {raw!r}; known: {known}")
         raw = bundled_data["mechanism"]
         kinds = {s: e.get("kind", LENGTH_KIND) for s, e in bundled_data["parameters"].items()}
+        if "grid" in bundled_data:
+            grid_keys = (bundled_data["grid"]["parameter"], bundled_data["grid"]["output"])
     elif not isinstance(raw, dict):
         raise InputError(f"{origin}: mechanism", "is missing: a [mechanism] table "
                                                  "(docs/language.md) or a bundled name")
-    grid = data.get("grid")
-    grid_keys = None
     if isinstance(grid, dict) and ("parameter" in grid or "output" in grid):
         grid_keys = (_need(grid, "parameter", f"{origin}: grid"),
                      _need(grid, "output", f"{origin}: grid"))
-    elif isinstance(data.get("mechanism"), str) and bundled_data.get("grid"):
-        grid_keys = (bundled_data["grid"]["parameter"], bundled_data["grid"]["output"])
     try:
         return compile_mechanism(name, raw, parameter_kinds(origin, table, kinds), origin,
                                  grid_keys)
