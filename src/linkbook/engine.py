@@ -102,7 +102,11 @@ DYNAMIC = frozenset({"INDIRECT", "OFFSET", "ISFORMULA", "_XLFN.ISFORMULA", "FORM
                      "_XLFN.FORMULATEXT", "CELL"})
 
 _PARSER = Parser()
-_COMPILED: dict[tuple[str, str, str], tuple[object, "_Batch"]] = {}
+# Compiled functions by (sheet, skeleton, pattern of equal references, mode): see _compiled.
+_COMPILED: dict[tuple, tuple[object, list[int], "_Batch"]] = {}
+# Skeletons whose references the `formulas` tokenizer has been seen to read exactly as the
+# lexer does, with the functions they call: a formula of a known skeleton is not re-tokenized.
+_READ_SKELETONS: dict[str, set[str]] = {}
 _COMPILED_MAX = 2048
 
 
@@ -120,12 +124,14 @@ class CircularReferenceError(EngineError):
 
 # --------------------------------------------------------------------------- public API
 
-def evaluate(wb: openpyxl.Workbook) -> dict[tuple[str, str], object]:
+def evaluate(wb: openpyxl.Workbook, known: dict | None = None) -> dict[tuple[str, str], object]:
     """Value of every non-empty cell of every worksheet, keyed by (sheet title, 'B7').
 
     Formula cells get a float, a `formulas` XlError (#N/A, #NUM!, #DIV/0!, ...), or a str/bool
-    where the formula yields one; constants keep their type (ints stay ints)."""
-    return Engine(wb).run()
+    where the formula yields one; constants keep their type (ints stay ints).  `known`: values
+    (as this function returns them) of formula cells that are taken as they are, not evaluated:
+    the caller vouches that nothing they read has changed since."""
+    return Engine(wb, known=known).run()
 
 
 def evaluate_file(path) -> dict[tuple[str, str], object]:
@@ -322,17 +328,37 @@ class Template:
     chunks: tuple[str, ...]
     slots: tuple[tuple[bool, int, bool], ...]   # (is_row, value, relative)
 
-    def shifted(self, dr: int, dc: int) -> tuple[str, "Template"] | None:
-        """(text, template) of this formula copied dr rows down and dc columns right."""
-        slots, text = [], [self.chunks[0]]
+    @functools.cached_property
+    def _relative(self) -> tuple[tuple[str, ...], tuple[tuple[bool, int], ...]]:
+        """The text between relative slots (absolute numbers written in), and those slots."""
+        texts, slots, text = [], [], self.chunks[0]
         for (is_row, value, relative), chunk in zip(self.slots, self.chunks[1:]):
             if relative:
-                value += dr if is_row else dc
-            if not 1 <= value <= (MAX_ROW if is_row else MAX_COL):
-                return None
-            slots.append((is_row, value, relative))
-            text += [str(value) if is_row else _column_letter(value), chunk]
-        return "".join(text), Template(self.chunks, tuple(slots))
+                texts.append(text)
+                slots.append((is_row, value))
+                text = chunk
+            else:
+                text += (str(value) if is_row else _column_letter(value)) + chunk
+        texts.append(text)
+        return tuple(texts), tuple(slots)
+
+    def shifted(self, dr: int, dc: int) -> str | None:
+        """The text of this formula copied dr rows down and dc columns right (None if a
+        reference would leave the sheet)."""
+        texts, slots = self._relative
+        out = [texts[0]]
+        for (is_row, value), text in zip(slots, texts[1:]):
+            if is_row:
+                value += dr
+                if not 1 <= value <= MAX_ROW:
+                    return None
+                out += (str(value), text)
+            else:
+                value += dc
+                if not 1 <= value <= MAX_COL:
+                    return None
+                out += (_column_letter(value), text)
+        return "".join(out)
 
 
 class References:
@@ -484,6 +510,17 @@ def _tokenize(formula: str) -> TokenInfo:
     if bad:
         raise UnsupportedFormulaError(f"{sorted(bad)} in {formula!r}")
     return TokenInfo(spans, keys, functions, builder)
+
+
+def _skeleton(formula: str, spans) -> str:
+    """The formula with every reference replaced by a mark: formulas that differ only in which
+    cells they read share a skeleton (and a compiled function)."""
+    parts, pos = [], 0
+    for start, end in spans:
+        parts += [formula[pos:start], "\0"]
+        pos = end
+    parts.append(formula[pos:])
+    return "".join(parts)
 
 
 def _shape(formula, spans, refs: References, sheet, row, col) -> tuple[str, list[RefDesc]]:
@@ -720,8 +757,9 @@ class Group:
 class Engine:
     """One evaluation of one workbook; `stats` tells how it was grouped and run."""
 
-    def __init__(self, wb: openpyxl.Workbook, vectorize: bool = True):
+    def __init__(self, wb: openpyxl.Workbook, vectorize: bool = True, known: dict | None = None):
         self.wb = wb
+        self.known = known or {}
         self.vectorize = vectorize
         self.refs = References.of(wb)
         self.constants: dict[str, dict[tuple[int, int], object]] = {}
@@ -731,7 +769,7 @@ class Engine:
         self.member: dict[str, np.ndarray] = {}
         self.stats = dict(formula_cells=0, shapes=0, compiled=0, reused=0, vector_groups=0,
                           cell_groups=0, each_groups=0, cyclic_cells=0, tokenized_cells=0,
-                          vector_fallbacks=0, row_by_row_nodes=0)
+                          vector_fallbacks=0, row_by_row_nodes=0, split_groups=0)
 
     # ---- pipeline
     def run(self) -> dict[tuple[str, str], object]:
@@ -745,10 +783,11 @@ class Engine:
         # Overflow warnings would only repeat what the #NUM!/#VALUE! results say; 'ignore' and
         # numpy's default 'warn' give the same values.
         with np.errstate(all="ignore"):
-            for component in self._components():
+            for component in self._untangled_components():
                 self._evaluate_component(component)
-        self.stats["row_by_row_nodes"] = sum(g.batch.row_by_row for g in self.groups)
-        self.stats["numeric_nodes"] = sum(g.batch.numeric for g in self.groups)
+        batches = {id(g.batch): g.batch for g in self.groups}.values()   # groups share them
+        self.stats["row_by_row_nodes"] = sum(b.row_by_row for b in batches)
+        self.stats["numeric_nodes"] = sum(b.numeric for b in batches)
         return self._values()
 
     # ---- 1. cells
@@ -760,6 +799,10 @@ class Engine:
                 if cell.value is None:
                     continue
                 if cell.data_type == "f":
+                    value = self.known.get((ws.title, _a1(row, col)), self)
+                    if value is not self:
+                        consts[(row, col)] = value
+                        continue
                     forms.append((row, col, _formula_text(cell)))
                 else:
                     value = _constant(cell)
@@ -777,24 +820,33 @@ class Engine:
         for sheet, forms in formulas_by_sheet.items():
             above, left = {}, {}   # last (row, col, shape, template) per column / per row
             for row, col, formula in forms:
-                shape, template = self._copied_shape(formula, row, col, above, left)
-                if shape is None:
+                copied = self._copied_shape(formula, row, col, above, left)
+                if copied is not None:
+                    above[col] = left[row] = copied
+                    shape = copied[2]
+                else:
                     try:
                         shape, template = self.refs.fast_shape(formula, sheet, row, col)
+                        above[col] = left[row] = (row, col, shape, template)
                     except UnsupportedFormulaError:
-                        shape, template = "\0" + formula, None   # the tokenizer decides below
-                if template is not None:
-                    above[col] = left[row] = (row, col, shape, template)
+                        shape = "\0" + formula   # the tokenizer decides below
                 candidates.setdefault((sheet, shape), []).append(_Member(row, col, formula))
         exact: dict[tuple[str, str], tuple[list[_Member], TokenInfo, list[RefDesc]]] = {}
         for (sheet, shape), members in candidates.items():
             rep = members[0]
-            info = self._tokenize(rep, sheet)
-            if not shape.startswith("\0") and info.spans == _lex_spans(rep.formula, self.refs):
+            lexed = None if shape.startswith("\0") else _lex_spans(rep.formula, self.refs)
+            skeleton = None if lexed is None else _skeleton(rep.formula, lexed)
+            read = _READ_SKELETONS.get(skeleton)
+            info = (TokenInfo(lexed, None, read, None) if read is not None
+                    else self._tokenize(rep, sheet))
+            if lexed is not None and info.spans == lexed:
                 exact_shape, descs = self._exact_shape(rep, sheet, info)
                 if exact_shape == shape:
+                    _READ_SKELETONS[skeleton] = info.functions
                     exact[(sheet, shape)] = (members, info, descs)
                     continue
+            if info.builder is None:
+                info = self._tokenize(rep, sheet)
             for m in members:  # the lexer misread this shape: re-read every member exactly
                 m_info = info if m is rep else self._tokenize(m, sheet)
                 exact_shape, descs = self._exact_shape(m, sheet, m_info)
@@ -807,15 +859,15 @@ class Engine:
     @staticmethod
     def _copied_shape(formula, row, col, above, left):
         """The shape of the cell above (or to the left) if this formula is its copy; a copy has
-        the same shape by definition, and checking it is much cheaper than lexing."""
+        the same shape by definition, and checking it is much cheaper than lexing.  The entries
+        keep the cell the template was made from, so every copy is a shift of that one."""
         for prev in (above.get(col), left.get(row)):
             if prev is None:
                 continue
             prow, pcol, shape, template = prev
-            copied = template.shifted(row - prow, col - pcol)
-            if copied is not None and copied[0] == formula:
-                return shape, copied[1]
-        return None, None
+            if template.shifted(row - prow, col - pcol) == formula:
+                return prev
+        return None
 
     def _tokenize(self, member: _Member, sheet: str) -> TokenInfo:
         self.stats["tokenized_cells"] += 1
@@ -837,56 +889,72 @@ class Engine:
         functions = g.info.functions
         if functions & HOST_AWARE:
             return self._plan_each(g)
-        chosen = self._representative(g)
-        if chosen is None:
+        rep = self._representative(g)
+        if rep is None:
             return self._plan_each(g)
-        rep, info, by_key = chosen
         vector = (self.vectorize and len(g.members) > 1 and functions <= VECTOR_SAFE
-                  and not any(d.is_range for d in by_key.values()))
+                  and not any(d.is_range for d in g.descs))
         g.mode = "vector" if vector else "cell"
-        func = self._compiled(g, rep, info)
-        inputs = []
-        for key, template in func.inputs.items():
-            desc = by_key.get(key)
-            if desc is None or not _same_cells(desc, template, rep, g.sheet, self.refs):
-                return self._plan_each(g)   # unions, intersections: not tied to one reference
-            inputs.append(desc)
-        g.func, g.inputs = func, inputs
+        compiled = self._compiled(g, *rep)
+        if compiled is None:
+            return self._plan_each(g)   # unions, intersections: not tied to one reference
+        g.func, positions = compiled
+        g.inputs = [g.descs[i] for i in positions]
         self.stats[f"{g.mode}_groups"] += 1
 
-    def _compiled(self, g: Group, rep: _Member, info: TokenInfo):
-        """The compiled representative, reused across evaluations in this process: a function
-        depends only on the formula's text, its sheet and the mode (its input keys are tied to
-        this workbook's cells afterwards), and compiling is most of the cost of a small book."""
-        key = (g.sheet, rep.formula, g.mode)
+    def _compiled(self, g: Group, rep: _Member, spans, keys):
+        """(compiled function, index of the reference behind each of its inputs), or None when
+        an input is not one reference.  Reused across groups and evaluations in this process:
+        the function depends only on the text around the references, the pattern of equal
+        references, the sheet and the mode (compiling is most of the cost of a small book)."""
+        pattern = tuple(keys.index(k) for k in keys)
+        skeleton = rep.formula if g.shape.startswith("\0") else _skeleton(rep.formula, spans)
+        key = (g.sheet, skeleton, pattern, g.mode)
         cached = _COMPILED.get(key)
         if cached is not None:
-            func, g.batch = cached
+            func, positions, g.batch = cached
             g.batch.row_by_row = g.batch.numeric = 0
             self.stats["reused"] += 1
-            return func
+            return func, positions
+        info = g.info
+        if rep is not g.members[0] or info.builder is None or info.keys is None:
+            info = self._tokenize(rep, g.sheet)
+        g.info = TokenInfo(info.spans, info.keys, info.functions, None)  # compile() consumes it
         func = _compile(info.builder, g.batch if g.mode == "vector" else None)
         self.stats["compiled"] += 1
+        positions = []
+        for name, template in func.inputs.items():
+            i = info.keys.index(name) if name in info.keys else -1
+            if i < 0 or not _same_cells(g.descs[i], template, rep, g.sheet, self.refs):
+                return None
+            positions.append(i)
+        if tuple(info.keys.index(k) for k in info.keys) != pattern:
+            return func, positions   # the tokenizer pairs references otherwise: not reusable
         if len(_COMPILED) >= _COMPILED_MAX:
             _COMPILED.pop(next(iter(_COMPILED)))
-        _COMPILED[key] = (func, g.batch)
-        return func
+        _COMPILED[key] = (func, positions, g.batch)
+        return func, positions
 
     def _representative(self, g: Group):
-        """(member, TokenInfo, compiled-input key -> RefDesc) of a member whose formula gives
-        every compiled input one descriptor.  In row 5, `=B5+$B$5` has one input 'B5' for two
-        descriptors; row 6 has two inputs, and its compiled function serves rows 5.. as well
-        (two inputs that happen to hold one cell are still right).  None if no member fits."""
+        """(member, spans, reference keys) of a member whose formula gives every compiled input
+        one descriptor.  In row 5, `=B5+$B$5` has one input 'B5' for two descriptors; row 6 has
+        two inputs, and its compiled function serves rows 5.. as well (two inputs that happen to
+        hold one cell are still right).  None if no member fits."""
         n = len(g.members)
         for i in dict.fromkeys((0, min(1, n - 1), n // 2, n - 1)):
             m = g.members[i]
-            info = g.info if i == 0 else self._tokenize(m, g.sheet)
+            if g.shape.startswith("\0"):    # the lexer misread this shape: the tokenizer's keys
+                info = g.info if i == 0 else self._tokenize(m, g.sheet)
+                spans, keys = info.spans, info.keys
+            else:
+                spans = g.info.spans if i == 0 else _lex_spans(m.formula, self.refs)
+                keys = [m.formula[a:b].replace("$", "").upper() for a, b in spans]
             by_key, clash = {}, []
-            for key, desc in zip(info.keys, g.descs):
+            for key, desc in zip(keys, g.descs):
                 if by_key.setdefault(key, desc) != desc:
                     clash.append((by_key[key], desc))
             if not clash or all(self._always_same(g, a, b) for a, b in clash):
-                return m, info, by_key
+                return m, spans, keys
         return None
 
     @staticmethod
@@ -1022,6 +1090,56 @@ class Engine:
                     parent = work[-1][0]
                     low[parent] = min(low[parent], low[v])
         return out
+
+    def _untangled_components(self) -> list[list[int]]:
+        """Components after splitting the groups that tie several groups into one cycle.
+
+        A group joins cells by shape, not by position, so two groups can read each other
+        without any cell reading itself: `=SQRT(E5^2+F5^2)` in columns G and M of a sweep is one
+        group, and if M reads a column that reads G, the two groups are one cycle.  Evaluated
+        cell by cell, such a cycle costs a compiled call per cell.  So a group of a cycle that
+        spans several columns is split into one group per column; where no such group is left,
+        the smallest groups are split into single cells; and again, until every cycle left is
+        real (a column that reads itself, or a circular reference).  A sweep column stays
+        whole."""
+        while True:
+            components = self._components()
+            victims = []
+            for component in components:
+                if len(component) < 2:
+                    continue
+                groups = [self.groups[gid] for gid in component]
+                wide = [g for g in groups if len(set(g.cols.tolist())) > 1]
+                if wide:
+                    victims += [(g, lambda m: m.col) for g in wide]
+                    continue
+                splittable = [len(g.members) for g in groups if len(g.members) > 1]
+                victims += [(g, lambda m: (m.row, m.col)) for g in groups
+                            if splittable and len(g.members) == min(splittable)]
+            if not victims:
+                return components
+            for g, key in victims:
+                self._split(g, key)
+            self.stats["split_groups"] += len(victims)
+
+    def _split(self, g: Group, key) -> None:
+        """One group per value of key(member); the first keeps the gid, all share the compiled
+        function and its inputs."""
+        parts: dict[object, list[int]] = {}
+        for i, m in enumerate(g.members):
+            parts.setdefault(key(m), []).append(i)
+        index = list(parts.values())
+        for idx in index[1:]:
+            part = Group(len(self.groups), g.sheet, g.shape, [g.members[i] for i in idx],
+                         g.info, g.descs, g.mode, g.func, g.inputs, g.batch,
+                         [g.each[i] for i in idx] if g.each else [], g.rows[idx], g.cols[idx])
+            self.groups.append(part)
+            self.owner[g.sheet][part.rows, part.cols] = part.gid
+            self.member[g.sheet][part.rows, part.cols] = np.arange(len(idx))
+        first = index[0]
+        g.members = [g.members[i] for i in first]
+        g.each = [g.each[i] for i in first] if g.each else []
+        g.rows, g.cols = g.rows[first], g.cols[first]
 
     # ---- 6. evaluation
     def _evaluate_component(self, component: list[int]):
