@@ -25,7 +25,8 @@ def test_list_shows_every_bundled_template():
     names = [line.split()[0] for line in out.stdout.splitlines()]
     assert names == sorted(["fourbar", "slider-crank", "pump", "inverted-slider-crank",
                             "quick-return", "shaper", "garage-door", "tk-fourbar",
-                            "jansen", "watt-sixbar", "whitworth", "toggle-press", "hoeken"])
+                            "jansen", "watt-sixbar", "whitworth", "toggle-press", "hoeken",
+                            "boom-cylinder"])
     assert "[crank, dyad, point]" in next(line for line in out.stdout.splitlines()
                                           if line.startswith("fourbar "))
 

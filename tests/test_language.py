@@ -108,6 +108,23 @@ BAD = [
                                                    "length": "a3", "through": "A",
                                                    "branch": 1}),
      ["(slider S).through", "must be a fixed point"]),
+    ("an input of an unknown kind", _set("mechanism.input", {"key": "theta12", "symbol": "θ",
+                                                             "kind": "force"}),
+     ["input.kind", "must be angle", "length"]),
+    ("a crank turned by a length input", _set("mechanism.input", {"key": "s", "symbol": "s",
+                                                                  "kind": "length"}),
+     ["(crank A).type", "a crank turns with an angle input"]),
+    ("a swept length where a constant is needed",
+     lambda d: (_set("mechanism.input", {"key": "s", "symbol": "s", "kind": "length"})(d),
+                d["mechanism"]["steps"].pop(0), _step("B", "p", "A0")(d),
+                _step("B", "q_length", "s")(d), _step("C", "frame", ["A0", "B"])(d),
+                _step("C", "local", ["s", 0])(d), _step("C", "distances", _DELETE)(d),
+                _step("C", "side", _DELETE)(d), _step("C", "columns", _DELETE)(d)),
+     ["(point C).local[0]", "unknown symbol 's'"]),
+    ("a moving line given by one point", _add_step({"type": "slider", "point": "S", "p": "C",
+                                                    "length": "a3", "through": "A",
+                                                    "along": ["A", "A"], "branch": 1}),
+     ["(slider S).along", "two different points"]),
 ]
 
 
@@ -168,10 +185,10 @@ def test_every_template_fits_the_json_schema():
     jsonschema = pytest.importorskip("jsonschema")
     schema = json.loads((ROOT / "docs" / "mechanism.schema.json").read_text(encoding="utf-8"))
     jsonschema.Draft7Validator.check_schema(schema)
-    for path in templates.bundled():
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-        errors = list(jsonschema.Draft7Validator(schema).iter_errors(data))
-        assert not errors, (path.name, [e.message for e in errors[:3]])
+    texts = {path.name: path.read_text(encoding="utf-8") for path in templates.bundled()}
+    for name, text in {**texts, "EVERY_OPTION": EVERY_OPTION}.items():
+        errors = list(jsonschema.Draft7Validator(schema).iter_errors(tomllib.loads(text)))
+        assert not errors, (name, [e.message for e in errors[:3]])
     broken = fourbar_data()
     step(broken, "B")["branch"] = 3
     assert list(jsonschema.Draft7Validator(schema).iter_errors(broken))
@@ -254,7 +271,8 @@ br = { label = "branch", unit = "-", value = 1, kind = "branch" }
 [mechanism]
 input = { key = "t", symbol = "t" }
 ground = { O = [0, 0], Q = ["a1", "a1/7"], L = [-20, -40], R = [-60, 30] }
-links = [["O", "A", "A2"], ["A", "B", "C"], ["Q", "B"], ["C", "S"], ["R", "F", "A2"], ["B", "P"]]
+links = [["O", "A", "A2"], ["A", "B", "C"], ["Q", "B"], ["C", "S"], ["R", "F", "A2"], ["B", "P"],
+         ["A2", "G", "L"], ["A2", "K"]]
 trace = "C"
 output = "s_S"
 steps = [
@@ -266,6 +284,8 @@ steps = [
   { type = "point", point = "C3", frame = ["A", "B"], local = ["a3/3", "-a2/4"] },
   { type = "slider", point = "S", p = "C", length = "d5", through = "L", direction = "dir", branch = -1 },
   { type = "slide", point = "F", p = "A2", pivot = "R", offset = "e6", branch = "br" },
+  { type = "dyad", point = "G", p = "L", q = "A2", p_length = "a4", q_length = "a3", branch = -1 },
+  { type = "slider", point = "K", p = "A2", length = "d5*0.6", through = "B", along = ["Q", "B"], direction = "dir/3", branch = "br" },
   { type = "slot", point = "P", slot_through = "B", slot_frame = ["Q", "B"], slot_angle = 70, through = "L", direction = "dir" },
   { type = "vector", from = "C", to = "S", key = "rod" },
   { type = "distance", between = ["C3", "S"], key = "d_CS" },
@@ -292,6 +312,11 @@ def test_every_option_of_every_step_type_is_verified():
     assert not bad, bad[:5]
     assert sum(c.cells for c in checks) == len(formula_cells(b.workbook))
     assert "k" in b.meta["constants"] and "ratio" in b.meta["sweep"]["columns"]
+    # two transmission angles and two four-bar loops on the ground, the second with its crank
+    # pin at the dyad's q end: each with its own summary rows, each checked above
+    summary = b.meta["summary"]
+    assert {"mu_min", "mu2_max", "fb_ground", "grashof2", "limit2_folded_2"} <= set(summary)
+    assert values[("Mechanism", summary["fb2_coupler"]["cell"])] == pytest.approx(80.0)
 
 
 def test_every_option_on_random_dimensions():
@@ -335,3 +360,42 @@ def test_a_long_description_fits_the_build_record(tmp_path):
     assert isinstance(record["A3"].value, str)       # the record did need a second cell
     assert all(len(c.value) <= 32_767 for c in record["A"] if isinstance(c.value, str))
     assert verify(path).ok
+
+
+def _boom_data() -> dict:
+    return tomllib.loads((templates.TEMPLATE_DIR / "boom-cylinder.toml").read_text(encoding="utf-8"))
+
+
+def test_a_linear_actuator_sweeps_a_length():
+    """The boom's input is the cylinder's length: the sweep's first column and the current
+    position are lengths, the dyad's side follows them, and everything is verified."""
+    t = templates.with_overrides(templates.load("boom-cylinder"), step="25")
+    b, values = build.make(t)
+    checks = checks_of(b, values)
+    bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
+    assert not bad, bad[:5]
+    assert sum(c.cells for c in checks) == len(formula_cells(b.workbook))
+    sweep = b.workbook["Sweep"]
+    assert sweep["A4"].value == "s [mm]" and sweep["A5"].value == 600
+    assert b.workbook["Mechanism"]["J7"].value == "mm"
+    assert list(b.meta["sweep"]["columns"])[0] == "s"
+    # the dyad's side |CB| is the swept length itself: on every row |CB| = s
+    cols, (r0, r1) = b.meta["sweep"]["columns"], b.meta["sweep"]["rows"]
+    for r in range(r0, r1 + 1):
+        s = sweep[f"A{r}"].value
+        xb, yb = values[("Sweep", f"{cols['xB']}{r}")], values[("Sweep", f"{cols['yB']}{r}")]
+        assert ((xb - 250.0) ** 2 + (yb + 500.0) ** 2) ** 0.5 == pytest.approx(s, rel=1e-12)
+
+
+def test_a_grid_needs_a_crank():
+    data = _boom_data()
+    data["grid"] = {"parameter": "b", "output": "yT", "values": [700, 800]}
+    with pytest.raises(InputError) as caught:
+        templates.from_data("boom", data, origin="boom.toml")
+    assert "grid" in str(caught.value) and "input is a length" in str(caught.value)
+
+
+def test_a_bad_step_of_a_length_sweep_says_its_unit():
+    with pytest.raises(InputError) as caught:
+        templates.with_overrides(templates.load("boom-cylinder"), step="-5")
+    assert "positive length in mm" in str(caught.value)

@@ -305,10 +305,13 @@ def test_print_setup_keeps_charts_whole():
 # ---------------------------------------------------------------- with LibreOffice
 @pytest.fixture(scope="module")
 def lo_books(tmp_path_factory):
-    """(Built, path, LibreOffice values) for the four-bar on its defaults and non-Grashof."""
+    """(Built, path, LibreOffice values) for the four-bar on its defaults and non-Grashof, and
+    for the boom driven by a linear actuator (an input that is a length)."""
     require_soffice()
-    return {case: _built_and_values("fourbar", sets, tmp_path_factory.mktemp(case))
-            for case, sets in (("default", ()), ("non-grashof", NON_GRASHOF))}
+    return {case: _built_and_values(name, sets, tmp_path_factory.mktemp(case))
+            for case, name, sets in (("default", "fourbar", ()),
+                                     ("non-grashof", "fourbar", NON_GRASHOF),
+                                     ("boom", "boom-cylinder", ()))}
 
 
 @pytest.mark.libreoffice
@@ -353,7 +356,7 @@ def test_stale_cached_values_are_recalculated(tmp_path):
 
 
 @pytest.mark.libreoffice
-@pytest.mark.parametrize("case", ["default", "non-grashof"])
+@pytest.mark.parametrize("case", ["default", "non-grashof", "boom"])
 def test_libreoffice_matches_reference(lo_books, case):
     """Every formula cell as LibreOffice computes it, against the generic reference: the sweep table
     directly here, and every block that verify knows (position, joints, constants) through it."""

@@ -14,14 +14,14 @@ def make(t: Template) -> tuple[workbook.Built, dict]:
     """The workbook and the value of every cell (the fast engine: chart scales, cached values).
 
     Output angles are shown in degrees in a 360° window chosen from the evaluated sweep, so that
-    each curve is continuous; that needs one evaluation before the final layout."""
+    each curve is continuous; the degree views are rewritten after the evaluation and only they
+    are evaluated again (every other cell keeps its value: no formula reads a degree view)."""
     built = workbook.build(t)
     values = engine.evaluate(built.workbook)
-    windows = degree_windows(built, values)
-    defaults = {q.key: workbook.default_window(q) for q in built.model.of_role(COLUMN)}
-    if any(windows[k] != defaults[k] for k in windows):
-        built = workbook.build(t, windows)
-        values = engine.evaluate(built.workbook)
+    changed = workbook.set_degree_windows(built, degree_windows(built, values))
+    if changed:
+        known = {cell: v for cell, v in values.items() if cell not in changed}
+        values = engine.evaluate(built.workbook, known=known)
     charts.add_charts(built, t, built.model, values)
     _print_setup(built.workbook)
     return built, values

@@ -159,6 +159,8 @@ def _series_title(model: Model, key: str) -> str:
 def _axis_title(text: str, model: Model, key: str, t: Template) -> str:
     if "[" in text:
         return text
+    if key == t.mechanism.input_column:
+        return header(text, t.mechanism.input_unit, t.length_unit)
     base = key[:-4] if key.endswith("_deg") else key
     try:
         q = model.get(base)

@@ -26,8 +26,9 @@ def _parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(
         prog="linkbook",
         description="Turn a planar mechanism into an Excel workbook of live formulas: named "
-                    "inputs, one row of RADIANS/ATAN2/ACOS steps per crank angle, the current "
-                    "position drawn as a chart, and #N/A wherever the loop cannot close. A "
+                    "inputs, one row of RADIANS/ATAN2/ACOS steps per crank angle (or "
+                    "actuator length), the current position drawn as a chart, and #N/A "
+                    "wherever the loop cannot close. A "
                     "mechanism is a TOML file of the textbook's steps (crank, dyad, slider, "
                     "slide, point, slot, ...): see docs/language.md, or copy a bundled template.",
         epilog=EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -51,7 +52,8 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("--set", dest="assignments", action="append", default=[],
                    metavar="KEY=VALUE", help="change a parameter, e.g. --set a2=40 (repeatable); "
                                              "a grid parameter takes a list: --set s1=20,50,100")
-    b.add_argument("--step", type=str, metavar="DEG", help="input-angle step in degrees")
+    b.add_argument("--step", type=str, metavar="STEP",
+                   help="sweep step: degrees for a crank, the length unit for a linear actuator")
     b.add_argument("--branch", choices=("open", "crossed"),
                    help="assembly branch of the main loop")
     b.add_argument("--all", action="store_true", help="build every bundled template")

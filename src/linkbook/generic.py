@@ -48,7 +48,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["solve", "pivots", "fourbar_loop", "limit_angles", "evaluate"]
+__all__ = ["solve", "pivots", "fourbar_loops", "limit_angles", "evaluate"]
 
 _TAU = 2.0 * math.pi
 _HALF_PI = 0.5 * math.pi
@@ -543,25 +543,26 @@ def _circles_careful(px: float, py: float, p: float, qx: float, qy: float, q: fl
     return fun
 
 
-def _two_circles(P: Point, Q: Point, p: float, q: float, branch: int, size: float,
+def _two_circles(P: Point, Q: Point, p, q, branch: int, size: float,
                  tol_f: float) -> Point:
     """Per row: R with |R − P| = p, |R − Q| = q and branch·cross(R − Q, P − Q) > 0; NaN where no
-    such point is found. (At a limit position the two branches meet: a root whose side is
-    below _TANGENT of the lengths is on both.)"""
+    such point is found. p and q are lengths, or per-row arrays where a side is a linear
+    actuator. (At a limit position the two branches meet: a root whose side is below _TANGENT of
+    the lengths is on both.)"""
     n = len(P[0])
-    nan = np.full(n, math.nan)
-    if not (_finite(p, q) and p > 0.0 and q > 0.0):
-        return nan, nan.copy()
     pxl, pyl, qxl, qyl = P[0].tolist(), P[1].tolist(), Q[0].tolist(), Q[1].tolist()
+    pl = np.broadcast_to(np.asarray(p, dtype=float), (n,)).tolist()
+    ql = np.broadcast_to(np.asarray(q, dtype=float), (n,)).tolist()
     slack = _RES_TOL * size
 
     def system(i):
-        if not _finite(pxl[i], pyl[i], qxl[i], qyl[i]):
+        if not (_finite(pxl[i], pyl[i], qxl[i], qyl[i], pl[i], ql[i])
+                and pl[i] > 0.0 and ql[i] > 0.0):
             return None
-        return _circles(pxl[i], pyl[i], p, qxl[i], qyl[i], q)
+        return _circles(pxl[i], pyl[i], pl[i], qxl[i], qyl[i], ql[i])
 
     def careful(i):
-        return _circles_careful(pxl[i], pyl[i], p, qxl[i], qyl[i], q)
+        return _circles_careful(pxl[i], pyl[i], pl[i], qxl[i], qyl[i], ql[i])
 
     def side(i, x):
         qx, qy = qxl[i], qyl[i]
@@ -577,11 +578,11 @@ def _two_circles(P: Point, Q: Point, p: float, q: float, branch: int, size: floa
         return abs(ux * vy - uy * vx) <= _NEAR_DOUBLE * math.hypot(ux, uy) * math.hypot(vx, vy)
 
     def starts(i, k):
-        qx, qy, px, py = qxl[i], qyl[i], pxl[i], pyl[i]
-        ring = [(qx + q * math.cos(a), qy + q * math.sin(a)) for a in _directions(k)]
+        qx, qy, px, py, p_i, q_i = qxl[i], qyl[i], pxl[i], pyl[i], pl[i], ql[i]
+        ring = [(qx + q_i * math.cos(a), qy + q_i * math.sin(a)) for a in _directions(k)]
         if k > _STARTS:  # dense: also around P, and half-way rings
-            ring += [(px + p * math.cos(a), py + p * math.sin(a)) for a in _directions(k)]
-            ring += [(qx + 0.5 * q * math.cos(a), qy + 0.5 * q * math.sin(a))
+            ring += [(px + p_i * math.cos(a), py + p_i * math.sin(a)) for a in _directions(k)]
+            ring += [(qx + 0.5 * q_i * math.cos(a), qy + 0.5 * q_i * math.sin(a))
                      for a in _directions(k)]
         # the guesses on the requested side first
         first = [g for g in ring if branch * side(i, g)[0] > 0.0]
@@ -589,7 +590,7 @@ def _two_circles(P: Point, Q: Point, p: float, q: float, branch: int, size: floa
 
     def closes(i):
         d = math.hypot(pxl[i] - qxl[i], pyl[i] - qyl[i])
-        return abs(p - q) - slack <= d <= p + q + slack
+        return abs(pl[i] - ql[i]) - slack <= d <= pl[i] + ql[i] + slack
 
     sols = _sweep(n, system, starts, on_branch, (size, size), (), tol_f, closes, careful,
                   near_double)
@@ -633,7 +634,7 @@ def _slider_positions(P: Point, T: Point, dx: float, dy: float, length: float, b
     """Per row: the position s of R = T + s·d with |R − P| = length and
     branch·((R − P)·d) > 0; NaN where no such point is found."""
     n = len(P[0])
-    if not (_finite(length, dx, dy) and length > 0.0):
+    if not (_finite(length) and length > 0.0):
         return np.full(n, math.nan)
     vx, vy = P[0] - T[0], P[1] - T[1]
     hl = (vx * dx + vy * dy).tolist()   # P's foot on the line, along d
@@ -792,7 +793,9 @@ def _size(steps: list[Mapping], params: Mapping[str, float],
     for step in steps:
         for field in _LENGTH_FIELDS:
             if field in step and step["type"] != "distance":
-                total += abs(_scalar(step[field], params))
+                value = evaluate(step[field], params)   # a swept length: its largest value
+                total += float(np.nanmax(np.abs(value), initial=0.0)) \
+                    if isinstance(value, np.ndarray) else abs(_scalar(step[field], params))
         for field in ("local", "distances"):
             if isinstance(step.get(field), (list, tuple)):
                 total += sum(abs(_scalar(v, params)) for v in step[field])
@@ -820,10 +823,15 @@ class _Solver:
         self.input_key = inp["key"]
         self.params = params
         self.steps = _steps(description)
-        self.th = np.radians(angles)
+        # the input: a crank's angle (degrees given, radians used) or a linear actuator's
+        # length, which a dyad's side may be
+        self.angle_input = inp.get("kind", "angle") == "angle"
+        values = np.asarray(angles, dtype=float)
+        self.th = np.radians(values) if self.angle_input else None
+        self.swept = {} if self.angle_input else {self.input_key: values}
         self.n = n = len(angles)
         ground = pivots(description, params)
-        self.size = _size(self.steps, params, ground)
+        self.size = _size(self.steps, {**params, **self.swept}, ground)
         self.tol_f = _RES_TOL * self.size
         self.points: dict[str, Point] = {name: (np.full(n, x), np.full(n, y))
                                          for name, (x, y) in ground.items()}
@@ -838,12 +846,15 @@ class _Solver:
                 if a != b:
                     self.rigid[frozenset((a, b))] = math.hypot(x2 - x1, y2 - y1)
                     self.link[(a, b)] = (np.full(n, math.atan2(y2 - y1, x2 - x1)), None)
-        self.out: dict[str, object] = {self.input_key: self.th}
+        self.out: dict[str, object] = {self.input_key: self.th if self.angle_input else values}
         self.fixed: dict[str, bool] = {}
         # what an expression step may name: parameters, the input angle, every earlier key
         self.env: dict[str, object] = {k: v for k, v in params.items()}
-        self.env[self.input_key] = self.th
-        self.env[f"{self.input_key}_deg"] = np.asarray(angles, dtype=float)
+        if self.angle_input:
+            self.env[self.input_key] = self.th
+            self.env[f"{self.input_key}_deg"] = values
+        else:
+            self.env[self.input_key] = values
         self.reserved = {self.input_key, "assembled", "points"}
         self.assembled = np.ones(n, dtype=bool)
 
@@ -877,6 +888,17 @@ class _Solver:
                 raise ValueError(f"{self.where}: missing {field}")
             return float(default)
         return _scalar(step[field], self.params)
+
+    def side(self, step: Mapping, field: str):
+        """A dyad's side: a length, or per-row lengths where it is the swept actuator."""
+        if not self.swept:
+            return self.num(step, field)
+        value = evaluate(step[field], {**self.params, **self.swept})
+        if isinstance(value, np.ndarray):
+            return value.astype(float)
+        if not isinstance(value, float):
+            raise ValueError(f"{self.where}.{field}: not a number")
+        return value
 
     def branch(self, step: Mapping, field: str = "branch") -> int:
         return _branch(step.get(field, 1), self.params, f"{self.where}.{field}")
@@ -943,9 +965,10 @@ class _Solver:
             self.assembled &= np.isfinite(x) & np.isfinite(y)
 
     def add_link(self, a: str, b: str, angle: np.ndarray, key: str | None,
-                 length: float | None = None) -> None:
+                 length=None) -> None:
+        """A link A→B and its angle; with a length (not a swept one), a rigid pair."""
         self.link.setdefault((a, b), (angle, key))
-        if length is not None:
+        if length is not None and not isinstance(length, np.ndarray):
             self.rigid[frozenset((a, b))] = abs(length)
 
     def angle_of(self, a: str, b: str) -> tuple[np.ndarray, bool]:
@@ -965,6 +988,8 @@ class _Solver:
 
     # -- step types
     def step_crank(self, step: Mapping) -> None:
+        if not self.angle_input:
+            raise ValueError(f"{self.where}: a crank needs an angle input")
         P = self.known(step, "pivot")
         length = self.num(step, "length")
         t = self.th + math.radians(self.num(step, "phase", 0.0))
@@ -975,7 +1000,7 @@ class _Solver:
 
     def step_dyad(self, step: Mapping) -> None:
         P, Q = self.known(step, "p"), self.known(step, "q")
-        pl, ql = self.num(step, "p_length"), self.num(step, "q_length")
+        pl, ql = self.side(step, "p_length"), self.side(step, "q_length")
         b = self.branch(step)
         x, y = _two_circles(P, Q, pl, ql, b, self.size, self.tol_f)
         xs, ys = P[0] - Q[0], P[1] - Q[1]
@@ -1008,15 +1033,25 @@ class _Solver:
         P, T = self.known(step, "p"), self.known(step, "through")
         length = self.num(step, "length")
         direction = self.num(step, "direction", 0.0)
-        dx, dy = _cos_sin_deg(direction)
         b = self.branch(step)
+        columns = {}
+        if "along" in step:     # a line carried by the link U→V, at `direction` from it
+            u, v = self.pair(step, "along")
+            line = self.angle_of(u, v)[0] + math.radians(direction)
+            dx, dy = np.cos(line), np.sin(line)
+            columns["line"] = line
+            moving = self.moves(step["p"], step["through"], u, v)
+        else:
+            line = math.radians(direction)
+            dx, dy = _cos_sin_deg(direction)
+            moving = self.moves(step["p"], step["through"])
         s = _slider_positions(P, T, dx, dy, length, b, self.size, self.tol_f)
         # R exactly on its line, R = T + s·d: a horizontal line keeps y = T_y to the last digit
         x, y = T[0] + s * dx, T[1] + s * dy
         # angle(R→P), in the window of the doc's branches: R ahead of P's foot (b = 1) or behind
-        theta = _near(np.arctan2(P[1] - y, P[0] - x), math.radians(direction) + (1 + b) * _HALF_PI)
-        moving = self.moves(step["p"], step["through"])
-        keys = self.point_columns(step, {"theta": theta, "s": s, "x": x, "y": y}, moving)
+        theta = _near(np.arctan2(P[1] - y, P[0] - x), line + (1 + b) * _HALF_PI)
+        keys = self.point_columns(step, {**columns, "theta": theta, "s": s, "x": x, "y": y},
+                                  moving)
         self.new_point(step, keys, moving, loop=True)
         self.add_link(step["point"], step["p"], theta, keys["theta"], length)
 
@@ -1185,34 +1220,35 @@ def solve(description: Mapping, params: Mapping[str, float], angles_deg) -> dict
 # The four-bar loop of a description (Grashof class, input limit angles)
 # --------------------------------------------------------------------------------------------
 
-def _fourbar_parts(description: Mapping, params: Mapping[str, float]):
-    """(crank pivot (x, y), output pivot (x, y), crank length, phase in degrees, coupler, output
-    link) of the first dyad whose q is a ground point and whose p is the pin of a crank turning
-    about a ground point; None if there is none."""
+def _fourbar_parts(description: Mapping, params: Mapping[str, float]) -> list[tuple]:
+    """Per four-bar loop on the ground, in step order: (crank pivot (x, y), output pivot (x, y),
+    crank length, phase in degrees, coupler, output link).  A loop is a dyad with one end a
+    ground point and the other the pin of a crank turning about a ground point."""
     ground = pivots(description, params)
-    cranks = {}
+    cranks, loops = {}, []
     for step in _steps(description):
         kind = step["type"]
         if kind == "crank" and step.get("pivot") in ground and step.get("point"):
             cranks.setdefault(step["point"], step)
-        elif kind == "dyad" and step.get("q") in ground and step.get("p") in cranks:
-            crank = cranks[step["p"]]
-            return (ground[crank["pivot"]], ground[step["q"]],
-                    _scalar(crank["length"], params), _scalar(crank.get("phase", 0), params),
-                    _scalar(step["p_length"], params), _scalar(step["q_length"], params))
-    return None
+        elif kind == "dyad":
+            for pin, fixed, coupler, rocker in (("p", "q", "p_length", "q_length"),
+                                                ("q", "p", "q_length", "p_length")):
+                if step.get(fixed) in ground and step.get(pin) in cranks:
+                    crank = cranks[step[pin]]
+                    loops.append((ground[crank["pivot"]], ground[step[fixed]],
+                                  _scalar(crank["length"], params),
+                                  _scalar(crank.get("phase", 0), params),
+                                  _scalar(step[coupler], params), _scalar(step[rocker], params)))
+                    break
+    return loops
 
 
-def fourbar_loop(description: Mapping, params: Mapping[str, float]
-                 ) -> tuple[float, float, float, float] | None:
-    """(ground, crank, coupler, output link) lengths of the description's four-bar loop — the
-    first dyad whose q is a ground point and whose p is the pin of a crank about a ground point —
-    or None."""
-    parts = _fourbar_parts(description, params)
-    if parts is None:
-        return None
-    (ax, ay), (qx, qy), crank, _, coupler, rocker = parts
-    return math.hypot(qx - ax, qy - ay), crank, coupler, rocker
+def fourbar_loops(description: Mapping, params: Mapping[str, float]
+                  ) -> list[tuple[float, float, float, float]]:
+    """(ground, crank, coupler, output link) lengths of every four-bar loop on the ground."""
+    return [(math.hypot(qx - ax, qy - ay), crank, coupler, rocker)
+            for (ax, ay), (qx, qy), crank, _, coupler, rocker
+            in _fourbar_parts(description, params)]
 
 
 def grashof_class(ground: float, crank: float, coupler: float, rocker: float) -> str:
@@ -1229,14 +1265,15 @@ def grashof_class(ground: float, crank: float, coupler: float, rocker: float) ->
             "coupler": "Grashof: double rocker", "rocker": "Grashof: rocker-crank"}[shortest]
 
 
-def limit_angles(description: Mapping, params: Mapping[str, float], length: float) -> list[float]:
-    """Input angles (degrees, [0, 360), ascending) where the four-bar loop's output pivot Q is
-    exactly `length` from the crank pin A(θ) (the crank's phase included): found by sampling
-    |Q − A(θ)| − length and bisecting each sign change. [] if the description has no such loop."""
+def limit_angles(description: Mapping, params: Mapping[str, float], length: float,
+                 loop: int = 0) -> list[float]:
+    """Input angles (degrees, [0, 360), ascending) where four-bar loop number `loop`'s output
+    pivot Q is exactly `length` from the crank pin A(θ) (the crank's phase included): found by
+    sampling |Q − A(θ)| − length and bisecting each sign change. [] if there is no such loop."""
     parts = _fourbar_parts(description, params)
-    if parts is None:
+    if loop >= len(parts):
         return []
-    (ax, ay), (qx, qy), r, phase, _, _ = parts
+    (ax, ay), (qx, qy), r, phase, _, _ = parts[loop]
 
     def f(deg: float) -> float:
         t = math.radians(deg + phase)

@@ -231,7 +231,7 @@ def polar_columns(n: str, a: str, b: str, degrees: bool = False) -> list[Column]
 STEP_KEYS = {
     "crank": ({"point", "pivot", "length"}, {"phase"}),
     "dyad": ({"point", "p", "q", "p_length", "q_length", "branch"}, set()),
-    "slider": ({"point", "p", "length", "through", "branch"}, {"direction"}),
+    "slider": ({"point", "p", "length", "through", "branch"}, {"direction", "along"}),
     "slide": ({"point", "p", "pivot", "offset", "branch"}, set()),
     "point": ({"point", "frame"}, {"local", "distances", "side", "distance", "angle"}),
     "slot": ({"point", "slot_through", "slot_frame", "through"},
@@ -283,10 +283,16 @@ class Compiler:
         self.rigid: dict[tuple[str, str], tuple[Expr | None, Expr]] = {}  # (A, B) -> |AB|, angle(A→B)
         self.cranks: list[dict] = []
         self.dyads: list[dict] = []
+        self.input_kind = ANGLE_KIND
+        self.swept: set[str] = set()     # the input key, where it is a length expressions use
         self.field = f"{origin}: mechanism"
         self.data = _table(self.field, data)
 
     # -- helpers
+    @property
+    def input_column(self) -> str:
+        return f"{self.input_key}_deg" if self.input_kind == ANGLE_KIND else self.input_key
+
     def expr(self, field: str, raw: object) -> Expr:
         return expression(field, raw, self.symbols)
 
@@ -423,16 +429,26 @@ class Compiler:
     def read_input(self, raw: object) -> None:
         field = f"{self.field}.input"
         table = _table(field, raw)
-        _keys(field, table, {"key", "symbol"}, set())
+        _keys(field, table, {"key", "symbol"}, {"kind"})
         k = table["key"]
-        if not isinstance(k, str) or not _IDENT.match(k) or k in self.symbols:
-            raise DescriptionError(f"{field}.key", f"must be a new identifier (got {k!r})")
+        if not isinstance(k, str) or not _IDENT.match(k) or k in self.symbols \
+                or k.endswith("_deg"):
+            raise DescriptionError(f"{field}.key", f"must be a new identifier not ending in _deg "
+                                                   f"(got {k!r})")
+        self.input_kind = table.get("kind", ANGLE_KIND)
+        if self.input_kind not in (ANGLE_KIND, LENGTH_KIND):
+            raise DescriptionError(f"{field}.kind", f"must be {ANGLE_KIND} (a crank's angle) or "
+                                                    f"{LENGTH_KIND} (a linear actuator's length) "
+                                                    f"(got {self.input_kind!r})")
         from .templates import excel_name_problem
         problem = excel_name_problem(f"{k}_now")
         if problem:
             raise DescriptionError(f"{field}.key", f"{k}_now (its Excel name) {problem}")
         self.input_key, self.input_symbol = k, _text(f"{field}.symbol", table["symbol"])
-        input_angle(self.model, k, self.input_symbol)
+        if self.input_kind == ANGLE_KIND:
+            input_angle(self.model, k, self.input_symbol)
+        else:   # the swept length is the sweep's first column itself; a dyad's side may be it
+            self.swept = {k}
 
     def read_ground(self, raw: object) -> None:
         field = f"{self.field}.ground"
@@ -475,6 +491,11 @@ class Compiler:
     # -- step types
     def step_crank(self, field: str, s: dict) -> None:
         name = s["point"]
+        if self.input_kind != ANGLE_KIND:
+            raise DescriptionError(f"{field}.type", "a crank turns with an angle input; this "
+                                                    "mechanism's input is a length (a linear "
+                                                    "actuator): use it as a dyad's p_length or "
+                                                    "q_length")
         pivot = self.known_point(f"{field}.pivot", s["pivot"], name)
         length = self.expr(f"{field}.length", s["length"])
         phase = self.expr(f"{field}.phase", s.get("phase", 0))
@@ -497,8 +518,9 @@ class Compiler:
         q = self.known_point(f"{field}.q", s["q"], name)
         if p == q:
             raise DescriptionError(f"{field}.q", "must differ from p")
-        p_len = self.expr(f"{field}.p_length", s["p_length"])
-        q_len = self.expr(f"{field}.q_length", s["q_length"])
+        # a linear actuator is a dyad side whose length is the swept input
+        p_len = expression(f"{field}.p_length", s["p_length"], self.symbols | self.swept)
+        q_len = expression(f"{field}.q_length", s["q_length"], self.symbols | self.swept)
         branch = self.branch(f"{field}.branch", s["branch"])
         n = name
         cols = self.columns(field, s, [
@@ -536,15 +558,24 @@ class Compiler:
                            "mu": cols["mu"]})
 
     def step_slider(self, field: str, s: dict) -> None:
+        """RRP: R at `length` from P, on a line through `through` at `direction` — a fixed line,
+        or, with `along = [U, V]`, a line carried by the link U→V (direction then measured from
+        U→V)."""
         n = s["point"]
         p = self.known_point(f"{field}.p", s["p"], n)
         through = self.known_point(f"{field}.through", s["through"], n)
-        if through not in self.ground:
-            raise DescriptionError(f"{field}.through", f"{through!r} must be a fixed point")
+        along = self.frame(f"{field}.along", s["along"], n) if "along" in s else None
+        if along is None and through not in self.ground:
+            raise DescriptionError(f"{field}.through", f"{through!r} must be a fixed point (or "
+                                                       "give the moving line's link as along)")
         length = self.expr(f"{field}.length", s["length"])
         direction = self.expr(f"{field}.direction", s.get("direction", 0))
         branch = self.branch(f"{field}.branch", s["branch"])
+        moving_line = [Column("line", f"line_{n}", f"θ(line)_{n}",
+                              f"slider line, angle along {'→'.join(along)}", RAD, True)] \
+            if along else []
         cols = self.columns(field, s, [
+            *moving_line,
             Column("theta", f"theta_{n}", f"θ({n}{p})", f"link, angle of {n}→{p}", RAD, True),
             Column("s", f"s_{n}", f"s_{n}", f"slider position along its line from {through}",
                    LENGTH),
@@ -554,13 +585,23 @@ class Compiler:
         dx, dy = minus(px, tx), minus(py, ty)
         length_key = self.operand(f"length_{n}", length)
         pos = cols["s"].key
-        if direction.zero:
+        if along:
+            angle = self.angle_of(*along)
+            if not direction.zero:
+                angle = Expr(plus(angle, radians(direction).text), SUM)
+            line = cols["line"]
+            self.model.add(Quantity(line.key, line.symbol, RAD, angle.text,
+                                    COLUMN if line.shown else ALIAS, line.label,
+                                    in_degrees=line.deg and line.shown, wrap_360=line.wrap))
+            d = f"{{{line.key}}}"
+        elif direction.zero:
             slider(self.model, pin_x=dx.text, pin_y=dy.at_least(PRODUCT), line_y="0",
                    length=length_key,
                    branch=branch, angle=cols["theta"], position=cols["s"])
             x, y = plus(tx, f"{{{pos}}}"), on_loop(ty.text, pos)
         else:
             d = radians(direction).text
+        if along or not direction.zero:
             u = f"{dx.at_least(PRODUCT)}*COS({d})+{dy.at_least(PRODUCT)}*SIN({d})"
             v = f"{dy.at_least(PRODUCT)}*COS({d})-{dx.at_least(PRODUCT)}*SIN({d})"
             slider(self.model, pin_x=f"({u})", pin_y=f"({v})", line_y="0", length=length_key,
@@ -711,7 +752,7 @@ class Compiler:
         shown = s.get("shown", True)
         if not isinstance(shown, bool):
             raise DescriptionError(f"{field}.shown", "must be true or false")
-        known = self.symbols | {q.key for q in self.model.quantities}
+        known = self.symbols | self.swept | {q.key for q in self.model.quantities}
         body = expression(f"{field}.formula", s["formula"], known)
         formula = f"IFERROR({body.text},NA())"
         sym = Sym(k, _text(f"{field}.symbol", s.get("symbol", k)),
@@ -800,38 +841,60 @@ class Compiler:
                 raise DescriptionError(f"{self.field}.trace", f"{t}'s coordinates must be "
                                                               "shown columns")
             m.path = (x, y)
-        for k, unit, what in (("output", LENGTH, "a length"), ("transmission", RAD, "an angle")):
-            if k in d:
-                if d[k] not in shown or shown[d[k]].unit != unit:
-                    # the summary's smallest and largest value: a length has one; an angle
-                    # only within a window of its own (μ lies in [0°, 180°])
-                    raise DescriptionError(f"{self.field}.{k}", f"{d[k]!r} is not a shown "
-                                                                f"column of {what}")
-                setattr(m, k, d[k])
-        if "transmission" not in d:
-            m.transmission = next((dy["mu"].key for dy in self.dyads if dy["mu"].shown), "")
-        m.fourbar = self.fourbar_loop()
+        if "output" in d:
+            if d["output"] not in shown or shown[d["output"]].unit != LENGTH:
+                # the summary's smallest and largest value: a length has one; an angle only
+                # within a window of its own
+                raise DescriptionError(f"{self.field}.output", f"{d['output']!r} is not a shown "
+                                                               "column of a length")
+            m.output = d["output"]
+        m.transmissions = self.transmissions(d.get("transmission"), shown)
+        m.fourbars = self.fourbar_loops()
         if "columns" in d:
             self.reorder(d["columns"])
         m.charts = self.charts(d.get("charts"), shown)
 
-    def fourbar_loop(self) -> FourBarLoop | None:
-        """The first dyad whose q is fixed and whose p is a crank's point: a four-bar loop on
-        the ground, whose Grashof class and limit angles the summary reports."""
+    def transmissions(self, given: object, shown: dict) -> tuple[str, ...]:
+        """The transmission angles the summary reports: those named (a key or a list of keys of
+        shown angle columns in [0, π]), by default μ of every dyad that shows it."""
+        if given is None:
+            return tuple(dy["mu"].key for dy in self.dyads if dy["mu"].shown)
+        keys = [given] if isinstance(given, str) else given
+        field = f"{self.field}.transmission"
+        if not isinstance(keys, list):
+            raise DescriptionError(field, "must be a column key or a list of them")
+        for k in keys:
+            if not isinstance(k, str) or k not in shown or shown[k].unit != RAD:
+                # its smallest and largest value are read in radians: an angle in [0, π]
+                raise DescriptionError(field, f"{k!r} is not a shown column of an angle")
+        return tuple(keys)
+
+    def fourbar_loops(self) -> tuple[FourBarLoop, ...]:
+        """Every dyad with one end a ground point and the other the pin of a crank about a
+        ground point: a four-bar loop on the ground, whose Grashof class and limit angles the
+        summary reports.  The output link is the dyad's side at the ground point."""
+        loops = []
         for dy in self.dyads:
-            pivot = self.crank_of.get(dy["p"])
-            if dy["q"] in self.ground and pivot in self.ground:
-                crank = next(c for c in self.cranks if c["point"] == dy["p"])
-                (ox, oy), (qx, qy) = self.points[pivot], self.points[dy["q"]]
-                dx, dy_ = minus(qx, ox), minus(qy, oy)
-                ground = (f"ABS({dx.text})" if dy_.zero else f"ABS({dy_.text})" if dx.zero
-                          else f"SQRT({dx.at_least(ATOM)}^2+{dy_.at_least(ATOM)}^2)")
-                angle = f"ATAN2({dx.text},{dy_.text})"
-                if not crank["phase"].zero:
-                    angle = f"{angle}-{radians(crank['phase']).at_least(PRODUCT)}"
-                return FourBarLoop(ground, crank["length"].text, dy["p_length"].text,
-                                   dy["q_length"].text, angle)
-        return None
+            for pin, fixed, coupler, rocker in ((dy["p"], dy["q"], "p_length", "q_length"),
+                                                (dy["q"], dy["p"], "q_length", "p_length")):
+                pivot = self.crank_of.get(pin)
+                if fixed in self.ground and pivot in self.ground:
+                    loops.append(self.fourbar(pivot, pin, dy, fixed, coupler, rocker))
+                    break
+        return tuple(loops)
+
+    def fourbar(self, pivot: str, pin: str, dy: dict, fixed: str, coupler: str,
+                rocker: str) -> FourBarLoop:
+        crank = next(c for c in self.cranks if c["point"] == pin)
+        (ox, oy), (qx, qy) = self.points[pivot], self.points[fixed]
+        dx, dy_ = minus(qx, ox), minus(qy, oy)
+        ground = (f"ABS({dx.text})" if dy_.zero else f"ABS({dy_.text})" if dx.zero
+                  else f"SQRT({dx.at_least(ATOM)}^2+{dy_.at_least(ATOM)}^2)")
+        angle = f"ATAN2({dx.text},{dy_.text})"
+        if not crank["phase"].zero:
+            angle = f"{angle}-{radians(crank['phase']).at_least(PRODUCT)}"
+        return FourBarLoop(ground, crank["length"].text, dy[coupler].text, dy[rocker].text,
+                           angle, f"{pivot} {pin} {dy['point']} {fixed}")
 
     def reorder(self, order: object) -> None:
         field = f"{self.field}.columns"
@@ -852,7 +915,7 @@ class Compiler:
         field = f"{self.field}.charts"
         symbol_of = {**{k: q.symbol for k, q in shown.items()},
                      **{f"{k}_deg": q.symbol for k, q in shown.items() if q.in_degrees},
-                     f"{self.input_key}_deg": self.input_symbol}
+                     self.input_column: self.input_symbol}
         if raw is None:
             return self.default_charts(shown)
         if not isinstance(raw, list):
@@ -878,11 +941,10 @@ class Compiler:
     def default_charts(self, shown: dict) -> list[Chart]:
         """Without charts in the description: every degree column against the input angle, and
         the traced point's path."""
-        x = f"{self.input_key}_deg"
         degs = tuple(f"{k}_deg" for k, q in shown.items() if q.in_degrees)
         charts = []
         if degs:
-            charts.append(Chart("Link angles", x, degs, f"{self.input_symbol} [deg]",
+            charts.append(Chart("Link angles", self.input_column, degs, self.input_symbol,
                                 "angle [deg]"))
         if self.model.path:
             px, py = self.model.path
@@ -916,13 +978,16 @@ def compile_mechanism(name: str, data: dict, kinds: dict[str, str], origin: str,
     c = Compiler(data, kinds, origin)
     model = c.run()
     if grid is not None:
+        if c.input_kind != ANGLE_KIND:
+            raise DescriptionError(f"{origin}: grid", "a grid sweeps a crank turn; this "
+                                                      "mechanism's input is a length")
         param, out = grid
         if param not in kinds:
             raise DescriptionError(f"{origin}: grid.parameter", f"{param!r} is not a parameter")
         if out not in {q.key for q in model.of_role(COLUMN)}:
             raise DescriptionError(f"{origin}: grid.output", f"{out!r} is not a shown column")
     return Mechanism(name, dict(kinds), c.input_key, c.input_symbol, lambda: model, grid,
-                     description=data)
+                     description=data, input_kind=c.input_kind)
 
 
 def from_record(meta: dict) -> Mechanism:

@@ -23,6 +23,26 @@ class Mechanism:
     build: Callable[[], Model]
     grid: tuple[str, str] | None = None   # (parameter across the grid, quantity in its cells)
     description: dict | None = None       # the [mechanism] table it was compiled from
+    input_kind: str = ANGLE_KIND          # a crank's angle, or a linear actuator's length
+
+    @property
+    def input_is_angle(self) -> bool:
+        return self.input_kind == ANGLE_KIND
+
+    @property
+    def input_column(self) -> str:
+        """The key of the swept value as the sweep's first column holds it: an angle in degrees
+        (`theta12_deg`; the model's `theta12` is its radians), a length as it is (`s`)."""
+        return f"{self.input_key}_deg" if self.input_is_angle else self.input_key
+
+    @property
+    def input_unit(self) -> str:
+        """The swept value's unit as model.header writes it: "deg" or "length"."""
+        return "deg" if self.input_is_angle else "length"
+
+    @property
+    def input_word(self) -> str:
+        return "angle" if self.input_is_angle else "length"
 
 
 def on_loop(value: str, witness: str) -> str:

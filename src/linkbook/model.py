@@ -68,6 +68,7 @@ class FourBarLoop:
     coupler: str
     rocker: str
     ground_angle: str = "0"
+    name: str = ""            # its points, e.g. "A0 A B B0"
 
 
 @dataclass
@@ -80,8 +81,8 @@ class Model:
     path: tuple[str, str] | None = None    # (x key, y key) of a traced point drawn on the mechanism
     closes: tuple[str, ...] = ()   # quantities that are all numbers exactly where every loop closes
     output: str = ""          # the main output, whose swing the summary reports
-    transmission: str = ""    # the transmission angle, if the mechanism has one
-    fourbar: FourBarLoop | None = None
+    transmissions: tuple[str, ...] = ()   # transmission angles whose range the summary reports
+    fourbars: tuple[FourBarLoop, ...] = ()  # four-bar loops on the ground (Grashof, limit angles)
 
     def add(self, *quantities: Quantity) -> None:
         known = {q.key for q in self.quantities}

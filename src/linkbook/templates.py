@@ -293,13 +293,15 @@ def _check_unique_names(params: list[Parameter], origin: str) -> None:
 def check_sweep(t: Template) -> None:
     """Positive step, start < stop, and tables inside Excel's limits — before any work."""
     s = t.sweep
+    unit = "degrees" if t.mechanism.input_is_angle else t.length_unit
     if s.step <= 0:
-        raise InputError("step", f"must be a positive angle in degrees (got {s.step:g})")
+        raise InputError("step", f"must be a positive {t.mechanism.input_word} in {unit} "
+                                 f"(got {s.step:g})")
     if s.stop <= s.start:
         raise InputError("sweep", f"stop must be greater than start (got {s.start:g}..{s.stop:g})")
     rows = (s.stop - s.start) / s.step + 1
     if rows > EXCEL_MAX_ROWS - 10:
-        raise InputError("step", f"{s.step:g} degrees gives {rows:,.0f} rows; Excel allows "
+        raise InputError("step", f"{s.step:g} {unit} gives {rows:,.0f} rows; Excel allows "
                                  f"{EXCEL_MAX_ROWS:,} per sheet")
     if t.mechanism.grid:
         if t.stroke_step <= 0:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from . import generic, workbook as layout
+from .workbook import summary_prefix
 from .templates import InputError, check_value
 
 ABS_TOL = 1e-9
@@ -193,11 +194,11 @@ class Reference:
     def solve(self, params: dict, angles) -> dict:
         return generic.solve(self.description, params, angles)
 
-    def fourbar_loop(self, params: dict):
-        return generic.fourbar_loop(self.description, params)
+    def fourbar_loops(self, params: dict):
+        return generic.fourbar_loops(self.description, params)
 
-    def limit_angles(self, params: dict, length: float) -> list[float]:
-        return generic.limit_angles(self.description, params, length)
+    def limit_angles(self, params: dict, length: float, loop: int = 0) -> list[float]:
+        return generic.limit_angles(self.description, params, length, loop)
 
 
 # ---------------------------------------------------------------- blocks
@@ -221,23 +222,25 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     ws = wb[sweep["sheet"]]
     rows = sweep["rows"]
     angles = _angles(ws, "A", rows)
+    # the slope of a cell is taken per radian of a crank, per `size` of an actuator's stroke
+    scale = math.degrees(1.0) if mech.input_is_angle else size
     ref = solver.solve(params, angles)
     for key, letter in sweep["columns"].items():
-        if key == f"{mech.input_key}_deg" or key in ASSEMBLY_COLUMNS:
+        if key == mech.input_column or key in ASSEMBLY_COLUMNS:
             continue
         cells = [f"{letter}{r}" for r in range(rows[0], rows[1] + 1)]
         unit = column_unit(model, key)
         run(layout.SWEEP, key, sweep["sheet"], cells, _expected(ref, key), unit,
-            _slope(solver, params, angles, key, unit))
+            _slope(solver, params, angles, key, unit, scale=scale))
 
     # The current position, the joints and the drawing rows.
     pos = meta["position"]
-    angle = _number(wb[pos["sheet"]], pos["input_cell"], "the current input angle")
+    angle = _number(wb[pos["sheet"]], pos["input_cell"], f"the current input {mech.input_word}")
     one = solver.solve(params, np.array([angle]))
     for key, cell in pos["cells"].items():
         unit = column_unit(model, key)
         run("position", key, pos["sheet"], [cell], _expected(one, key), unit,
-            _slope(solver, params, np.array([angle]), key, unit))
+            _slope(solver, params, np.array([angle]), key, unit, scale=scale))
     joint_values = {name: (float(x[0]), float(y[0])) for name, (x, y) in one["points"].items()}
     for joint in model.joints:
         x_cell, y_cell = pos["joints"][joint.name]
@@ -324,8 +327,10 @@ def _edge_slack(model, ref, closes: np.ndarray) -> dict[str, float]:
     position (a double root): it gets the same √ε-level allowance as that cell itself."""
     edge = closes & ~(np.roll(closes, 1) & np.roll(closes, -1))
     out = {}
-    for prefix, key, scale in (("output", model.output, 1.0), ("mu", model.transmission,
-                                                               180.0 / math.pi)):
+    extremes = [("output", model.output, 1.0)] + [
+        (summary_prefix("mu", i), key, 180.0 / math.pi)
+        for i, key in enumerate(model.transmissions, start=1)]
+    for prefix, key, scale in extremes:
         if not key:
             continue
         x = np.asarray(ref[key], dtype=float) * scale
@@ -357,31 +362,32 @@ def _summary_expected(model, solver, params, ref, closes, starts, ends) -> dict:
     if model.output:
         o = np.asarray(ref[model.output], dtype=float)
         out["output_min"], out["output_max"] = _extreme(o, np.min), _extreme(o, np.max)
-    if model.transmission:
-        m = np.degrees(np.asarray(ref[model.transmission], dtype=float))
-        out["mu_min"], out["mu_max"] = _extreme(m, np.min), _extreme(m, np.max)
-    loop = solver.fourbar_loop(params)
-    if loop:
-        g, c, k, r = loop
-        out.update(fb_ground=g, fb_crank=c, fb_coupler=k, fb_rocker=r,
-                   grashof=generic.grashof_class(g, c, k, r))
+    for i, key in enumerate(model.transmissions, start=1):
+        m = np.degrees(np.asarray(ref[key], dtype=float))
+        n = summary_prefix("mu", i)
+        out[f"{n}_min"], out[f"{n}_max"] = _extreme(m, np.min), _extreme(m, np.max)
+    for i, (g, c, k, r) in enumerate(solver.fourbar_loops(params)):
+        n = summary_prefix("", i + 1)
+        out.update({f"fb{n}_ground": g, f"fb{n}_crank": c, f"fb{n}_coupler": k,
+                    f"fb{n}_rocker": r, f"grashof{n}": generic.grashof_class(g, c, k, r)})
         for name, length in (("stretched", k + r), ("folded", abs(k - r))):
-            roots = solver.limit_angles(params, length)
+            roots = solver.limit_angles(params, length, i)
             lo, hi = (roots[0], roots[-1]) if roots else ("none", "none")
-            out[f"limit_{name}_1"], out[f"limit_{name}_2"] = lo, hi
+            out[f"limit{n}_{name}_1"], out[f"limit{n}_{name}_2"] = lo, hi
     return out
 
 
 def _slope(solver: Reference, params: dict, angles: np.ndarray, key: str, unit: str,
-           param: str | None = None, column_values=()):
+           param: str | None = None, column_values=(), scale: float = math.degrees(1.0)):
     """|∂x/∂θ| per row (per column value, for a grid) by a central difference of the reference,
-    computed for one row when asked."""
+    computed for one row when asked. `scale`: input units per unit of θ (degrees per radian of a
+    crank; the mechanism's size for an actuator's length)."""
     period = ANGLE_UNITS.get(unit)
     h = SENSITIVITY_STEP
 
     def at(i: int, j: int = 0) -> float:
         p = {**params, param: column_values[j]} if param else params
-        deg = float(angles[i]) + np.degrees(np.array([-h, 0.0, h]))
+        deg = float(angles[i]) + scale * np.array([-h, 0.0, h])
         x = _expected(solver.solve(p, deg), key)
         pairs = [(a, b, span) for a, b, span in ((0, 2, 2 * h), (0, 1, h), (1, 2, h))
                  if np.isfinite(x[a]) and np.isfinite(x[b])]

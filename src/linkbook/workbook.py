@@ -51,10 +51,9 @@ class Built:
     meta: dict = field(default_factory=dict)
 
 
-def build(t: Template, windows: dict[str, float] | None = None) -> Built:
-    """Lay the workbook out. `windows`: where each output angle's degree view starts (see
-    build.degree_windows); by default [-180°, 180°)."""
-    windows = windows or {}
+def build(t: Template) -> Built:
+    """Lay the workbook out; each output angle's degree view starts at its default window
+    (set_degree_windows moves it)."""
     model = t.mechanism.build()
     wb = Workbook()
     ws_mech = wb.active
@@ -68,8 +67,8 @@ def build(t: Template, windows: dict[str, float] | None = None) -> Built:
         meta["description"] = t.mechanism.description
 
     names, meta["inputs"], meta["constants"], next_row = _inputs_block(wb, ws_mech, t, model)
-    meta["position"] = _position_block(wb, ws_mech, t, model, names, windows)
-    meta["sweep"] = _sweep_table(ws_sweep, t, model, names, windows)
+    meta["position"] = _position_block(wb, ws_mech, t, model, names)
+    meta["sweep"] = _sweep_table(ws_sweep, t, model, names)
     meta["summary"] = _summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1)
     if t.mechanism.grid:
         meta["grid"] = _grid_sheet(wb.create_sheet(GRID), t, model, names)
@@ -191,27 +190,32 @@ def _inputs_block(wb, ws, t: Template, model: Model):
     return names, inputs, constants, row
 
 
-def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str],
-                    windows: dict) -> dict:
-    """The textbook's spin-button row: one input angle drives every step and the drawing."""
+def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) -> dict:
+    """The textbook's spin-button row: one input value drives every step and the drawing."""
     mech = t.mechanism
     _block_head(ws, "G", "Current position",
                 (("Quantity", 34), ("Symbol", 8), ("Value", 13), ("Unit", 7)))
-    angle_name = f"{mech.input_key}_now"
-    _text(ws, "G7", "input angle: change it, the drawing moves")
+    input_name = f"{mech.input_key}_now"
+    _text(ws, "G7", f"input {mech.input_word}: change it, the drawing moves")
     _text(ws, "H7", mech.input_symbol)
     ws["I7"] = t.position
     ws["I7"].fill = INPUT_FILL
     ws["I7"].border = BOX
-    _text(ws, "J7", "deg")
-    dv = DataValidation(type="decimal", operator="between", formula1="-3600", formula2="3600")
-    dv.prompt = "The input angle in degrees"
+    ws["I7"].number_format = number_format(mech.input_unit)
+    _text(ws, "J7", unit_text(mech.input_unit, t.length_unit))
+    if mech.input_is_angle:
+        dv = DataValidation(type="decimal", operator="between", formula1="-3600",
+                            formula2="3600")
+        dv.prompt = "The input angle in degrees"
+    else:
+        dv = DataValidation(type="decimal", operator="greaterThan", formula1="0")
+        dv.prompt = f"The actuator's length in {t.length_unit}"
     dv.showInputMessage = True
     ws.add_data_validation(dv)
     dv.add("I7")
-    _define(wb, angle_name, MECH, "I7")
-    cells = {f"{mech.input_key}_deg": angle_name}
-    rows = _sweep_columns(model, mech.input_key)[1:]
+    _define(wb, input_name, MECH, "I7")
+    cells = {mech.input_column: input_name}
+    rows = _sweep_columns(model, mech.input_column)[1:]
     for row, (key, _) in enumerate(rows, start=8):
         cells[key] = f"I{row}"
     resolve = Resolver(model, names, cells)
@@ -221,14 +225,14 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str],
         _text(ws, f"G{r}", q.label)
         ws[f"G{r}"].alignment = Alignment(wrap_text=True, vertical="top")
         _text(ws, f"H{r}", q.symbol)
-        ws[cell] = (_degree_formula(q, cells[q.key], windows) if key != q.key
+        ws[cell] = (_degree_formula(q, cells[q.key]) if key != q.key
                     else resolve.formula(key))
         unit = DEG if key != q.key else q.unit
         ws[cell].number_format = number_format(unit)
         _text(ws, f"J{r}", unit_text(unit, t.length_unit))
     joints = _joints_table(ws, model, resolve)
-    return {"sheet": MECH, "input_cell": "I7", "input_name": angle_name,
-            "cells": {k: v for k, v in cells.items() if k != f"{mech.input_key}_deg"},
+    return {"sheet": MECH, "input_cell": "I7", "input_name": input_name,
+            "cells": {k: v for k, v in cells.items() if k != mech.input_column},
             "joints": joints["cells"], "drawing": joints["drawing"],
             "chart_anchor": f"L{joints['chart_row']}"}
 
@@ -263,9 +267,10 @@ def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
 
 
 # ---------------------------------------------------------------- Sweep sheet
-def _sweep_columns(model: Model, input_key: str) -> list[tuple[str, object]]:
-    """(key, quantity) in table order: the input in degrees, the steps, then outputs in degrees."""
-    columns: list[tuple[str, object]] = [(f"{input_key}_deg", None)]
+def _sweep_columns(model: Model, input_column: str) -> list[tuple[str, object]]:
+    """(key, quantity) in table order: the input (an angle in degrees), the steps, then outputs
+    in degrees."""
+    columns: list[tuple[str, object]] = [(input_column, None)]
     columns += [(q.key, q) for q in model.of_role(COLUMN)]
     columns += [(f"{q.key}_deg", q) for q in model.of_role(COLUMN) if q.in_degrees]
     return columns
@@ -276,30 +281,52 @@ def default_window(q) -> float:
     return 0.0 if q.wrap_360 else -180.0
 
 
-def _degree_formula(q, ref: str, windows: dict) -> str:
-    """The degree view of a radian cell, shown in [lo, lo + 360)."""
-    lo = windows.get(q.key, default_window(q))
+def set_degree_windows(built: Built, windows: dict[str, float]) -> set[tuple[str, str]]:
+    """Rewrite the degree views (current position and sweep) of the output angles whose window
+    start `windows` gives; the (sheet, cell)s rewritten.  No formula reads a degree view (charts
+    do), so no other cell changes value."""
+    changed = set()
+    position, sweep = built.meta["position"], built.meta["sweep"]
+    r0, r1 = sweep["rows"]
+    ws_mech, ws_sweep = built.workbook[MECH], built.workbook[SWEEP]
+    for q in built.model.of_role(COLUMN):
+        key = f"{q.key}_deg"
+        if not q.in_degrees or windows.get(q.key, default_window(q)) == default_window(q):
+            continue
+        cell = position["cells"][key]
+        ws_mech[cell] = _degree_formula(q, position["cells"][q.key], windows[q.key])
+        changed.add((MECH, cell))
+        letter, source = sweep["columns"][key], sweep["columns"][q.key]
+        for r in range(r0, r1 + 1):
+            ws_sweep[f"{letter}{r}"].value = _degree_formula(q, f"{source}{r}", windows[q.key])
+            changed.add((SWEEP, f"{letter}{r}"))
+    return changed
+
+
+def _degree_formula(q, ref: str, lo: float | None = None) -> str:
+    """The degree view of a radian cell, shown in [lo, lo + 360) (by default q's window)."""
+    lo = default_window(q) if lo is None else lo
     shift = f"-{lo:g}" if lo > 0 else f"+{-lo:g}" if lo < 0 else ""
     back = f"+{lo:g}" if lo > 0 else f"-{-lo:g}" if lo < 0 else ""
     return f"=MOD(DEGREES({ref}){shift},360){back}"
 
 
-def _sweep_table(ws, t: Template, model: Model, names: dict[str, str], windows: dict) -> dict:
+def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
     mech = t.mechanism
     angles = t.sweep.angles()
-    columns = _sweep_columns(model, mech.input_key)
+    columns = _sweep_columns(model, mech.input_column)
     letters = {key: get_column_letter(i) for i, (key, _) in enumerate(columns, start=1)}
     _text(ws, "A1", f"{t.title}: one row per {mech.input_symbol}", TITLE)
-    _text(ws, "A2", "Formulas read the named inputs on sheet Mechanism; #N/A marks angles where "
-                    "the loop cannot close.", NOTE)
+    _text(ws, "A2", f"Formulas read the named inputs on sheet Mechanism; #N/A marks "
+                    f"{mech.input_word}s where the loop cannot close.", NOTE)
     head_row, first = 4, 5
     formulas: dict[str, str] = {}
     resolve = Resolver(model, names, {k: f"{letters[k]}{ROW}" for k, _ in columns})
     for i, (key, q) in enumerate(columns, start=1):
         ws.column_dimensions[letters[key]].width = 12
         if q is None:
-            _text(ws, f"{letters[key]}3", "input angle", NOTE)
-            _head(ws, head_row, i, f"{mech.input_symbol} [deg]")
+            _text(ws, f"{letters[key]}3", f"input {mech.input_word}", NOTE)
+            _head(ws, head_row, i, header(mech.input_symbol, mech.input_unit, t.length_unit))
             continue
         degree_column = key.endswith("_deg") and key != q.key
         unit = DEG if degree_column else q.unit
@@ -307,7 +334,7 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str], windows: 
         ws[f"{letters[key]}3"].alignment = Alignment(wrap_text=True, vertical="top")
         _head(ws, head_row, i, header(q.symbol, unit, t.length_unit))
         if degree_column:
-            formulas[key] = _degree_formula(q, f"{letters[q.key]}{ROW}", windows)
+            formulas[key] = _degree_formula(q, f"{letters[q.key]}{ROW}")
         else:
             formulas[key] = resolve.formula(key)
     ws.row_dimensions[3].height = 30
@@ -322,19 +349,21 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str], windows: 
             c.number_format = formats[key]
     last = first + len(angles) - 1
     if model.closes:
-        letters.update(_assembly_columns(ws, letters, model.closes, first, last, head_row))
+        letters.update(_assembly_columns(ws, letters, model.closes, first, last, head_row,
+                                         unit_text(mech.input_unit, t.length_unit),
+                                         mech.input_word))
     ws.freeze_panes = ws.cell(first, 2)
     return {"sheet": SWEEP, "rows": [first, last], "columns": letters}
 
 
 def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int, last: int,
-                      head_row: int) -> dict:
+                      head_row: int, unit: str, word: str) -> dict:
     """Bookkeeping for the summary: does the row close (1/0), and where do gaps start and end."""
     col = len(letters) + 1
     closes, start, end = (get_column_letter(col + i) for i in range(3))
     for i, (text, label) in enumerate((("closes [1/0]", "1 where every loop closes"),
-                                       ("gap from [deg]", "first angle of a gap"),
-                                       ("gap to [deg]", "last angle of a gap"))):
+                                       (f"gap from [{unit}]", f"first {word} of a gap"),
+                                       (f"gap to [{unit}]", f"last {word} of a gap"))):
         _head(ws, head_row, col + i, text)
         _text(ws, f"{get_column_letter(col + i)}3", label, NOTE)
         ws.column_dimensions[get_column_letter(col + i)].width = 11
@@ -358,8 +387,9 @@ MINIFS, MAXIFS = "_xlfn.MINIFS", "_xlfn.MAXIFS"
 
 
 def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row: int) -> dict:
-    """Geometry honesty, as live formulas: where the mechanism assembles, its swing, its
-    transmission angle, and for a four-bar loop the Grashof class and the input limit angles."""
+    """Geometry honesty, as live formulas: where the mechanism assembles, its swing, the range
+    of every transmission angle, and for every four-bar loop on the ground its Grashof class and
+    the input's limit angles."""
     if not model.closes:
         return {}
     cols, (r0, r1) = sweep["columns"], sweep["rows"]
@@ -392,38 +422,47 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
     put("not_closing", "angles where the loop cannot close", f"=ROWS({w})-SUM({w})")
     for k in range(1, GAPS_SHOWN + 1):
         put(f"gap{k}_from", f"gap {k}: cannot close from",
-            f'=IFERROR(SMALL({rng("gap_from")},{k}),"{DASH}")', DEG, "number_or_dash")
-        put(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"{DASH}")', DEG,
+            f'=IFERROR(SMALL({rng("gap_from")},{k}),"{DASH}")', t.mechanism.input_unit,
             "number_or_dash")
+        put(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"{DASH}")',
+            t.mechanism.input_unit, "number_or_dash")
 
-    def extremes(prefix: str, what: str, column: str, unit: str) -> None:
+    def extremes(prefix: str, what: str, column: str, unit: str, convert: str = "") -> None:
         # MINIFS/MAXIFS over numbers only: the #N/A rows of a column are skipped.
         for suffix, fn, word in (("min", MINIFS, "smallest"), ("max", MAXIFS, "largest")):
+            value = f'{fn}({column},{column},">-1E+300")'
+            value = f"{convert}({value})" if convert else value
             put(f"{prefix}_{suffix}", f"{word} {what}",
-                f'=IF(COUNT({column})=0,"{DASH}",{fn}({column},{column},">-1E+300"))', unit,
-                "number_or_dash")
+                f'=IF(COUNT({column})=0,"{DASH}",{value})', unit, "number_or_dash")
 
     if model.output:
         q = model.get(model.output)
         extremes("output", f"{q.symbol} ({q.label})", rng(model.output), q.unit)
-    if model.transmission:
-        extremes("mu", "transmission angle μ", rng(f"{model.transmission}_deg"), DEG)
-    if model.fourbar:
-        _fourbar_summary(put, model, names)
+    for i, key in enumerate(model.transmissions, start=1):
+        # read in radians: a degree view's window moves with the data, μ lies in [0, π]
+        extremes(summary_prefix("mu", i), f"transmission angle {model.get(key).symbol}",
+                 rng(key), DEG, convert="DEGREES")
+    for i, loop in enumerate(model.fourbars, start=1):
+        _fourbar_summary(put, loop, summary_prefix("", i), Resolver(model, names, {}))
     return cells
 
 
-def _fourbar_summary(put, model: Model, names: dict) -> None:
-    resolve = Resolver(model, names, {})
-    fb = model.fourbar
-    g = put("fb_ground", "four-bar loop: ground link", "=" + render(fb.ground, resolve), LENGTH)
-    c = put("fb_crank", "four-bar loop: input crank", "=" + render(fb.crank, resolve), LENGTH)
-    k = put("fb_coupler", "four-bar loop: coupler", "=" + render(fb.coupler, resolve), LENGTH)
-    r = put("fb_rocker", "four-bar loop: output link", "=" + render(fb.rocker, resolve), LENGTH)
+def summary_prefix(base: str, i: int) -> str:
+    """Keys of the summary's i-th transmission angle or four-bar loop: the first keeps the
+    names older books have (mu_min, fb_ground, grashof, limit_folded_1), then mu2_min, fb2_…"""
+    return base + (str(i) if i > 1 else "")
+
+
+def _fourbar_summary(put, fb, n: str, resolve) -> None:
+    what = f"four-bar loop {fb.name}"
+    g = put(f"fb{n}_ground", f"{what}: ground link", "=" + render(fb.ground, resolve), LENGTH)
+    c = put(f"fb{n}_crank", f"{what}: input crank", "=" + render(fb.crank, resolve), LENGTH)
+    k = put(f"fb{n}_coupler", f"{what}: coupler", "=" + render(fb.coupler, resolve), LENGTH)
+    r = put(f"fb{n}_rocker", f"{what}: output link", "=" + render(fb.rocker, resolve), LENGTH)
     links = f"{g},{c},{k},{r}"
     shortest, longest = f"MIN({links})", f"MAX({links})"
     others = f"({g}+{c}+{k}+{r}-{shortest}-{longest})"
-    put("grashof", "Grashof class",
+    put(f"grashof{n}", f"{what}: Grashof class",
         f'=IF({shortest}+{longest}>{others}*(1+1E-12),"non-Grashof: triple rocker",'
         f'IF({shortest}+{longest}>={others}*(1-1E-12),"change point",'
         f'IF({shortest}={g},"Grashof: double crank",IF({shortest}={c},"Grashof: crank-rocker",'
@@ -433,9 +472,9 @@ def _fourbar_summary(put, model: Model, names: dict) -> None:
         cosine = f"({g}^2+{c}^2-{length}^2)/(2*{g}*{c})"
         lo = f"MOD(DEGREES({ground_angle}-ACOS({cosine})),360)"
         hi = f"MOD(DEGREES({ground_angle}+ACOS({cosine})),360)"
-        put(f"limit_{name}_1", f"input limit angle, coupler and output link {name}",
+        put(f"limit{n}_{name}_1", f"{what}: input limit angle, coupler and output link {name}",
             f'=IFERROR(MIN({lo},{hi}),"none")', DEG, "number_or_none")
-        put(f"limit_{name}_2", "… and the other one",
+        put(f"limit{n}_{name}_2", "… and the other one",
             f'=IFERROR(MAX({lo},{hi}),"none")', DEG, "number_or_none")
 
 
@@ -476,7 +515,7 @@ def _fill_grid(ws, t: Template, model: Model, names: dict, param_row: int, rows:
     """One self-contained formula per cell: the row's angle in $A, the column's value in
     `param_row`; the same text with the row and column put in."""
     param, out = t.mechanism.grid
-    text = _grid_formula(model, names, t.mechanism.input_key, param, out, param_row)
+    text = _grid_formula(model, names, t.mechanism.input_column, param, out, param_row)
     for i in rows:
         for letter in cols:
             c = ws[f"{letter}{i}"]
@@ -488,11 +527,11 @@ def _fill_grid(ws, t: Template, model: Model, names: dict, param_row: int, rows:
 EXCEL_FORMULA_CHARS, EXCEL_NESTING = 8192, 64
 
 
-def _grid_formula(model, names, input_key, param, out, param_row) -> str:
+def _grid_formula(model, names, input_column, param, out, param_row) -> str:
     """The self-contained grid formula, refused (before any file is written) where Excel could
     not open it: over 8,192 characters or 64 levels of nested functions."""
     from .templates import InputError
-    cells = {f"{input_key}_deg": f"$A{ROW}", param: f"{COL}${param_row}"}
+    cells = {input_column: f"$A{ROW}", param: f"{COL}${param_row}"}
     text = Resolver(model, names, cells).formula(out)
     depth = deepest = 0
     for ch in text:
