@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from conftest import checks_of, formula_cells
 from linkbook import engine, templates, workbook
 from linkbook.language import STEP_KEYS
-from linkbook.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND
+from linkbook.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, RATE_KIND
 
 EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
 TALLY: Counter = Counter()
@@ -33,6 +33,14 @@ def dimensions(t: templates.Template):
             draws[p.symbol] = st.sampled_from([1.0, -1.0])
         elif p.kind == ANGLE_KIND:
             draws[p.symbol] = st.floats(-180.0, 180.0)
+        elif p.kind == RATE_KIND:
+            # the input's speed and acceleration: zero, or 0.05 to 30 times the template's
+            # (at least 5 units), either sign. Not 1e-184: `formulas` reads an input cell to 15
+            # decimals, so a rate below ~1e-12 is not the rate the engine computes with.
+            draws[p.symbol] = st.one_of(
+                st.just(0.0),
+                st.tuples(st.floats(0.05, 30.0), st.sampled_from([1.0, -1.0])).map(
+                    lambda fs, v=p.value: fs[0] * fs[1] * max(abs(v), 5.0)))
         else:
             draws[p.symbol] = st.floats(-1.0, 1.0).map(lambda f, v=p.value: v + f * scale)
     return st.fixed_dictionaries(draws)

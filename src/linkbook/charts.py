@@ -14,9 +14,9 @@ from openpyxl.chart.data_source import NumFmt
 from openpyxl.chart.layout import Layout, ManualLayout
 from openpyxl.utils import column_index_from_string, get_column_letter
 
-from .model import LENGTH, Model, header
+from .model import ANG_ACCEL, ANG_SPEED, LENGTH, Model, header, unit_text
 from .templates import Template
-from .workbook import CHARTS, GRID, MECH, SWEEP, Built
+from .workbook import CHARTS, GRID, MECH, MOTION_SHEET, SWEEP, Built
 
 LINE_EMU = 22000          # 1.7 pt
 DRAWING_CM = 15.0
@@ -94,7 +94,9 @@ def _column(values: dict, sheet: str, letter: str, rows: tuple[int, int]) -> lis
 def add_charts(built: Built, t: Template, model: Model, values: dict) -> None:
     wb, meta = built.workbook, built.meta
     _drawing(wb, t, model, meta, values)
-    _sweep_charts(wb, t, model, meta, values)
+    row = _sweep_charts(wb, t, model, meta, values)
+    if "motion" in meta:
+        _motion_charts(wb, t, model, meta, row)
     if "grid" in meta:
         _family_chart(wb, t, model, meta)
 
@@ -149,6 +151,39 @@ def _sweep_charts(wb, t, model: Model, meta: dict, values: dict) -> None:
                 _angle_axis(chart, t)
         ws.add_chart(chart, f"A{anchor_row}")
         anchor_row += 30 if spec.equal_axes else 21
+    return anchor_row
+
+
+def _motion_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:
+    """From the Motion sheet: the angular velocities, the angular accelerations, and the main
+    output's (else the traced point's) velocity and acceleration, against the input."""
+    motion = meta["motion"]
+    ws_data, ws = wb[MOTION_SHEET], wb[CHARTS]
+    rows, letters = tuple(motion["rows"]), motion["columns"]
+    by_key = {q.key: q for q in model.quantities}
+    mech = t.mechanism
+    x_title = header(mech.input_symbol, mech.input_unit, t.length_unit)
+    omegas = [k for k in letters if k.startswith("omega_")]
+    alphas = [k for k in letters if k.startswith("alpha_")]
+    out = model.output
+    pair = ([f"v_{out}", f"acc_{out}"] if out and f"v_{out}" in letters else
+            [k for k in letters if k.startswith(("vmag_", "amag_"))])
+    specs = [("Angular velocities", omegas, ANG_SPEED), ("Angular accelerations", alphas,
+                                                           ANG_ACCEL)]
+    specs += [(f"{by_key[k].symbol}: {by_key[k].label}", [k], by_key[k].unit) for k in pair]
+    for title, keys, unit in specs:
+        if not keys:
+            continue
+        y_title = (header(by_key[keys[0]].symbol, unit, t.length_unit) if len(keys) == 1
+                   else f"[{unit_text(unit, t.length_unit)}]")
+        chart = _chart(title, x_title, y_title)
+        for k in keys:
+            chart.series.append(_series(ws_data, "A", letters[k], rows, by_key[k].symbol))
+        chart.width, chart.height = 18, 10
+        if mech.input_is_angle:
+            _angle_axis(chart, t)
+        ws.add_chart(chart, f"A{anchor_row}")
+        anchor_row += 21
 
 
 def _series_title(model: Model, key: str) -> str:

@@ -1189,6 +1189,306 @@ class _Solver:
 
 
 # --------------------------------------------------------------------------------------------
+# Velocity and acceleration: the constraints differentiated by Taylor arithmetic
+# --------------------------------------------------------------------------------------------
+#
+# Every quantity is carried as its second-order Taylor expansion in time about each row,
+# x(t) = a + b·t + c·t²/2 (b the velocity, c the acceleration), element-wise over the rows. A
+# point placed directly (a crank pin, a carried point) is computed in this arithmetic. A step
+# whose unknowns z satisfy constraints F(z, known) = 0 is differentiated implicitly: its
+# Jacobian J = ∂F/∂z comes from seeding each unknown with a unit velocity (the knowns held
+# still), then ż = −J⁻¹·(the velocity F has with z held still) and z̈ = −J⁻¹·(the acceleration
+# F has with z moving at ż): J·ż = −(∂F/∂θ)·ω and the once more differentiated system. No
+# closed form of the workbook's is used; a singular J (a dead centre) gives NaN.
+
+# The data format's names of the input's speed and acceleration parameters.
+_MOTION_PARAMS = {"angle": ("omega_in", "alpha_in"), "length": ("v_in", "a_in")}
+
+
+class _T:
+    """a + b·t + c·t²/2, element-wise (numpy arrays or floats)."""
+    __slots__ = ("a", "b", "c")
+
+    def __init__(self, a, b=0.0, c=0.0):
+        self.a, self.b, self.c = a, b, c
+
+    def __add__(self, o):
+        o = _lift(o)
+        return _T(self.a + o.a, self.b + o.b, self.c + o.c)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return _T(-self.a, -self.b, -self.c)
+
+    def __sub__(self, o):
+        return self + (-_lift(o))
+
+    def __rsub__(self, o):
+        return _lift(o) - self
+
+    def __mul__(self, o):
+        o = _lift(o)
+        return _T(self.a * o.a, self.a * o.b + self.b * o.a,
+                  self.a * o.c + 2.0 * self.b * o.b + self.c * o.a)
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, o):
+        o = _lift(o)
+        q0 = self.a / o.a
+        q1 = (self.b - q0 * o.b) / o.a
+        return _T(q0, q1, (self.c - 2.0 * q1 * o.b - q0 * o.c) / o.a)
+
+
+def _lift(x) -> _T:
+    return x if isinstance(x, _T) else _T(x)
+
+
+def _t_sin(x: _T) -> _T:
+    s, c = np.sin(x.a), np.cos(x.a)
+    return _T(s, c * x.b, c * x.c - s * x.b * x.b)
+
+
+def _t_cos(x: _T) -> _T:
+    s, c = np.sin(x.a), np.cos(x.a)
+    return _T(c, -s * x.b, -s * x.c - c * x.b * x.b)
+
+
+def _t_sqrt(x: _T) -> _T:
+    r = np.sqrt(x.a)
+    d1 = x.b / (2.0 * r)
+    return _T(r, d1, (x.c - 2.0 * d1 * d1) / (2.0 * r))
+
+
+def _t_atan2(y: _T, x: _T) -> _T:
+    r2 = x.a * x.a + y.a * y.a
+    d1 = (x.a * y.b - y.a * x.b) / r2
+    d2 = (x.a * y.c - y.a * x.c) / r2 - 2.0 * d1 * (x.a * x.b + y.a * y.b) / r2
+    return _T(np.arctan2(y.a, x.a), d1, d2)
+
+
+def _still(x: _T) -> _T:
+    return _T(x.a)
+
+
+def _t_solve(jac: list[list[np.ndarray]], rhs: list[np.ndarray]) -> list[np.ndarray]:
+    """jac·x = rhs per row (1×1 or 2×2); NaN where jac is singular."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if len(rhs) == 1:
+            d = jac[0][0]
+            return [np.where(d == 0.0, np.nan, rhs[0] / np.where(d == 0.0, 1.0, d))]
+        (a, b), (c, d) = jac
+        det = a * d - b * c
+        safe = np.where(det == 0.0, 1.0, det)
+        x = (rhs[0] * d - b * rhs[1]) / safe
+        y = (a * rhs[1] - c * rhs[0]) / safe
+        return [np.where(det == 0.0, np.nan, x), np.where(det == 0.0, np.nan, y)]
+
+
+def _implicit(residuals, z0: list[np.ndarray], knowns: dict, still: dict) -> list[_T]:
+    """The unknowns z(t) with residuals(z, knowns) = 0, z(0) = z0: see the section's comment."""
+    k = len(z0)
+    jac = [[None] * k for _ in range(k)]
+    for j in range(k):
+        seeded = [_T(z0[i], 1.0 if i == j else 0.0) for i in range(k)]
+        for i, r in enumerate(residuals(seeded, still)):
+            jac[i][j] = np.broadcast_to(np.asarray(r.b, dtype=float), z0[0].shape)
+    first = residuals([_T(z) for z in z0], knowns)
+    z1 = _t_solve(jac, [-np.asarray(r.b, dtype=float) for r in first])
+    second = residuals([_T(z, d) for z, d in zip(z0, z1)], knowns)
+    z2 = _t_solve(jac, [-np.asarray(r.c, dtype=float) for r in second])
+    return [_T(z, d, dd) for z, d, dd in zip(z0, z1, z2)]
+
+
+class _Motion:
+    """Velocities and accelerations of a solved mechanism (a _Solver after run())."""
+
+    def __init__(self, solver: "_Solver", description: Mapping, speed: float, accel: float):
+        self.s = solver
+        self.description = description
+        n = solver.n
+        self.zero = np.zeros(n)
+        self.points: dict[str, tuple[_T, _T]] = {
+            name: (_T(x), _T(y)) for name, (x, y) in solver.points.items()}
+        values = solver.out[solver.input_key]
+        self.input = _T(np.asarray(values, dtype=float), speed, accel)
+        self.out: dict[str, np.ndarray] = {}
+
+    def run(self) -> dict:
+        for k, step in enumerate(self.s.steps):
+            self.where = f"steps[{k}]"
+            getattr(self, f"step_{step['type']}")(step)
+        trace = self.description.get("trace")
+        if isinstance(trace, str) and trace in self.points:
+            x, y = self.points[trace]
+            self.out[f"vmag_{trace}"] = np.hypot(x.b, y.b)
+            self.out[f"amag_{trace}"] = np.hypot(x.c, y.c)
+        return {k: np.broadcast_to(np.asarray(v, dtype=float), (self.s.n,)).copy()
+                for k, v in self.out.items()}
+
+    # -- helpers
+    def key(self, step: Mapping, col: str, default: str) -> str:
+        spec = (step.get("columns") or {}).get(col)
+        return str(spec.get("key") or default) if isinstance(spec, Mapping) else default
+
+    def put_rates(self, key: str, value: _T, angle: bool) -> None:
+        first, second = ("omega_", "alpha_") if angle else ("v_", "acc_")
+        self.out[first + key] = value.b
+        self.out[second + key] = value.c
+
+    def place(self, name: str, x: _T, y: _T) -> None:
+        self.points[name] = (x, y)
+        self.out[f"vx_{name}"], self.out[f"vy_{name}"] = x.b, y.b
+        self.out[f"ax_{name}"], self.out[f"ay_{name}"] = x.c, y.c
+
+    def length(self, step: Mapping, field: str) -> _T | float:
+        """A length of the description: the swept input where it is the input key itself."""
+        if step[field] == self.s.input_key and not self.s.angle_input:
+            return self.input
+        return self.s.num(step, field)
+
+    def still(self) -> dict:
+        return {name: (_still(x), _still(y)) for name, (x, y) in self.points.items()}
+
+    def angle(self, a: str, b: str, pts=None) -> _T:
+        (ax, ay), (bx, by) = (pts or self.points)[a], (pts or self.points)[b]
+        return _t_atan2(by - ay, bx - ax)
+
+    # -- step types
+    def step_crank(self, step: Mapping) -> None:
+        ox, oy = self.points[step["pivot"]]
+        r = self.s.num(step, "length")
+        t = self.input + math.radians(self.s.num(step, "phase", 0.0))
+        self.place(step["point"], ox + r * _t_cos(t), oy + r * _t_sin(t))
+
+    def circles(self, name: str, a: str, ra, b: str, rb) -> tuple[_T, _T]:
+        """R with |R − A| = ra and |R − B| = rb (the solved R as the start)."""
+        x0, y0 = self.s.points[name]
+
+        def residuals(z, pts):
+            (ax, ay), (bx, by) = pts[a], pts[b]
+            ra_, rb_ = (r if not isinstance(r, _T) or pts is self.points else _still(r)
+                        for r in (ra, rb))
+            return [(z[0] - ax) * (z[0] - ax) + (z[1] - ay) * (z[1] - ay) - ra_ * ra_,
+                    (z[0] - bx) * (z[0] - bx) + (z[1] - by) * (z[1] - by) - rb_ * rb_]
+
+        x, y = _implicit(residuals, [x0, y0], self.points, self.still())
+        return x, y
+
+    def step_dyad(self, step: Mapping) -> None:
+        n, p, q = step["point"], step["p"], step["q"]
+        x, y = self.circles(n, p, self.length(step, "p_length"), q,
+                            self.length(step, "q_length"))
+        self.place(n, x, y)
+        self.put_rates(self.key(step, "theta_q", f"theta_q_{n}"), self.angle(q, n), True)
+        self.put_rates(self.key(step, "theta_p", f"theta_p_{n}"), self.angle(p, n), True)
+
+    def step_slider(self, step: Mapping) -> None:
+        n, p, t = step["point"], step["p"], step["through"]
+        length = self.s.num(step, "length")
+        direction = math.radians(self.s.num(step, "direction", 0.0))
+        along = self.s.pair(step, "along") if "along" in step else None
+
+        fixed = _cos_sin_deg(self.s.num(step, "direction", 0.0))   # exact at quarter turns
+
+        def line(pts):
+            """The line's direction (cos, sin): turning with the link `along`, else fixed."""
+            if along:
+                lam = self.angle(*along, pts=pts) + direction
+                return _t_cos(lam), _t_sin(lam)
+            return _T(fixed[0]), _T(fixed[1])
+
+        s0 = np.asarray(self.s.out[self.key(step, "s", f"s_{n}")], dtype=float)
+
+        def residuals(z, pts):
+            (dx, dy), (tx, ty), (px, py) = line(pts), pts[t], pts[p]
+            rx, ry = tx + z[0] * dx - px, ty + z[0] * dy - py
+            return [rx * rx + ry * ry - length * length]
+
+        (pos,) = _implicit(residuals, [s0], self.points, self.still())
+        (dx, dy), (tx, ty) = line(self.points), self.points[t]
+        self.place(n, tx + pos * dx, ty + pos * dy)
+        self.put_rates(self.key(step, "s", f"s_{n}"), pos, False)
+        self.put_rates(self.key(step, "theta", f"theta_{n}"), self.angle(n, p), True)
+        if along:
+            self.put_rates(self.key(step, "line", f"line_{n}"),
+                           self.angle(*along) + direction, True)
+
+    def step_slide(self, step: Mapping) -> None:
+        n, p, q = step["point"], step["p"], step["pivot"]
+        offset = self.s.num(step, "offset")
+        th0 = np.asarray(self.s.out[self.key(step, "theta", f"theta_{n}")], dtype=float)
+
+        def residuals(z, pts):
+            (px, py), (qx, qy) = pts[p], pts[q]
+            return [(px - qx) * _t_cos(z[0]) + (py - qy) * _t_sin(z[0]) - offset]
+
+        (theta,) = _implicit(residuals, [th0], self.points, self.still())
+        qx, qy = self.points[q]
+        self.place(n, qx + offset * _t_cos(theta), qy + offset * _t_sin(theta))
+        self.put_rates(self.key(step, "theta", f"theta_{n}"), theta, True)
+        self.put_rates(self.key(step, "theta_slide", f"theta_slide_{n}"), theta, True)
+        (px, py), (nx, ny) = self.points[p], self.points[n]
+        self.put_rates(self.key(step, "travel", f"travel_{n}"),
+                       _t_sqrt((px - nx) * (px - nx) + (py - ny) * (py - ny)), False)
+
+    def step_point(self, step: Mapping) -> None:
+        n = step["point"]
+        a, b = self.s.pair(step, "frame")
+        (ax, ay), (bx, by) = self.points[a], self.points[b]
+        if "local" in step:
+            u, v = (_scalar(e, self.s.params) for e in step["local"])
+            ab = _t_sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
+            ex, ey = (bx - ax) / ab, (by - ay) / ab
+            self.place(n, ax + u * ex - v * ey, ay + u * ey + v * ex)
+        elif "distances" in step:
+            da, db = (_scalar(e, self.s.params) for e in step["distances"])
+            self.place(n, *self.circles(n, a, da, b, db))
+        else:
+            d = self.s.num(step, "distance")
+            theta = self.angle(a, b) + math.radians(self.s.num(step, "angle", 0.0))
+            self.place(n, ax + d * _t_cos(theta), ay + d * _t_sin(theta))
+            self.put_rates(self.key(step, "theta", f"theta_{n}"), theta, True)
+
+    def step_slot(self, step: Mapping) -> None:
+        n, e, t = step["point"], step["slot_through"], step["through"]
+        a, b = self.s.pair(step, "slot_frame")
+        slot_angle = math.radians(self.s.num(step, "slot_angle", 0.0))
+        dc, ds = _cos_sin_deg(self.s.num(step, "direction", 0.0))    # exact at quarter turns
+        z0 = [np.asarray(self.s.out[self.key(step, c, f"{c}_{n}")], dtype=float)
+              for c in ("s_slot", "s")]
+
+        def residuals(z, pts):
+            u = self.angle(a, b, pts=pts) + slot_angle
+            (ex, ey), (tx, ty) = pts[e], pts[t]
+            return [ex + z[0] * _t_cos(u) - tx - z[1] * dc,
+                    ey + z[0] * _t_sin(u) - ty - z[1] * ds]
+
+        s_slot, pos = _implicit(residuals, z0, self.points, self.still())
+        tx, ty = self.points[t]
+        self.place(n, tx + pos * dc, ty + pos * ds)
+        self.put_rates(self.key(step, "s_slot", f"s_slot_{n}"), s_slot, False)
+        self.put_rates(self.key(step, "s", f"s_{n}"), pos, False)
+
+    def step_vector(self, step: Mapping) -> None:
+        key = step["key"]
+        (ax, ay), (bx, by) = self.points[step["from"]], self.points[step["to"]]
+        dx, dy = bx - ax, by - ay
+        self.put_rates(self.key(step, "s", f"s_{key}"), _t_sqrt(dx * dx + dy * dy), False)
+        self.put_rates(self.key(step, "phi", f"phi_{key}"), _t_atan2(dy, dx), True)
+
+    def step_distance(self, step: Mapping) -> None:
+        a, b = self.s.pair(step, "between")
+        (ax, ay), (bx, by) = self.points[a], self.points[b]
+        dx, dy = bx - ax, by - ay
+        self.put_rates(self.key(step, "d", step["key"]), _t_sqrt(dx * dx + dy * dy), False)
+
+    def step_expression(self, step: Mapping) -> None:
+        """A formula of the user's: no rates (the workbook writes none either)."""
+
+
+# --------------------------------------------------------------------------------------------
 # Public API
 # --------------------------------------------------------------------------------------------
 
@@ -1213,7 +1513,15 @@ def solve(description: Mapping, params: Mapping[str, float], angles_deg) -> dict
     if angles.ndim != 1:
         raise ValueError("angles_deg must be one-dimensional")
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        return _Solver(description, params, angles).run()
+        solver = _Solver(description, params, angles)
+        out = solver.run()
+        speed, accel = _MOTION_PARAMS["angle" if solver.angle_input else "length"]
+        if speed in params and accel in params:
+            out.update(_Motion(solver, description, float(params[speed]),
+                               float(params[accel])).run())
+            if solver.angle_input:
+                out["rpm_in"] = float(params[speed]) * 30.0 / math.pi   # rad/s in rev/min
+        return out
 
 
 # --------------------------------------------------------------------------------------------

@@ -11,7 +11,8 @@ import keyword
 import re
 from dataclasses import dataclass
 
-from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, OFFSET_KIND, Mechanism, on_loop
+from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND,
+                         RATE_KIND, Mechanism, on_loop)
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Chart, FourBarLoop, Joint, Model,
                     Quantity, _one_group, references)
 from .steps import Sym, acos_or_na, input_angle, offset_slide, polar, slider, triangle
@@ -274,7 +275,7 @@ class Compiler:
 
     def __init__(self, data: dict, kinds: dict[str, str], origin: str):
         self.origin = origin
-        self.kinds = kinds
+        self.kinds = dict(kinds)
         self.symbols = set(kinds)
         self.model = Model()
         self.points: dict[str, tuple[Expr, Expr]] = {}
@@ -285,6 +286,8 @@ class Compiler:
         self.dyads: list[dict] = []
         self.input_kind = ANGLE_KIND
         self.swept: set[str] = set()     # the input key, where it is a length expressions use
+        self.records: list[dict] = []    # per step what it placed, for motion.py
+        self.traced = ""
         self.field = f"{origin}: mechanism"
         self.data = _table(self.field, data)
 
@@ -424,6 +427,8 @@ class Compiler:
         for i, step in enumerate(steps):
             self.read_step(i, step)
         self.read_presentation(d)
+        from .motion import MotionWriter
+        MotionWriter(self).run()
         return self.model
 
     def read_input(self, raw: object) -> None:
@@ -449,6 +454,10 @@ class Compiler:
             input_angle(self.model, k, self.input_symbol)
         else:   # the swept length is the sweep's first column itself; a dyad's side may be it
             self.swept = {k}
+        self.motion_symbols = MOTION_SYMBOLS[self.input_kind]
+        for symbol in self.motion_symbols:    # the input's speed and acceleration
+            self.kinds[symbol] = RATE_KIND
+            self.symbols.add(symbol)
 
     def read_ground(self, raw: object) -> None:
         field = f"{self.field}.ground"
@@ -511,6 +520,7 @@ class Compiler:
         self.rigid[(pivot, name)] = (length, angle)
         self.crank_of[name] = pivot
         self.cranks.append({"point": name, "pivot": pivot, "length": length, "phase": phase})
+        self.records.append({"type": "crank", "point": name, "pivot": pivot})
 
     def step_dyad(self, field: str, s: dict) -> None:
         name = s["point"]
@@ -554,6 +564,9 @@ class Compiler:
         self.rigid[(q, n)] = (q_len, key(theta_q))
         self.rigid[(p, n)] = (p_len, key(cols["theta_p"].key))
         self.witness(field, cols, ("theta_p", "theta_q", "x", "y", "mu", "psi"))
+        self.records.append({"type": "dyad", "field": field, "point": n, "p": p, "q": q,
+                             "p_length": p_len, "q_length": q_len, "theta_q": cols["theta_q"],
+                             "theta_p": cols["theta_p"]})
         self.dyads.append({"point": n, "p": p, "q": q, "p_length": p_len, "q_length": q_len,
                            "mu": cols["mu"]})
 
@@ -611,6 +624,10 @@ class Compiler:
         self.add_point(field, n, cols["x"], cols["y"], x, y)
         self.rigid[(n, p)] = (length, key(cols["theta"].key))
         self.witness(field, cols, ("theta", "s", "x", "y"))
+        line_dir = ((f"COS({d})", f"SIN({d})") if along or not direction.zero else ("1", "0"))
+        self.records.append({"type": "slider", "point": n, "p": p, "through": through,
+                             "along": along, "line": cols.get("line"), "direction": line_dir,
+                             "theta": cols["theta"], "s": cols["s"]})
 
     def step_slide(self, field: str, s: dict) -> None:
         n = s["point"]
@@ -642,6 +659,9 @@ class Compiler:
                        plus(qx, f"{r}*COS({{{t}}})"), plus(qy, f"{r}*SIN({{{t}}})"))
         self.rigid[(n, p)] = (None, key(cols["theta_slide"].key))
         self.witness(field, cols, ("theta", "travel", "x", "y", "psi"))
+        self.records.append({"type": "slide", "point": n, "p": p, "pivot": pivot,
+                             "theta": cols["theta"], "theta_slide": cols["theta_slide"],
+                             "travel": cols["travel"]})
 
     def step_point(self, field: str, s: dict) -> None:
         n = s["point"]
@@ -708,6 +728,8 @@ class Compiler:
             x = plus(ax, f"{d}*COS({angle})")
             y = plus(ay, f"{d}*SIN({angle})")
         self.add_point(field, n, cols["x"], cols["y"], x, y)
+        self.records.append({"type": "point", "point": n, "frame": (a, b), "form": form,
+                             "theta": cols.get("theta")})
 
     def step_slot(self, field: str, s: dict) -> None:
         n = s["point"]
@@ -742,6 +764,9 @@ class Compiler:
             combine([times(ty, "1"), times(key(pos), ds)]).text
         self.add_point(field, n, cols["x"], cols["y"], x, y)
         self.witness(field, cols, ("s", "s_slot", "x", "y"))
+        self.records.append({"type": "slot", "point": n, "slot_through": e, "frame": (a, b),
+                             "through": through, "slot_dir": (uc, us), "direction": (dc, ds),
+                             "s_slot": cols["s_slot"], "s": cols["s"]})
 
     def step_expression(self, field: str, s: dict) -> None:
         k = self.new_key(f"{field}.key", s["key"])
@@ -788,6 +813,8 @@ class Compiler:
               cols["xs"], cols["ys"], cols["s"], cols["phi"])
         if (a, b) not in self.rigid and (b, a) not in self.rigid:
             self.rigid[(a, b)] = (None, key(cols["phi"].key))
+        self.records.append({"type": "vector", "from": a, "to": b, "xs": cols["xs"],
+                             "ys": cols["ys"], "length": cols["s"], "angle": cols["phi"]})
 
     def step_distance(self, field: str, s: dict) -> None:
         k = s["key"]
@@ -804,6 +831,7 @@ class Compiler:
         self.model.add(Quantity(d.key, d.symbol, LENGTH,
                                 f"SQRT({dx.at_least(ATOM)}^2+{dy.at_least(ATOM)}^2)",
                                 COLUMN if d.shown else ALIAS, d.label))
+        self.records.append({"type": "distance", "between": (a, b), "length": d})
 
     def witness(self, field: str, cols: dict[str, Sym], order: tuple[str, ...]) -> None:
         """A shown column of a loop step: a number exactly where this loop closes."""
@@ -841,6 +869,7 @@ class Compiler:
                 raise DescriptionError(f"{self.field}.trace", f"{t}'s coordinates must be "
                                                               "shown columns")
             m.path = (x, y)
+            self.traced = t
         if "output" in d:
             if d["output"] not in shown or shown[d["output"]].unit != LENGTH:
                 # the summary's smallest and largest value: a length has one; an angle only
@@ -986,7 +1015,7 @@ def compile_mechanism(name: str, data: dict, kinds: dict[str, str], origin: str,
             raise DescriptionError(f"{origin}: grid.parameter", f"{param!r} is not a parameter")
         if out not in {q.key for q in model.of_role(COLUMN)}:
             raise DescriptionError(f"{origin}: grid.output", f"{out!r} is not a shown column")
-    return Mechanism(name, dict(kinds), c.input_key, c.input_symbol, lambda: model, grid,
+    return Mechanism(name, dict(c.kinds), c.input_key, c.input_symbol, lambda: model, grid,
                      description=data, input_kind=c.input_kind)
 
 

@@ -12,6 +12,12 @@ from .model import Model
 
 # Kinds of parameter, each with its own check (templates.check_value) and input validation.
 LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND = "length", "offset", "angle", "branch"
+RATE_KIND = "rate"     # the input's speed or acceleration: any number
+
+# The input's speed and acceleration, parameters every mechanism has (the data format's names,
+# which the reference reads too): a crank's ω and α, a linear actuator's velocity and
+# acceleration.
+MOTION_SYMBOLS = {ANGLE_KIND: ("omega_in", "alpha_in"), LENGTH_KIND: ("v_in", "a_in")}
 
 
 @dataclass(frozen=True)

@@ -23,9 +23,12 @@ PLACEHOLDER = re.compile(r"\{(\w+)\}")
 COLUMN = "column"      # one cell per row of the sweep, shown with its header
 ALIAS = "alias"        # inlined wherever it is used
 CONSTANT = "constant"  # one cell in the inputs block, with a defined name (depends on parameters only)
+MOTION = "motion"      # one cell per row of the Motion sheet (velocities and accelerations)
 
 # Units a quantity can have. LENGTH is replaced by the template's length unit when shown.
 LENGTH, RAD, DEG, RATIO = "length", "rad", "deg", "-"
+SPEED, ACCEL = "length/s", "length/s²"          # a point's or a slider's velocity, acceleration
+ANG_SPEED, ANG_ACCEL, RPM = "rad/s", "rad/s²", "rpm"
 
 
 @dataclass(frozen=True)
@@ -169,7 +172,10 @@ class Resolver:
 
 
 def unit_text(unit: str, length_unit: str) -> str:
-    return length_unit if unit == LENGTH else unit
+    """The unit as a reader sees it: the template's length unit put in (mm, mm/s, mm/s²)."""
+    if unit == LENGTH or unit.startswith(LENGTH + "/"):
+        return length_unit + unit[len(LENGTH):]
+    return unit
 
 
 def header(symbol: str, unit: str, length_unit: str) -> str:

@@ -12,7 +12,7 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, Mechanism
+from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, RATE_KIND, Mechanism
 
 def _template_dir() -> Path:
     """Installed: templates/ is packaged inside linkbook; from a checkout: the repo's templates/."""
@@ -195,9 +195,9 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
     params = []
     for symbol, kind in mech.parameters.items():
         field = f"{origin}: parameters.{symbol}"
-        if symbol not in table:
+        if symbol not in table and kind != RATE_KIND:
             raise InputError(field, "is missing")
-        entry = table[symbol]
+        entry = table.get(symbol) or motion_default(mech, symbol, length_unit)
         if not isinstance(entry, dict):
             raise InputError(field, f"must be a table with label, unit, value (got {entry!r})")
         label = _need(entry, "label", field)
@@ -239,6 +239,20 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         stroke_step=stroke_step)
     check_sweep(template)
     return template
+
+
+def motion_default(mech: Mechanism, symbol: str, length_unit: str) -> dict:
+    """The input's speed and acceleration where a template does not give them: a crank at
+    10 rad/s (95.5 rpm), an actuator at 100 length units per second, neither accelerating."""
+    speed, _ = MOTION_SYMBOLS[mech.input_kind]
+    if mech.input_is_angle:
+        label, unit, value = (("crank angular velocity", "rad/s", 10.0) if symbol == speed else
+                              ("crank angular acceleration", "rad/s²", 0.0))
+    else:
+        label, unit, value = (("actuator velocity", f"{length_unit}/s", 100.0)
+                              if symbol == speed else
+                              ("actuator acceleration", f"{length_unit}/s²", 0.0))
+    return {"label": label, "unit": unit, "value": value, "name": symbol}
 
 
 def _mechanism(name: str, data: dict, origin: str) -> Mechanism:

@@ -39,6 +39,7 @@ class Check:
     block: str
     name: str
     size: float = math.inf      # the mechanism's size S (sum of its input lengths)
+    rate: float = 1.0           # per second, per second²: a velocity's or acceleration's scale
     cells: int = 0
     max_abs: float = 0.0
     na_expected: int = 0
@@ -57,7 +58,8 @@ class Check:
         there the bound is tol·(|x|/S)²."""
         if relative:
             return tol * max(1.0, abs(expected))
-        return tol * max(1.0, (abs(expected) / self.size) ** 2)
+        rate = max(self.rate, 1e-300)
+        return tol * rate * max(1.0, (abs(expected) / (self.size * rate)) ** 2)
 
     def as_dict(self) -> dict:
         return {"block": self.block, "column": self.name, "cells": self.cells,
@@ -211,8 +213,8 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     size = mechanism_size(meta, params)
     checks: list[Check] = []
 
-    def run(block, name, sheet, cells, expected, unit, slope=None):
-        c = Check(block, name, size)
+    def run(block, name, sheet, cells, expected, unit, slope=None, rate=1.0):
+        c = Check(block, name, size, rate)
         compare(c, sheet, cells, [values.get((sheet, x)) for x in cells], expected, unit,
                 is_error, error_code, tol, relative, slope)
         checks.append(c)
@@ -260,12 +262,57 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         run("constants", key, layout.MECH, [info["cell"]], np.array([float(ref[key])]),
             info["unit"])
 
+    if "motion" in meta:
+        checks += _check_motion(wb, meta, model, solver, params, angles, ref, one, angle, scale,
+                                size, run)
     if "closes" in sweep["columns"]:
         checks += _check_assembly(wb, meta, model, solver, params, angles, ref, values, size)
     if "grid" in meta:
         checks += _check_grid(wb, meta, solver, params, values, is_error, error_code, tol,
                               relative, size)
     return checks
+
+
+def motion_rates(mech, params: dict, size: float) -> tuple[float, float]:
+    """The scale of velocities and accelerations: a crank's |ω| and ω² + |α| (per second, per
+    second²); an actuator's |v|/S and (v/S)² + |a|/S. A velocity's bound is the position's
+    bound times the first, an acceleration's times the second. Neither goes below 1e-9 (a
+    rate of one part in 10⁹ of the size per second is zero for any purpose; `formulas` reads
+    an input of 1e-184 as 0, to 15 decimals)."""
+    from .mechanisms import MOTION_SYMBOLS
+    speed, accel = (float(params.get(k, 0.0)) for k in MOTION_SYMBOLS[mech.input_kind])
+    if not mech.input_is_angle:
+        speed, accel = speed / size, accel / size
+    return max(abs(speed), MIN_RATE), max(speed * speed + abs(accel), MIN_RATE)
+
+
+MIN_RATE = 1e-9
+
+
+def _check_motion(wb, meta, model, solver, params, angles, ref, one, angle, scale, size, run):
+    """The Motion sheet (the sweep's rows and the current position's row) and the traced
+    point's velocity under the current position."""
+    from .model import ACCEL, ANG_ACCEL
+    mech = solver.mechanism
+    motion, sheet = meta["motion"], meta["motion"]["sheet"]
+    rate1, rate2 = motion_rates(mech, params, size)
+    (r0, r1), now = motion["rows"], motion["current_row"]
+    run(sheet, mech.input_column, sheet, [f"A{r}" for r in range(r0, r1 + 1)], angles,
+        mech.input_unit)
+    run(sheet, mech.input_column, sheet, [f"A{now}"], np.array([angle]), mech.input_unit)
+    for key, letter in motion["columns"].items():
+        unit = model.get(key).unit
+        rate = rate2 if unit in (ACCEL, ANG_ACCEL) else rate1
+        run(sheet, key, sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)], _expected(ref, key),
+            unit, _slope(solver, params, angles, key, unit, scale=scale), rate)
+        run("motion now", key, sheet, [f"{letter}{now}"], _expected(one, key), unit,
+            _slope(solver, params, np.array([angle]), key, unit, scale=scale), rate)
+    for key, cell in meta["position"].get("motion_cells", {}).items():
+        unit = model.get(key).unit
+        rate = rate2 if unit in (ACCEL, ANG_ACCEL) else rate1
+        run("position", key, layout.MECH, [cell], _expected(one, key), unit,
+            _slope(solver, params, np.array([angle]), key, unit, scale=scale), rate)
+    return []
 
 
 ASSEMBLY_COLUMNS = ("closes", "gap_from", "gap_to")

@@ -17,15 +17,17 @@ from openpyxl.workbook.defined_name import DefinedName
 from openpyxl.worksheet.datavalidation import DataValidation
 
 from . import __version__
-from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND
-from .model import (COLUMN, CONSTANT, DEG, LENGTH, RAD, Model, Resolver, header, render,
-                    unit_text)
+from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, RATE_KIND
+from .model import (ACCEL, ANG_ACCEL, ANG_SPEED, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
+                    SPEED, Model, Resolver, header, render, unit_text)
 from .templates import Template
 
-MECH, SWEEP, CHARTS, GRID, STROKE, META = ("Mechanism", "Sweep", "Charts", "Grid",
-                                           "Stroke sweep", "linkbook")
+MECH, SWEEP, MOTION_SHEET, CHARTS, GRID, STROKE, META = (
+    "Mechanism", "Sweep", "Motion", "Charts", "Grid", "Stroke sweep", "linkbook")
 FORMAT_VERSION = 1
 ROW = "\x00"   # stands for the row number in a rendered sweep formula
+SWEEP_ROW = "\x02"   # the Sweep sheet's row of a Motion row (MOTION_OFFSET rows up)
+MOTION_OFFSET = 2     # Motion row 5: the current position; row 7 on: Sweep row 5 on
 COL = "\x01"   # stands for the column letter in a rendered grid formula
 
 TITLE = Font(bold=True, size=14)
@@ -36,7 +38,8 @@ INPUT_FILL = PatternFill("solid", fgColor="FFF2CC")
 DERIVED_FILL = PatternFill("solid", fgColor="EDEDED")
 THIN = Side(style="thin", color="A6A6A6")
 BOX = Border(left=THIN, right=THIN, top=THIN, bottom=THIN)
-FORMATS = {LENGTH: "0.0000", RAD: "0.000000", DEG: "0.000", "-": "0.0000"}
+FORMATS = {LENGTH: "0.0000", RAD: "0.000000", DEG: "0.000", "-": "0.0000", SPEED: "0.000",
+           ACCEL: "0.00", ANG_SPEED: "0.00000", ANG_ACCEL: "0.0000"}
 
 
 def number_format(unit: str) -> str:
@@ -59,6 +62,7 @@ def build(t: Template) -> Built:
     ws_mech = wb.active
     ws_mech.title = MECH
     ws_sweep = wb.create_sheet(SWEEP)
+    ws_motion = wb.create_sheet(MOTION_SHEET) if model.of_role(MOTION) else None
     wb.create_sheet(CHARTS)     # filled by charts.add_charts once values are known
     meta = {"format": FORMAT_VERSION, "linkbook": __version__, "template": t.name,
             "mechanism": t.mechanism.name, "title": t.title, "length_unit": t.length_unit,
@@ -69,6 +73,10 @@ def build(t: Template) -> Built:
     names, meta["inputs"], meta["constants"], next_row = _inputs_block(wb, ws_mech, t, model)
     meta["position"] = _position_block(wb, ws_mech, t, model, names)
     meta["sweep"] = _sweep_table(ws_sweep, t, model, names)
+    if ws_motion is not None:
+        meta["motion"] = _motion_table(ws_motion, t, model, names, meta["sweep"],
+                                       meta["position"])
+        _position_motion(ws_mech, t, model, meta["position"], meta["motion"])
     meta["summary"] = _summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1)
     if t.mechanism.grid:
         meta["grid"] = _grid_sheet(wb.create_sheet(GRID), t, model, names)
@@ -354,6 +362,88 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
                                          mech.input_word))
     ws.freeze_panes = ws.cell(first, 2)
     return {"sheet": SWEEP, "rows": [first, last], "columns": letters}
+
+
+# ---------------------------------------------------------------- Motion sheet
+def _motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
+                  position: dict) -> dict:
+    """Velocities and accelerations: row 5 at the current position (sheet Mechanism), then one
+    row per Sweep row, reading that row's positions."""
+    mech = t.mechanism
+    qs = model.of_role(MOTION)
+    letters = {q.key: get_column_letter(i) for i, q in enumerate(qs, start=2)}
+    speed, accel = (model_name(names, s) for s in MOTION_SYMBOLS[mech.input_kind])
+    _text(ws, "A1", f"{t.title}: velocities and accelerations", TITLE)
+    _text(ws, "A2", f"The input moves at {speed} with acceleration {accel} (sheet Mechanism). "
+                    f"Row 5: the current position; from row {5 + MOTION_OFFSET}: each row of "
+                    f"sheet {SWEEP}. #N/A where the loop cannot close or at a dead centre.", NOTE)
+    head_row, current, first = 4, 5, 5 + MOTION_OFFSET
+    _head(ws, head_row, 1, header(mech.input_symbol, mech.input_unit, t.length_unit))
+    ws.column_dimensions["A"].width = 12
+    for i, q in enumerate(qs, start=2):
+        letter = letters[q.key]
+        ws.column_dimensions[letter].width = 12
+        _text(ws, f"{letter}3", q.label, NOTE)
+        ws[f"{letter}3"].alignment = Alignment(wrap_text=True, vertical="top")
+        _head(ws, head_row, i, header(q.symbol, q.unit, t.length_unit))
+    ws.row_dimensions[3].height = 42
+    own = {k: f"{v}{ROW}" for k, v in letters.items()}
+    src = quote_sheetname(SWEEP)
+    in_sweep = {k: f"{src}!{v}{SWEEP_ROW}" for k, v in sweep["columns"].items()}
+    at_sweep = Resolver(model, names, {**in_sweep, **own})
+    pos = quote_sheetname(MECH)
+    in_position = {k: f"{pos}!{v}" for k, v in position["cells"].items()}
+    in_position[mech.input_column] = position["input_name"]
+    at_current = Resolver(model, names, {**in_position, **own})
+    formats = {q.key: number_format(q.unit) for q in qs}
+    ws.cell(current, 1, f"={position['input_name']}").number_format = number_format(
+        mech.input_unit)
+    for q in qs:
+        c = ws[f"{letters[q.key]}{current}"]
+        c.value = at_current.formula(q.key).replace(ROW, str(current))
+        c.number_format = formats[q.key]
+        c.fill = DERIVED_FILL
+    texts = {q.key: at_sweep.formula(q.key) for q in qs}
+    r0, r1 = sweep["rows"]
+    for r in range(r0, r1 + 1):
+        row, row_text, sweep_text = r + MOTION_OFFSET, str(r + MOTION_OFFSET), str(r)
+        ws.cell(row, 1, f"={src}!A{r}").number_format = number_format(mech.input_unit)
+        for key, text in texts.items():
+            c = ws[f"{letters[key]}{row}"]
+            c.value = text.replace(ROW, row_text).replace(SWEEP_ROW, sweep_text)
+            c.number_format = formats[key]
+    ws.freeze_panes = ws.cell(first, 2)
+    return {"sheet": MOTION_SHEET, "rows": [r0 + MOTION_OFFSET, r1 + MOTION_OFFSET],
+            "current_row": current, "columns": letters}
+
+
+def model_name(names: dict, symbol: str) -> str:
+    return names.get(symbol, symbol)
+
+
+def _position_motion(ws, t: Template, model: Model, position: dict, motion: dict) -> None:
+    """Under the current position: the traced point's velocity and acceleration, from row 5
+    of the Motion sheet."""
+    if not model.path:
+        return
+    keys = [k for k in motion["columns"] if k.startswith(("vmag_", "amag_"))]
+    name = keys[0].split("_", 1)[1]
+    keys = [f"vx_{name}", f"vy_{name}", *keys]
+    row = 8 + len(_sweep_columns(model, t.mechanism.input_column)) - 1
+    src = quote_sheetname(MOTION_SHEET)
+    by_key = {q.key: q for q in model.quantities}
+    cells = {}
+    for key in keys:
+        q = by_key[key]
+        _text(ws, f"G{row}", q.label)
+        _text(ws, f"H{row}", q.symbol)
+        c = ws[f"I{row}"]
+        c.value = f"={src}!{motion['columns'][key]}{motion['current_row']}"
+        c.number_format = number_format(q.unit)
+        _text(ws, f"J{row}", unit_text(q.unit, t.length_unit))
+        cells[key] = f"I{row}"
+        row += 1
+    position["motion_cells"] = cells
 
 
 def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int, last: int,

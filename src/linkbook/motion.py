@@ -1,0 +1,401 @@
+"""Velocity and acceleration as live formulas: each step's loop differentiated once and twice.
+
+The input turns at ω with angular acceleration α (a linear actuator: extends at v with
+acceleration a), two named inputs. Every step places its point from points already known, and
+its motion follows from theirs, step after step as the positions do:
+
+* a point carried by a link moves with it as a rigid body: v = v_A + ω × r, a = a_A + α × r − ω² r
+  (r = A→point, ω and α the link's);
+* a loop step's unknown rates solve its differentiated loop equation, a 2×2 linear system
+  written out by Cramer's rule. Its determinant is a cross or dot product of the step's own
+  vectors and is exactly zero at a dead centre: there the rates are #N/A (IF(det=0,NA(),…)),
+  never #DIV/0!, and a position that is #N/A makes its rates #N/A too.
+
+Keys (the data format's, which the reference computes under the same names): a point N's
+velocity vx_N, vy_N and acceleration ax_N, ay_N (the traced point also |v| vmag_N and |a| amag_N);
+an angle column k's ω and α omega_k, alpha_k; a length column k's rates v_k, acc_k. Expression
+steps get none (a formula of the user's has no derivative written for it).
+"""
+from __future__ import annotations
+
+from .model import (ACCEL, ALIAS, ANG_ACCEL, ANG_SPEED, CONSTANT, MOTION, RPM, SPEED, Quantity,
+                    _one_group)
+
+ZERO = "0"
+
+
+def _p(text: str) -> str:
+    """Parenthesized unless an atom: a key, a number, or one call or bracket group."""
+    if text.startswith("{") and text.endswith("}") and text.count("{") == 1:
+        return text
+    if text.replace(".", "", 1).isdigit() or _one_group(text):
+        return text
+    return f"({text})"
+
+
+def mul(*factors: str) -> str:
+    if any(f == ZERO for f in factors):
+        return ZERO
+    kept = [f for f in factors if f != "1"]
+    return "*".join(_p(f) for f in kept) if kept else "1"
+
+
+def lin(*terms: tuple[int, str]) -> str:
+    """A sum of signed terms (sign ±1, text), zeros dropped."""
+    out = ""
+    for sign, text in terms:
+        if text == ZERO:
+            continue
+        if sign > 0:
+            out += text if not out else "+" + (_p(text) if text.startswith("-") else text)
+        else:
+            out += "-" + _p(text)
+    return out or ZERO
+
+
+def guard(den: str, num: str) -> str:
+    """num/den, #N/A where den is exactly zero (a dead centre) — never #DIV/0!."""
+    if num == ZERO:
+        return ZERO
+    return f"IF({den}=0,NA(),{_p(num)}/{_p(den)})"
+
+
+def sq(text: str) -> str:
+    return ZERO if text == ZERO else f"{_p(text)}^2"
+
+
+def dot(a: tuple[str, str], b: tuple[str, str]) -> str:
+    return lin((1, mul(a[0], b[0])), (1, mul(a[1], b[1])))
+
+
+def cross(a: tuple[str, str], b: tuple[str, str]) -> str:
+    return lin((1, mul(a[0], b[1])), (-1, mul(a[1], b[0])))
+
+
+def rate_symbol(symbol: str, order: int, angle: bool) -> str:
+    """θ13 → ω13, α13; another symbol gets one or two dots (ṡ14, s̈14)."""
+    if angle and symbol.startswith("θ"):
+        return ("ω", "α")[order - 1] + symbol[1:]
+    return symbol[0] + ("\u0307", "\u0308")[order - 1] + symbol[1:]
+
+
+class MotionWriter:
+    """Adds the Motion sheet's quantities to a compiled model (language.Compiler's state)."""
+
+    def __init__(self, compiler):
+        self.c = compiler
+        self.model = compiler.model
+        self.speed, self.accel = (f"{{{s}}}" for s in compiler.motion_symbols)
+        self.motion: dict[str, tuple[str, str, str, str]] = {
+            g: (ZERO, ZERO, ZERO, ZERO) for g in compiler.ground}
+        self.links: dict[tuple[str, str], tuple[str, str]] = {}   # link a→b: (ω, α) texts
+
+    def run(self) -> None:
+        c = self.c
+        if c.input_kind == "angle":
+            symbol = "n" + c.input_symbol[1:] if c.input_symbol.startswith("θ") else "n"
+            self.add(Quantity("rpm_in", symbol, RPM, f"{self.speed}*30/PI()", CONSTANT,
+                              "input speed in revolutions per minute"))
+        for rec in c.records:
+            getattr(self, f"step_{rec['type']}")(rec)
+        if self.model.path:
+            name = self.c.traced
+            vx, vy, ax, ay = self.motion[name]
+            self.add(Quantity(f"vmag_{name}", f"v{name}", SPEED, f"SQRT({sq(vx)}+{sq(vy)})",
+                              MOTION, f"speed of {name}"),
+                     Quantity(f"amag_{name}", f"a{name}", ACCEL, f"SQRT({sq(ax)}+{sq(ay)})",
+                              MOTION, f"acceleration of {name}, magnitude"))
+
+    # -- helpers
+    def add(self, *quantities: Quantity) -> None:
+        try:
+            self.model.add(*quantities)
+        except ValueError as exc:
+            from .language import DescriptionError
+            raise DescriptionError(f"{self.c.field}", f"{exc} (velocity and acceleration keys "
+                                                      "start with vx_, vy_, ax_, ay_, omega_, "
+                                                      "alpha_, v_, acc_)") from None
+
+    def pos(self, n: str) -> tuple[str, str]:
+        x, y = self.c.points[n]
+        return x.text, y.text
+
+    def rel(self, a: str, b: str) -> tuple[str, str]:
+        """b − a, the components of the vector a→b (position formulas)."""
+        (ax, ay), (bx, by) = self.pos(a), self.pos(b)
+        return lin((1, bx), (-1, ax)), lin((1, by), (-1, ay))
+
+    def vel(self, n: str) -> tuple[str, str]:
+        return self.motion[n][:2]
+
+    def acc(self, n: str) -> tuple[str, str]:
+        return self.motion[n][2:]
+
+    def point(self, n: str, vx: str, vy: str, ax: str, ay: str, witness: str = "") -> None:
+        """n's velocity and acceleration; a component that is zero by construction (a slider
+        on a horizontal line) is #N/A where `witness` is: where the loop cannot close."""
+        if witness:
+            vx, vy, ax, ay = (f"IF(ISNUMBER({witness}),0,NA())" if t == ZERO else t
+                              for t in (vx, vy, ax, ay))
+        keys = (f"vx_{n}", f"vy_{n}", f"ax_{n}", f"ay_{n}")
+        units = (SPEED, SPEED, ACCEL, ACCEL)
+        labels = (f"velocity of {n}, x", f"velocity of {n}, y", f"acceleration of {n}, x",
+                  f"acceleration of {n}, y")
+        symbols = (f"vx{n}", f"vy{n}", f"ax{n}", f"ay{n}")
+        self.add(*(Quantity(k, s, u, f, MOTION, lab)
+                   for k, s, u, f, lab in zip(keys, symbols, units, (vx, vy, ax, ay), labels)))
+        self.motion[n] = tuple(f"{{{k}}}" for k in keys)
+
+    def rates(self, sym, omega: str, alpha: str, angle: bool = True) -> tuple[str, str]:
+        """ω and α (or a length's v and a) of the column `sym`, as quantities; their texts."""
+        return self.rate(sym, 1, omega, angle), self.rate(sym, 2, alpha, angle)
+
+    def rate(self, sym, order: int, text: str, angle: bool = True) -> str:
+        """The first or second time derivative of the column `sym` as a quantity (shown where
+        the column is; None: no column, the text itself)."""
+        if sym is None:
+            return text
+        pre = (("omega_", "alpha_") if angle else ("v_", "acc_"))[order - 1]
+        unit = ((ANG_SPEED, ANG_ACCEL) if angle else (SPEED, ACCEL))[order - 1]
+        word = (("angular velocity", "angular acceleration") if angle else
+                ("velocity", "acceleration"))[order - 1]
+        key = f"{pre}{sym.key}"
+        self.add(Quantity(key, rate_symbol(sym.symbol, order, angle), unit, text,
+                          MOTION if sym.shown else ALIAS, f"{sym.label}: {word}"))
+        return f"{{{key}}}"
+
+    def rigid(self, n: str, a: str, omega: str, alpha: str) -> None:
+        """n carried by a body turning at ω, α about a known point a."""
+        rx, ry = self.rel(a, n)
+        (vax, vay), (aax, aay) = self.vel(a), self.acc(a)
+        w2 = sq(omega)
+        self.point(n, lin((1, vax), (-1, mul(omega, ry))), lin((1, vay), (1, mul(omega, rx))),
+                   lin((1, aax), (-1, mul(alpha, ry)), (-1, mul(w2, rx))),
+                   lin((1, aay), (1, mul(alpha, rx)), (-1, mul(w2, ry))))
+
+    def link_rates(self, a: str, b: str) -> tuple[str, str]:
+        """ω and α of the line a→b: a known link's, else from the points' motion,
+        ω = (r × v)/|r|², α = (r × a − 2 (r·v) ω)/|r|² (r = a→b)."""
+        if (a, b) in self.links:
+            return self.links[(a, b)]
+        if (b, a) in self.links:
+            return self.links[(b, a)]
+        if a in self.c.ground and b in self.c.ground:
+            return ZERO, ZERO
+        r = self.rel(a, b)
+        (vax, vay), (vbx, vby) = self.vel(a), self.vel(b)
+        (aax, aay), (abx, aby) = self.acc(a), self.acc(b)
+        v = (lin((1, vbx), (-1, vax)), lin((1, vby), (-1, vay)))
+        acc = (lin((1, abx), (-1, aax)), lin((1, aby), (-1, aay)))
+        r2 = dot(r, r)
+        w_key, a_key = f"_omega_{a}_{b}", f"_alpha_{a}_{b}"
+        self.add(Quantity(w_key, w_key, ANG_SPEED, guard(r2, cross(r, v)), ALIAS),
+                 Quantity(a_key, a_key, ANG_ACCEL,
+                          guard(r2, lin((1, cross(r, acc)), (-1, mul("2", dot(r, v), f"{{{w_key}}}")))),
+                          ALIAS))
+        self.links[(a, b)] = (f"{{{w_key}}}", f"{{{a_key}}}")
+        return self.links[(a, b)]
+
+    def fixed_length(self, a: str, b: str) -> bool:
+        """Is |ab| a constant (a link of a length that is not the actuator's, or two fixed
+        points)? Then a point at given distances from a and b is carried by that link."""
+        if a in self.c.ground and b in self.c.ground:
+            return True
+        for pair in ((a, b), (b, a)):
+            length = self.c.rigid.get(pair, (None, None))[0]
+            if length is not None:
+                return not any(f"{{{k}}}" in length.text for k in self.c.swept)
+        return False
+
+    def side_rates(self, field: str, side) -> tuple[str, str]:
+        """A dyad side's rate: zero for a link, the input's speed for the actuator itself."""
+        if not any(k in side.text for k in (f"{{{s}}}" for s in self.c.swept)):
+            return ZERO, ZERO
+        if side.text == f"{{{self.c.input_key}}}":
+            return self.speed, self.accel
+        from .language import DescriptionError
+        raise DescriptionError(field, "a side driven by the actuator must be its length itself "
+                                      f"({self.c.input_key}), so that its rate is the input's")
+
+    def two_circles(self, n: str, p: str, q: str, p_rates=(ZERO, ZERO), q_rates=(ZERO, ZERO),
+                    p_len: str = "", q_len: str = "", q_sym=None, p_sym=None
+                    ) -> tuple[str, str, str, str]:
+        """R = n with |PR| = p and |QR| = q: R = Q + q e_q = P + p e_p differentiated,
+        ω_q (i u_q) − ω_p (i u_p) = v_P − v_Q + ṗ e_p − q̇ e_q, solved by Cramer's rule over the
+        determinant c = u_q × u_p (zero when P, Q, R are in line: a dead centre).
+        Returns (ω_q, ω_p, α_q, α_p) as texts; defines n's motion."""
+        uq, up = self.rel(q, n), self.rel(p, n)
+        c = cross(uq, up)
+        det = f"_det_{n}"
+        self.add(Quantity(det, det, "-", c, ALIAS))
+        c = f"{{{det}}}"
+        (vpx, vpy), (vqx, vqy) = self.vel(p), self.vel(q)
+        (apx, apy), (aqx, aqy) = self.acc(p), self.acc(q)
+        (pd, pdd), (qd, qdd) = p_rates, q_rates
+        ep = tuple(guard(p_len, u) if pd != ZERO else ZERO for u in up)
+        eq = tuple(guard(q_len, u) if qd != ZERO else ZERO for u in uq)
+        dx = lin((1, vpx), (-1, vqx), (1, mul(pd, ep[0])), (-1, mul(qd, eq[0])))
+        dy = lin((1, vpy), (-1, vqy), (1, mul(pd, ep[1])), (-1, mul(qd, eq[1])))
+        wq = self.rate(q_sym, 1, guard(c, dot((dx, dy), up))) if q_sym else \
+            self.alias(f"_wq_{n}", guard(c, dot((dx, dy), up)))
+        wp = self.rate(p_sym, 1, guard(c, dot((dx, dy), uq))) if p_sym else \
+            self.alias(f"_wp_{n}", guard(c, dot((dx, dy), uq)))
+        vqx_, vqy_ = self.vel(q)
+        vx = lin((1, vqx_), (1, mul(qd, eq[0])), (-1, mul(wq, uq[1])))
+        vy = lin((1, vqy_), (1, mul(qd, eq[1])), (1, mul(wq, uq[0])))
+        # second derivative: ..., the centripetal −ω² u and Coriolis 2 ṗ ω (i e_p) terms moved right
+        ex = lin((1, apx), (-1, aqx), (-1, mul(sq(wp), up[0])), (1, mul(sq(wq), uq[0])),
+                 (1, mul(pdd, ep[0])), (-1, mul("2", pd, wp, ep[1])),
+                 (-1, mul(qdd, eq[0])), (1, mul("2", qd, wq, eq[1])))
+        ey = lin((1, apy), (-1, aqy), (-1, mul(sq(wp), up[1])), (1, mul(sq(wq), uq[1])),
+                 (1, mul(pdd, ep[1])), (1, mul("2", pd, wp, ep[0])),
+                 (-1, mul(qdd, eq[1])), (-1, mul("2", qd, wq, eq[0])))
+        aq = self.rate(q_sym, 2, guard(c, dot((ex, ey), up))) if q_sym else \
+            self.alias(f"_aq_{n}", guard(c, dot((ex, ey), up)))
+        ap = self.rate(p_sym, 2, guard(c, dot((ex, ey), uq))) if p_sym else \
+            self.alias(f"_ap_{n}", guard(c, dot((ex, ey), uq)))
+        ax = lin((1, aqx), (1, mul(qdd, eq[0])), (-1, mul("2", qd, wq, eq[1])),
+                 (-1, mul(aq, uq[1])), (-1, mul(sq(wq), uq[0])))
+        ay = lin((1, aqy), (1, mul(qdd, eq[1])), (1, mul("2", qd, wq, eq[0])),
+                 (1, mul(aq, uq[0])), (-1, mul(sq(wq), uq[1])))
+        self.point(n, vx, vy, ax, ay)
+        return wq, wp, aq, ap
+
+    def alias(self, key: str, text: str) -> str:
+        self.add(Quantity(key, key, "-", text, ALIAS))
+        return f"{{{key}}}"
+
+    # -- step types
+    def step_crank(self, rec: dict) -> None:
+        n, pivot = rec["point"], rec["pivot"]
+        self.links[(pivot, n)] = (self.speed, self.accel)
+        self.rigid(n, pivot, self.speed, self.accel)
+
+    def step_dyad(self, rec: dict) -> None:
+        n, p, q = rec["point"], rec["p"], rec["q"]
+        p_rates = self.side_rates(f"{rec['field']}.p_length", rec["p_length"])
+        q_rates = self.side_rates(f"{rec['field']}.q_length", rec["q_length"])
+        wq, wp, aq, ap = self.two_circles(n, p, q, p_rates, q_rates,
+                                          rec["p_length"].text, rec["q_length"].text,
+                                          rec["theta_q"], rec["theta_p"])
+        self.links[(q, n)] = (wq, aq)
+        self.links[(p, n)] = (wp, ap)
+
+    def step_slider(self, rec: dict) -> None:
+        """R = T + s d on its line (angle λ), P = R + u: ṡ d + θ̇ (i u) = v_P − v_T − s λ̇ (i d),
+        over the determinant d·u (zero where the rod is square to the line)."""
+        n, p, t = rec["point"], rec["p"], rec["through"]
+        dc, ds = rec["direction"]
+        if rec["along"]:
+            lw, la = self.link_rates(*rec["along"])
+            lw, la = self.rates(rec["line"], lw, la)
+        else:
+            lw = la = ZERO
+        s = f"{{{rec['s'].key}}}"
+        ux, uy = self.rel(n, p)
+        (vpx, vpy), (vtx, vty) = self.vel(p), self.vel(t)
+        (apx, apy), (atx, aty) = self.acc(p), self.acc(t)
+        det = self.alias(f"_det_{n}", dot((dc, ds), (ux, uy)))
+        dx = lin((1, vpx), (-1, vtx), (1, mul(s, lw, ds)))
+        dy = lin((1, vpy), (-1, vty), (-1, mul(s, lw, dc)))
+        sd = self.rate(rec["s"], 1, guard(det, dot((dx, dy), (ux, uy))), angle=False)
+        td = self.rate(rec["theta"], 1, guard(det, cross((dc, ds), (dx, dy))))
+        coriolis = mul("2", sd, lw)
+        ex = lin((1, apx), (-1, atx), (1, mul(coriolis, ds)), (1, mul(s, la, ds)),
+                 (1, mul(s, sq(lw), dc)), (1, mul(sq(td), ux)))
+        ey = lin((1, apy), (-1, aty), (-1, mul(coriolis, dc)), (-1, mul(s, la, dc)),
+                 (1, mul(s, sq(lw), ds)), (1, mul(sq(td), uy)))
+        sdd = self.rate(rec["s"], 2, guard(det, dot((ex, ey), (ux, uy))), angle=False)
+        tdd = self.rate(rec["theta"], 2, guard(det, cross((dc, ds), (ex, ey))))
+        self.point(n, lin((1, vtx), (1, mul(sd, dc)), (-1, mul(s, lw, ds))),
+                   lin((1, vty), (1, mul(sd, ds)), (1, mul(s, lw, dc))),
+                   lin((1, atx), (1, mul(sdd, dc)), (-1, mul(coriolis, ds)), (-1, mul(s, la, ds)),
+                       (-1, mul(s, sq(lw), dc))),
+                   lin((1, aty), (1, mul(sdd, ds)), (1, mul(coriolis, dc)), (1, mul(s, la, dc)),
+                       (-1, mul(s, sq(lw), ds))), witness=sd)
+        self.links[(n, p)] = (td, tdd)
+
+    def step_slide(self, rec: dict) -> None:
+        """The slide line, square to the link at the offset, passes through P:
+        (P − Q)·e = offset, e = (cos θ, sin θ); differentiated, θ̇ (P − Q)·(i e) = −(v_P − v_Q)·e,
+        over the determinant (P − Q)·(i e) (zero where the travel is zero)."""
+        n, p, q = rec["point"], rec["p"], rec["pivot"]
+        th = f"{{{rec['theta'].key}}}"
+        e, ie = (f"COS({th})", f"SIN({th})"), (f"-SIN({th})", f"COS({th})")
+        w = self.rel(q, p)
+        (vpx, vpy), (vqx, vqy) = self.vel(p), self.vel(q)
+        (apx, apy), (aqx, aqy) = self.acc(p), self.acc(q)
+        dv = (lin((1, vpx), (-1, vqx)), lin((1, vpy), (-1, vqy)))
+        da = (lin((1, apx), (-1, aqx)), lin((1, apy), (-1, aqy)))
+        den = self.alias(f"_det_{n}", dot(w, ie))
+        td = self.rate(rec["theta"], 1, guard(den, lin((-1, dot(dv, e)))))
+        tdd = self.rate(rec["theta"], 2, guard(den, lin((-1, dot(da, e)),
+                                                        (-1, mul("2", td, dot(dv, ie))),
+                                                        (1, mul(sq(td), dot(w, e))))))
+        self.links[(q, n)] = (td, tdd)
+        self.links[(n, p)] = self.rates(rec["theta_slide"], td, tdd)
+        self.rigid(n, q, td, tdd)
+        # the travel |nP| = |(P − Q)·(i e)|: its rates, with the sign of (P − Q)·(i e)
+        sign = f"SIGN({den})"
+        self.rates(rec["travel"],
+                   mul(sign, lin((1, dot(dv, ie)), (-1, mul(td, dot(w, e))))),
+                   mul(sign, lin((1, dot(da, ie)), (-1, mul("2", td, dot(dv, e))),
+                                 (-1, mul(tdd, dot(w, e))), (-1, mul(sq(td), dot(w, ie))))),
+                   angle=False)
+
+    def step_point(self, rec: dict) -> None:
+        n, (a, b) = rec["point"], rec["frame"]
+        if rec["form"] == "distances" and not self.fixed_length(a, b):
+            self.two_circles(n, a, b)      # a frame that stretches: two circles about its points
+            return
+        omega, alpha = self.link_rates(a, b)
+        self.rigid(n, a, omega, alpha)
+        if rec["theta"] is not None:
+            self.links[(a, n)] = self.rates(rec["theta"], omega, alpha)
+
+    def step_slot(self, rec: dict) -> None:
+        """E + s_slot û = T + s d̂ (the slot, direction û, turns with its link at ω):
+        ṡ d̂ − ṡ_slot û = v_E + s_slot ω (i û), over the determinant û × d̂ (zero when the slot
+        is parallel to the line)."""
+        n, e = rec["point"], rec["slot_through"]
+        omega, alpha = self.link_rates(*rec["frame"])
+        uc, us = rec["slot_dir"]
+        dc, ds = rec["direction"]
+        ss = f"{{{rec['s_slot'].key}}}"
+        (vex, vey), (aex, aey) = self.vel(e), self.acc(e)
+        det = self.alias(f"_det_{n}", cross((uc, us), (dc, ds)))
+        dx = lin((1, vex), (-1, mul(ss, omega, us)))
+        dy = lin((1, vey), (1, mul(ss, omega, uc)))
+        sd = self.rate(rec["s"], 1, guard(det, cross((uc, us), (dx, dy))), angle=False)
+        ssd = self.rate(rec["s_slot"], 1, guard(det, cross((dc, ds), (dx, dy))), angle=False)
+        coriolis = mul("2", ssd, omega)
+        ex = lin((1, aex), (-1, mul(coriolis, us)), (-1, mul(ss, alpha, us)),
+                 (-1, mul(ss, sq(omega), uc)))
+        ey = lin((1, aey), (1, mul(coriolis, uc)), (1, mul(ss, alpha, uc)),
+                 (-1, mul(ss, sq(omega), us)))
+        sdd = self.rate(rec["s"], 2, guard(det, cross((uc, us), (ex, ey))), angle=False)
+        self.rate(rec["s_slot"], 2, guard(det, cross((dc, ds), (ex, ey))), angle=False)
+        self.point(n, mul(sd, dc), mul(sd, ds), mul(sdd, dc), mul(sdd, ds), witness=sd)
+
+    def step_vector(self, rec: dict) -> None:
+        self.length_and_angle(rec["from"], rec["to"], rec["length"], rec["angle"])
+
+    def step_distance(self, rec: dict) -> None:
+        self.length_and_angle(*rec["between"], rec["length"], None)
+
+    def length_and_angle(self, a: str, b: str, length, angle) -> None:
+        """|r| and the angle of r = a→b: ṙ = (r·v)/|r|, φ̇ = (r × v)/|r|²,
+        r̈ = (|v|² + r·a − ṙ²)/|r|, φ̈ = (r × a − 2 (r·v) φ̇)/|r|²."""
+        r = self.rel(a, b)
+        (vax, vay), (vbx, vby) = self.vel(a), self.vel(b)
+        (aax, aay), (abx, aby) = self.acc(a), self.acc(b)
+        v = (lin((1, vbx), (-1, vax)), lin((1, vby), (-1, vay)))
+        acc = (lin((1, abx), (-1, aax)), lin((1, aby), (-1, aay)))
+        size = f"{{{length.key}}}"
+        rd = self.rate(length, 1, guard(size, dot(r, v)), angle=False)
+        self.rate(length, 2, guard(size, lin((1, dot(v, v)), (1, dot(r, acc)), (-1, sq(rd)))),
+                  angle=False)
+        if angle is not None:
+            r2 = sq(size)
+            w = self.rate(angle, 1, guard(r2, cross(r, v)))
+            self.rate(angle, 2, guard(r2, lin((1, cross(r, acc)), (-1, mul("2", dot(r, v), w)))))
