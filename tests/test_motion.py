@@ -114,3 +114,32 @@ def test_motion_cells_are_all_checked_and_a_wrong_sign_is_caught():
         broken[("Motion", f"{letter}{r}")] = -v if isinstance(v, float) else v
     bad = [c for c in checks_of(b, broken) if not c.ok]
     assert [c.name for c in bad] == ["omega_theta13"]
+
+
+def test_a_dead_centre_is_na_not_div0():
+    """Ground 10, crank 20, coupler 4, rocker 6: at θ12 = 0 the crank pin A = (20, 0) is 10 from
+    B0 = (10, 0), coupler and rocker lie stretched along the x axis (ψ = acos(1) = 0, θ14 = 0,
+    B = (16, 0), all exact) and the dyad's determinant u_q × u_p is exactly zero. The positions
+    there are numbers, every rate that divides by the determinant is #N/A, and nothing in the
+    book is #DIV/0!. (Trigonometry rarely lands on an exact zero: elsewhere a determinant near
+    zero gives large, finite rates, bounded by verify's forward-error allowance.)"""
+    b, values = built("fourbar", ("a1=10", "a2=20", "a3=4", "a4=6", "b3=3", "c3=2"), 10)
+    motion = b.meta["motion"]
+    row = motion["rows"][0]                      # θ12 = 0
+    assert b.workbook["Motion"][f"A{row}"].value == "='Sweep'!A5"
+    assert isinstance(values[("Sweep", f"{b.meta['sweep']['columns']['xB']}5")], float)
+    for key in ("omega_theta13", "omega_theta14", "alpha_theta13", "vx_B", "ax_B"):
+        v = values[("Motion", f"{motion['columns'][key]}{row}")]
+        assert verify_code(v) == "#N/A", (key, v)
+    assert not any(verify_code(v) == "#DIV/0!" for v in values.values())
+    # The reference's own position there is good to round-off only, its Jacobian singular to
+    # within 1e-7: it marks the row a dead centre, where #N/A (or a number) is the honest answer.
+    checks = checks_of(b, values)
+    assert all(c.ok for c in checks), [(c.name, c.mismatches[:1]) for c in checks if not c.ok]
+    assert sum(c.dead_centre for c in checks   # θ12 = 0° and 360°
+               if c.name == "omega_theta13" and c.block == "Motion") == 2
+
+
+def verify_code(value):
+    from linkbook import engine
+    return engine.error_code(value) if engine.is_error(value) else None

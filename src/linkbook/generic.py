@@ -1272,22 +1272,33 @@ def _still(x: _T) -> _T:
     return _T(x.a)
 
 
-def _t_solve(jac: list[list[np.ndarray]], rhs: list[np.ndarray]) -> list[np.ndarray]:
-    """jac·x = rhs per row (1×1 or 2×2); NaN where jac is singular."""
+# Two constraint gradients closer to parallel than this (the sine of their angle) make a dead
+# centre as far as double precision can tell: the solved position itself is only good to about
+# √ε there (a double root), so the rates are not determined by the data.
+_DEAD_CENTRE = 1e-7
+
+
+def _t_solve(jac: list[list[np.ndarray]], rhs: list[np.ndarray]) -> tuple[list, np.ndarray]:
+    """jac·x = rhs per row (1×1 or 2×2); NaN where jac is singular. Also the rows where a 2×2
+    jac is singular to within _DEAD_CENTRE (the rates there are NaN and marked)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         if len(rhs) == 1:
             d = jac[0][0]
-            return [np.where(d == 0.0, np.nan, rhs[0] / np.where(d == 0.0, 1.0, d))]
+            dead = d == 0.0
+            return [np.where(dead, np.nan, rhs[0] / np.where(dead, 1.0, d))], dead
         (a, b), (c, d) = jac
         det = a * d - b * c
-        safe = np.where(det == 0.0, 1.0, det)
+        dead = np.abs(det) <= _DEAD_CENTRE * np.hypot(a, b) * np.hypot(c, d)
+        safe = np.where(dead, 1.0, det)
         x = (rhs[0] * d - b * rhs[1]) / safe
         y = (a * rhs[1] - c * rhs[0]) / safe
-        return [np.where(det == 0.0, np.nan, x), np.where(det == 0.0, np.nan, y)]
+        return [np.where(dead, np.nan, x), np.where(dead, np.nan, y)], dead
 
 
-def _implicit(residuals, z0: list[np.ndarray], knowns: dict, still: dict) -> list[_T]:
-    """The unknowns z(t) with residuals(z, knowns) = 0, z(0) = z0: see the section's comment."""
+def _implicit(residuals, z0: list[np.ndarray], knowns: dict, still: dict
+              ) -> tuple[list[_T], np.ndarray]:
+    """The unknowns z(t) with residuals(z, knowns) = 0, z(0) = z0 (see the section's comment),
+    and the rows at a dead centre."""
     k = len(z0)
     jac = [[None] * k for _ in range(k)]
     for j in range(k):
@@ -1295,10 +1306,10 @@ def _implicit(residuals, z0: list[np.ndarray], knowns: dict, still: dict) -> lis
         for i, r in enumerate(residuals(seeded, still)):
             jac[i][j] = np.broadcast_to(np.asarray(r.b, dtype=float), z0[0].shape)
     first = residuals([_T(z) for z in z0], knowns)
-    z1 = _t_solve(jac, [-np.asarray(r.b, dtype=float) for r in first])
+    z1, dead = _t_solve(jac, [-np.asarray(r.b, dtype=float) for r in first])
     second = residuals([_T(z, d) for z, d in zip(z0, z1)], knowns)
-    z2 = _t_solve(jac, [-np.asarray(r.c, dtype=float) for r in second])
-    return [_T(z, d, dd) for z, d, dd in zip(z0, z1, z2)]
+    z2, _ = _t_solve(jac, [-np.asarray(r.c, dtype=float) for r in second])
+    return [_T(z, d, dd) for z, d, dd in zip(z0, z1, z2)], dead
 
 
 class _Motion:
@@ -1314,6 +1325,7 @@ class _Motion:
         values = solver.out[solver.input_key]
         self.input = _T(np.asarray(values, dtype=float), speed, accel)
         self.out: dict[str, np.ndarray] = {}
+        self.dead = np.zeros(n, dtype=bool)     # rows at a dead centre of some loop
 
     def run(self) -> dict:
         for k, step in enumerate(self.s.steps):
@@ -1324,8 +1336,10 @@ class _Motion:
             x, y = self.points[trace]
             self.out[f"vmag_{trace}"] = np.hypot(x.b, y.b)
             self.out[f"amag_{trace}"] = np.hypot(x.c, y.c)
-        return {k: np.broadcast_to(np.asarray(v, dtype=float), (self.s.n,)).copy()
-                for k, v in self.out.items()}
+        out = {k: np.broadcast_to(np.asarray(v, dtype=float), (self.s.n,)).copy()
+               for k, v in self.out.items()}
+        out["dead_centre"] = self.dead
+        return out
 
     # -- helpers
     def key(self, step: Mapping, col: str, default: str) -> str:
@@ -1373,7 +1387,8 @@ class _Motion:
             return [(z[0] - ax) * (z[0] - ax) + (z[1] - ay) * (z[1] - ay) - ra_ * ra_,
                     (z[0] - bx) * (z[0] - bx) + (z[1] - by) * (z[1] - by) - rb_ * rb_]
 
-        x, y = _implicit(residuals, [x0, y0], self.points, self.still())
+        (x, y), dead = _implicit(residuals, [x0, y0], self.points, self.still())
+        self.dead |= dead & np.isfinite(x0) & np.isfinite(y0)
         return x, y
 
     def step_dyad(self, step: Mapping) -> None:
@@ -1406,7 +1421,7 @@ class _Motion:
             rx, ry = tx + z[0] * dx - px, ty + z[0] * dy - py
             return [rx * rx + ry * ry - length * length]
 
-        (pos,) = _implicit(residuals, [s0], self.points, self.still())
+        (pos,), _ = _implicit(residuals, [s0], self.points, self.still())
         (dx, dy), (tx, ty) = line(self.points), self.points[t]
         self.place(n, tx + pos * dx, ty + pos * dy)
         self.put_rates(self.key(step, "s", f"s_{n}"), pos, False)
@@ -1424,7 +1439,7 @@ class _Motion:
             (px, py), (qx, qy) = pts[p], pts[q]
             return [(px - qx) * _t_cos(z[0]) + (py - qy) * _t_sin(z[0]) - offset]
 
-        (theta,) = _implicit(residuals, [th0], self.points, self.still())
+        (theta,), _ = _implicit(residuals, [th0], self.points, self.still())
         qx, qy = self.points[q]
         self.place(n, qx + offset * _t_cos(theta), qy + offset * _t_sin(theta))
         self.put_rates(self.key(step, "theta", f"theta_{n}"), theta, True)
@@ -1465,7 +1480,8 @@ class _Motion:
             return [ex + z[0] * _t_cos(u) - tx - z[1] * dc,
                     ey + z[0] * _t_sin(u) - ty - z[1] * ds]
 
-        s_slot, pos = _implicit(residuals, z0, self.points, self.still())
+        (s_slot, pos), dead = _implicit(residuals, z0, self.points, self.still())
+        self.dead |= dead & np.isfinite(z0[0]) & np.isfinite(z0[1])
         tx, ty = self.points[t]
         self.place(n, tx + pos * dc, ty + pos * ds)
         self.put_rates(self.key(step, "s_slot", f"s_slot_{n}"), s_slot, False)
