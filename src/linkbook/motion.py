@@ -189,10 +189,10 @@ class MotionWriter:
         acc = (lin((1, abx), (-1, aax)), lin((1, aby), (-1, aay)))
         r2 = dot(r, r)
         w_key, a_key = f"_omega_{a}_{b}", f"_alpha_{a}_{b}"
+        omega = f"{{{w_key}}}"
+        alpha = guard(r2, lin((1, cross(r, acc)), (-1, mul("2", dot(r, v), omega))))
         self.add(Quantity(w_key, w_key, ANG_SPEED, guard(r2, cross(r, v)), ALIAS),
-                 Quantity(a_key, a_key, ANG_ACCEL,
-                          guard(r2, lin((1, cross(r, acc)), (-1, mul("2", dot(r, v), f"{{{w_key}}}")))),
-                          ALIAS))
+                 Quantity(a_key, a_key, ANG_ACCEL, alpha, ALIAS))
         self.links[(a, b)] = (f"{{{w_key}}}", f"{{{a_key}}}")
         return self.links[(a, b)]
 

@@ -303,6 +303,10 @@ def _check_motion(wb, meta, model, solver, params, angles, ref, one, angle, scal
     motion, sheet = meta["motion"], meta["motion"]["sheet"]
     rate1, rate2 = motion_rates(mech, params, size)
     (r0, r1), now = motion["rows"], motion["current_row"]
+
+    def slope(inputs, key, unit):
+        return _slope(solver, params, inputs, key, unit, scale=scale, motion=True)
+
     run(sheet, mech.input_column, sheet, [f"A{r}" for r in range(r0, r1 + 1)], angles,
         mech.input_unit)
     run(sheet, mech.input_column, sheet, [f"A{now}"], np.array([angle]), mech.input_unit)
@@ -310,17 +314,14 @@ def _check_motion(wb, meta, model, solver, params, angles, ref, one, angle, scal
         unit = model.get(key).unit
         rate = rate2 if unit in (ACCEL, ANG_ACCEL) else rate1
         run(sheet, key, sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)], _expected(ref, key),
-            unit, _slope(solver, params, angles, key, unit, scale=scale), rate,
-            ref.get("dead_centre"))
+            unit, slope(angles, key, unit), rate, ref.get("dead_centre"))
         run("motion now", key, sheet, [f"{letter}{now}"], _expected(one, key), unit,
-            _slope(solver, params, np.array([angle]), key, unit, scale=scale), rate,
-            one.get("dead_centre"))
+            slope(np.array([angle]), key, unit), rate, one.get("dead_centre"))
     for key, cell in meta["position"].get("motion_cells", {}).items():
         unit = model.get(key).unit
         rate = rate2 if unit in (ACCEL, ANG_ACCEL) else rate1
         run("position", key, layout.MECH, [cell], _expected(one, key), unit,
-            _slope(solver, params, np.array([angle]), key, unit, scale=scale), rate,
-            one.get("dead_centre"))
+            slope(np.array([angle]), key, unit), rate, one.get("dead_centre"))
     return []
 
 
@@ -434,12 +435,18 @@ def _summary_expected(model, solver, params, ref, closes, starts, ends) -> dict:
 
 
 def _slope(solver: Reference, params: dict, angles: np.ndarray, key: str, unit: str,
-           param: str | None = None, column_values=(), scale: float = math.degrees(1.0)):
+           param: str | None = None, column_values=(), scale: float = math.degrees(1.0),
+           motion: bool = False):
     """|∂x/∂θ| per row (per column value, for a grid) by a central difference of the reference,
     computed for one row when asked. `scale`: input units per unit of θ (degrees per radian of a
-    crank; the mechanism's size for an actuator's length)."""
+    crank; the mechanism's size for an actuator's length). `motion`: x is a velocity or an
+    acceleration (else the reference is asked for positions only, which is quicker)."""
     period = ANGLE_UNITS.get(unit)
     h = SENSITIVITY_STEP
+    if not motion:
+        from .mechanisms import MOTION_SYMBOLS
+        params = {k: v for k, v in params.items()
+                  if k not in MOTION_SYMBOLS[solver.mechanism.input_kind]}
 
     def at(i: int, j: int = 0) -> float:
         p = {**params, param: column_values[j]} if param else params
