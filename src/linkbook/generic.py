@@ -1369,6 +1369,11 @@ class _Motion:
         (ax, ay), (bx, by) = (pts or self.points)[a], (pts or self.points)[b]
         return _t_atan2(by - ay, bx - ax)
 
+    def determinant(self, n: str, q: str, p: str) -> None:
+        """(R − Q) × (R − P) of the solved points: zero where P, Q, R line up."""
+        (rx, ry), (qx, qy), (px, py) = self.points[n], self.points[q], self.points[p]
+        self.out[f"det_{n}"] = ((rx.a - qx.a) * (ry.a - py.a) - (ry.a - qy.a) * (rx.a - px.a))
+
     # -- step types
     def step_crank(self, step: Mapping) -> None:
         ox, oy = self.points[step["pivot"]]
@@ -1396,6 +1401,7 @@ class _Motion:
         x, y = self.circles(n, p, self.length(step, "p_length"), q,
                             self.length(step, "q_length"))
         self.place(n, x, y)
+        self.determinant(n, q, p)
         self.put_rates(self.key(step, "theta_q", f"theta_q_{n}"), self.angle(q, n), True)
         self.put_rates(self.key(step, "theta_p", f"theta_p_{n}"), self.angle(p, n), True)
 
@@ -1404,6 +1410,8 @@ class _Motion:
         length = self.s.num(step, "length")
         direction = math.radians(self.s.num(step, "direction", 0.0))
         along = self.s.pair(step, "along") if "along" in step else None
+        if along:
+            self.put_rates("_".join(along), self.angle(*along), True)
 
         fixed = _cos_sin_deg(self.s.num(step, "direction", 0.0))   # exact at quarter turns
 
@@ -1424,6 +1432,8 @@ class _Motion:
         (pos,), _ = _implicit(residuals, [s0], self.points, self.still())
         (dx, dy), (tx, ty) = line(self.points), self.points[t]
         self.place(n, tx + pos * dx, ty + pos * dy)
+        (px, py), (rx, ry) = self.points[p], self.points[n]
+        self.out[f"det_{n}"] = dx.a * (px.a - rx.a) + dy.a * (py.a - ry.a)   # d·(P − R)
         self.put_rates(self.key(step, "s", f"s_{n}"), pos, False)
         self.put_rates(self.key(step, "theta", f"theta_{n}"), self.angle(n, p), True)
         if along:
@@ -1442,6 +1452,9 @@ class _Motion:
         (theta,), _ = _implicit(residuals, [th0], self.points, self.still())
         qx, qy = self.points[q]
         self.place(n, qx + offset * _t_cos(theta), qy + offset * _t_sin(theta))
+        (px, py) = self.points[p]
+        self.out[f"det_{n}"] = (-(px.a - qx.a) * np.sin(theta.a)          # (P − Q)·(i e)
+                                + (py.a - qy.a) * np.cos(theta.a))
         self.put_rates(self.key(step, "theta", f"theta_{n}"), theta, True)
         self.put_rates(self.key(step, "theta_slide", f"theta_slide_{n}"), theta, True)
         (px, py), (nx, ny) = self.points[p], self.points[n]
@@ -1452,6 +1465,7 @@ class _Motion:
         n = step["point"]
         a, b = self.s.pair(step, "frame")
         (ax, ay), (bx, by) = self.points[a], self.points[b]
+        self.put_rates(f"{a}_{b}", self.angle(a, b), True)     # the frame's own ω and α
         if "local" in step:
             u, v = (_scalar(e, self.s.params) for e in step["local"])
             ab = _t_sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
@@ -1460,6 +1474,8 @@ class _Motion:
         elif "distances" in step:
             da, db = (_scalar(e, self.s.params) for e in step["distances"])
             self.place(n, *self.circles(n, a, da, b, db))
+            if frozenset((a, b)) not in self.s.rigid:     # the frame stretches: a loop of its own
+                self.determinant(n, b, a)
         else:
             d = self.s.num(step, "distance")
             theta = self.angle(a, b) + math.radians(self.s.num(step, "angle", 0.0))
@@ -1469,6 +1485,7 @@ class _Motion:
     def step_slot(self, step: Mapping) -> None:
         n, e, t = step["point"], step["slot_through"], step["through"]
         a, b = self.s.pair(step, "slot_frame")
+        self.put_rates(f"{a}_{b}", self.angle(a, b), True)
         slot_angle = math.radians(self.s.num(step, "slot_angle", 0.0))
         dc, ds = _cos_sin_deg(self.s.num(step, "direction", 0.0))    # exact at quarter turns
         z0 = [np.asarray(self.s.out[self.key(step, c, f"{c}_{n}")], dtype=float)
@@ -1484,6 +1501,8 @@ class _Motion:
         self.dead |= dead & np.isfinite(z0[0]) & np.isfinite(z0[1])
         tx, ty = self.points[t]
         self.place(n, tx + pos * dc, ty + pos * ds)
+        u = self.angle(a, b).a + slot_angle
+        self.out[f"det_{n}"] = np.cos(u) * ds - np.sin(u) * dc            # û × d
         self.put_rates(self.key(step, "s_slot", f"s_slot_{n}"), s_slot, False)
         self.put_rates(self.key(step, "s", f"s_{n}"), pos, False)
 

@@ -28,6 +28,7 @@ MOTION = "motion"      # one cell per row of the Motion sheet (velocities and ac
 # Units a quantity can have. LENGTH is replaced by the template's length unit when shown.
 LENGTH, RAD, DEG, RATIO = "length", "rad", "deg", "-"
 SPEED, ACCEL = "length/s", "length/s²"          # a point's or a slider's velocity, acceleration
+AREA = "length²"                                # a dyad's determinant u_q × u_p
 ANG_SPEED, ANG_ACCEL, RPM = "rad/s", "rad/s²", "rpm"
 
 
@@ -173,7 +174,7 @@ class Resolver:
 
 def unit_text(unit: str, length_unit: str) -> str:
     """The unit as a reader sees it: the template's length unit put in (mm, mm/s, mm/s²)."""
-    if unit == LENGTH or unit.startswith(LENGTH + "/"):
+    if unit.startswith(LENGTH):
         return length_unit + unit[len(LENGTH):]
     return unit
 

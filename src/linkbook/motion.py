@@ -18,8 +18,8 @@ steps get none (a formula of the user's has no derivative written for it).
 """
 from __future__ import annotations
 
-from .model import (ACCEL, ALIAS, ANG_ACCEL, ANG_SPEED, CONSTANT, MOTION, RPM, SPEED, Quantity,
-                    _one_group)
+from .model import (ACCEL, ALIAS, ANG_ACCEL, ANG_SPEED, AREA, CONSTANT, LENGTH, MOTION, RATIO, RPM,
+                    SPEED, Quantity, _one_group)
 
 ZERO = "0"
 
@@ -160,8 +160,9 @@ class MotionWriter:
         word = (("angular velocity", "angular acceleration") if angle else
                 ("velocity", "acceleration"))[order - 1]
         key = f"{pre}{sym.key}"
-        self.add(Quantity(key, rate_symbol(sym.symbol, order, angle), unit, text,
-                          MOTION if sym.shown else ALIAS, f"{sym.label}: {word}"))
+        # a column even where the position is hidden: later formulas read it, not inline it
+        self.add(Quantity(key, rate_symbol(sym.symbol, order, angle), unit, text, MOTION,
+                          f"{sym.label}: {word}"))
         return f"{{{key}}}"
 
     def rigid(self, n: str, a: str, omega: str, alpha: str) -> None:
@@ -188,11 +189,13 @@ class MotionWriter:
         v = (lin((1, vbx), (-1, vax)), lin((1, vby), (-1, vay)))
         acc = (lin((1, abx), (-1, aax)), lin((1, aby), (-1, aay)))
         r2 = dot(r, r)
-        w_key, a_key = f"_omega_{a}_{b}", f"_alpha_{a}_{b}"
+        w_key, a_key = f"omega_{a}_{b}", f"alpha_{a}_{b}"
         omega = f"{{{w_key}}}"
         alpha = guard(r2, lin((1, cross(r, acc)), (-1, mul("2", dot(r, v), omega))))
-        self.add(Quantity(w_key, w_key, ANG_SPEED, guard(r2, cross(r, v)), ALIAS),
-                 Quantity(a_key, a_key, ANG_ACCEL, alpha, ALIAS))
+        self.add(Quantity(w_key, f"ω({a}{b})", ANG_SPEED, guard(r2, cross(r, v)), MOTION,
+                          f"angular velocity of {a}→{b}"),
+                 Quantity(a_key, f"α({a}{b})", ANG_ACCEL, alpha, MOTION,
+                          f"angular acceleration of {a}→{b}"))
         self.links[(a, b)] = (f"{{{w_key}}}", f"{{{a_key}}}")
         return self.links[(a, b)]
 
@@ -226,9 +229,7 @@ class MotionWriter:
         Returns (ω_q, ω_p, α_q, α_p) as texts; defines n's motion."""
         uq, up = self.rel(q, n), self.rel(p, n)
         c = cross(uq, up)
-        det = f"_det_{n}"
-        self.add(Quantity(det, det, "-", c, ALIAS))
-        c = f"{{{det}}}"
+        c = self.determinant(n, AREA, c)
         (vpx, vpy), (vqx, vqy) = self.vel(p), self.vel(q)
         (apx, apy), (aqx, aqy) = self.acc(p), self.acc(q)
         (pd, pdd), (qd, qdd) = p_rates, q_rates
@@ -260,6 +261,13 @@ class MotionWriter:
                  (1, mul(aq, uq[0])), (-1, mul(sq(wq), uq[1])))
         self.point(n, vx, vy, ax, ay)
         return wq, wp, aq, ap
+
+    def determinant(self, n: str, unit: str, text: str) -> str:
+        """The determinant of the step's differentiated loop, a column of its own (Δ_n): zero
+        exactly at a dead centre, where the rates that divide by it are #N/A."""
+        self.add(Quantity(f"det_{n}", f"Δ_{n}", unit, text, MOTION,
+                          f"determinant of the loop that places {n}"))
+        return f"{{det_{n}}}"
 
     def alias(self, key: str, text: str) -> str:
         self.add(Quantity(key, key, "-", text, ALIAS))
@@ -295,7 +303,7 @@ class MotionWriter:
         ux, uy = self.rel(n, p)
         (vpx, vpy), (vtx, vty) = self.vel(p), self.vel(t)
         (apx, apy), (atx, aty) = self.acc(p), self.acc(t)
-        det = self.alias(f"_det_{n}", dot((dc, ds), (ux, uy)))
+        det = self.determinant(n, LENGTH, dot((dc, ds), (ux, uy)))
         dx = lin((1, vpx), (-1, vtx), (1, mul(s, lw, ds)))
         dy = lin((1, vpy), (-1, vty), (-1, mul(s, lw, dc)))
         sd = self.rate(rec["s"], 1, guard(det, dot((dx, dy), (ux, uy))), angle=False)
@@ -327,7 +335,7 @@ class MotionWriter:
         (apx, apy), (aqx, aqy) = self.acc(p), self.acc(q)
         dv = (lin((1, vpx), (-1, vqx)), lin((1, vpy), (-1, vqy)))
         da = (lin((1, apx), (-1, aqx)), lin((1, apy), (-1, aqy)))
-        den = self.alias(f"_det_{n}", dot(w, ie))
+        den = self.determinant(n, LENGTH, dot(w, ie))
         td = self.rate(rec["theta"], 1, guard(den, lin((-1, dot(dv, e)))))
         tdd = self.rate(rec["theta"], 2, guard(den, lin((-1, dot(da, e)),
                                                         (-1, mul("2", td, dot(dv, ie))),
@@ -363,7 +371,7 @@ class MotionWriter:
         dc, ds = rec["direction"]
         ss = f"{{{rec['s_slot'].key}}}"
         (vex, vey), (aex, aey) = self.vel(e), self.acc(e)
-        det = self.alias(f"_det_{n}", cross((uc, us), (dc, ds)))
+        det = self.determinant(n, RATIO, cross((uc, us), (dc, ds)))
         dx = lin((1, vex), (-1, mul(ss, omega, us)))
         dy = lin((1, vey), (1, mul(ss, omega, uc)))
         sd = self.rate(rec["s"], 1, guard(det, cross((uc, us), (dx, dy))), angle=False)

@@ -298,7 +298,7 @@ MIN_RATE = 1e-9
 def _check_motion(wb, meta, model, solver, params, angles, ref, one, angle, scale, size, run):
     """The Motion sheet (the sweep's rows and the current position's row) and the traced
     point's velocity under the current position."""
-    from .model import ACCEL, ANG_ACCEL
+    from .model import ACCEL, ANG_ACCEL, AREA, LENGTH, RATIO
     mech = solver.mechanism
     motion, sheet = meta["motion"], meta["motion"]["sheet"]
     rate1, rate2 = motion_rates(mech, params, size)
@@ -312,7 +312,9 @@ def _check_motion(wb, meta, model, solver, params, angles, ref, one, angle, scal
     run(sheet, mech.input_column, sheet, [f"A{now}"], np.array([angle]), mech.input_unit)
     for key, letter in motion["columns"].items():
         unit = model.get(key).unit
-        rate = rate2 if unit in (ACCEL, ANG_ACCEL) else rate1
+        # a determinant is a position measured (an area's scale is S)
+        rate = {ACCEL: rate2, ANG_ACCEL: rate2, AREA: size, LENGTH: 1.0, RATIO: 1.0}.get(unit,
+                                                                                     rate1)
         run(sheet, key, sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)], _expected(ref, key),
             unit, slope(angles, key, unit), rate, ref.get("dead_centre"))
         run("motion now", key, sheet, [f"{letter}{now}"], _expected(one, key), unit,
