@@ -13,13 +13,14 @@ its motion follows from theirs, step after step as the positions do:
 
 Keys (the data format's, which the reference computes under the same names): a point N's
 velocity vx_N, vy_N and acceleration ax_N, ay_N (the traced point also |v| vmag_N and |a| amag_N);
-an angle column k's ω and α omega_k, alpha_k; a length column k's rates v_k, acc_k. Expression
-steps get none (a formula of the user's has no derivative written for it).
+an angle column k's ω and α omega_k, alpha_k; a length column k's rates v_k, acc_k; a frame A→B
+measured from its points omega_A_B, alpha_A_B; the loop that places N its determinant det_N.
+Expression steps get none (a formula of the user's has no derivative written for it).
 """
 from __future__ import annotations
 
-from .model import (ACCEL, ALIAS, ANG_ACCEL, ANG_SPEED, AREA, CONSTANT, LENGTH, MOTION, RATIO, RPM,
-                    SPEED, Quantity, _one_group)
+from .model import (ACCEL, ALIAS, ANG_ACCEL, ANG_SPEED, AREA, CONSTANT, LENGTH, MOTION, RATIO,
+                    RPM, SPEED, Quantity, _one_group)
 
 ZERO = "0"
 
