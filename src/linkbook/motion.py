@@ -55,9 +55,10 @@ def lin(*terms: tuple[int, str]) -> str:
 
 
 def guard(den: str, num: str) -> str:
-    """num/den, #N/A where den is exactly zero (a dead centre) — never #DIV/0!."""
+    """num/den, #N/A where den is exactly zero (a dead centre) or #N/A (the loop cannot close)
+    — never #DIV/0!; a numerator that is zero by construction still keeps that #N/A."""
     if num == ZERO:
-        return ZERO
+        return f"IF({den}=0,NA(),0)"
     return f"IF({den}=0,NA(),{_p(num)}/{_p(den)})"
 
 
