@@ -269,8 +269,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
             info["unit"])
 
     if "motion" in meta:
-        checks += _check_motion(wb, meta, model, solver, params, angles, ref, one, angle, scale,
-                                size, run)
+        _check_motion(meta, model, solver, params, angles, ref, one, angle, scale, size, run)
     if "closes" in sweep["columns"]:
         checks += _check_assembly(wb, meta, model, solver, params, angles, ref, values, size)
     if "grid" in meta:
@@ -295,9 +294,9 @@ def motion_rates(mech, params: dict, size: float) -> tuple[float, float]:
 MIN_RATE = 1e-9
 
 
-def _check_motion(wb, meta, model, solver, params, angles, ref, one, angle, scale, size, run):
+def _check_motion(meta, model, solver, params, angles, ref, one, angle, scale, size, run) -> None:
     """The Motion sheet (the sweep's rows and the current position's row) and the traced
-    point's velocity under the current position."""
+    point's velocity under the current position, each compared through `run`."""
     from .model import ACCEL, ANG_ACCEL, AREA, LENGTH, RATIO
     mech = solver.mechanism
     motion, sheet = meta["motion"], meta["motion"]["sheet"]
@@ -324,7 +323,6 @@ def _check_motion(wb, meta, model, solver, params, angles, ref, one, angle, scal
         rate = rate2 if unit in (ACCEL, ANG_ACCEL) else rate1
         run("position", key, layout.MECH, [cell], _expected(one, key), unit,
             slope(np.array([angle]), key, unit), rate, one.get("dead_centre"))
-    return []
 
 
 ASSEMBLY_COLUMNS = ("closes", "gap_from", "gap_to")
