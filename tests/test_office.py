@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT / "src") not in sys.path:        # conftest does this too; kept for --noconftest
     sys.path.insert(0, str(ROOT / "src"))
 
-from linkbook import cached, charts, office, templates, verify, workbook  # noqa: E402
+from linkbook import cached, charts, office, package, templates, verify, workbook  # noqa: E402
 
 REL_TOL = 1e-9          # LibreOffice stores 15 significant digits
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")      # cannot turn fully: #N/A rows
@@ -438,7 +438,7 @@ def test_cached_values_round_trip(lo_books, tmp_path):
 
     before, after = zipfile.ZipFile(path), zipfile.ZipFile(out)
     assert before.namelist() == after.namelist()
-    sheets = set(cached.sheet_parts(before).values())
+    sheets = set(package.sheet_parts(before).values())
     for name in before.namelist():
         if name not in sheets and name != "xl/workbook.xml":
             assert before.read(name) == after.read(name), f"{name} changed"

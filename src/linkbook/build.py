@@ -4,7 +4,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from . import charts, engine, workbook
+from . import charts, engine, package, workbook
+from .controls import Control
 from .files import write_atomic
 from .model import COLUMN
 from .templates import Template
@@ -72,9 +73,9 @@ def build_file(t: Template, path: Path, with_values: bool = False) -> workbook.B
 
     def write(tmp: Path) -> None:
         built.workbook.save(tmp)
-        if with_values:
-            from .cached import add_cached_values
-            add_cached_values(tmp, tmp, values)
+        controls = {sheet: [Control.of(c) for c in items]
+                    for sheet, items in built.meta.get("controls", {}).items()}
+        package.finish(tmp, tmp, values=values if with_values else None, controls=controls)
 
     write_atomic(path, write)
     return built

@@ -20,6 +20,7 @@ from . import __version__
 from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, RATE_KIND
 from .model import (ACCEL, ANG_ACCEL, ANG_SPEED, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
                     SPEED, Model, Resolver, header, render, unit_text)
+from .controls import control_record
 from .templates import Template
 
 MECH, SWEEP, MOTION_SHEET, CHARTS, GRID, STROKE, META = (
@@ -29,6 +30,7 @@ ROW = "\x00"   # stands for the row number in a rendered sweep formula
 SWEEP_ROW = "\x02"   # the Sweep sheet's row of a Motion row (MOTION_OFFSET rows up)
 MOTION_OFFSET = 2     # Motion row 5: the current position; row 7 on: Sweep row 5 on
 COL = "\x01"   # stands for the column letter in a rendered grid formula
+DRAWING_COLUMNS = ("N", "O")   # x and y of the joints table and of the links the drawing plots
 
 TITLE = Font(bold=True, size=14)
 BOLD = Font(bold=True)
@@ -78,6 +80,7 @@ def build(t: Template) -> Built:
                                        meta["position"])
         _position_motion(ws_mech, t, model, meta["position"], meta["motion"])
     meta["summary"] = _summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1)
+    meta["controls"] = {MECH: _controls(ws_mech, t, meta["inputs"])}
     if t.mechanism.grid:
         meta["grid"] = _grid_sheet(wb.create_sheet(GRID), t, model, names)
         # A grid that already samples a whole turn finely enough is its own stroke sweep.
@@ -242,7 +245,37 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     return {"sheet": MECH, "input_cell": "I7", "input_name": input_name,
             "cells": {k: v for k, v in cells.items() if k != mech.input_column},
             "joints": joints["cells"], "drawing": joints["drawing"],
+            "traced": _traced_joint(model),
             "chart_anchor": f"L{joints['chart_row']}"}
+
+
+def _traced_joint(model: Model) -> str | None:
+    """The joint whose path the drawing shows (its coordinates are the path's columns)."""
+    if not model.path:
+        return None
+    x, y = model.path
+    return next((j.name for j in model.joints if (j.x, j.y) == (f"{{{x}}}", f"{{{y}}}")), None)
+
+
+def _controls(ws, t: Template, inputs: dict) -> list[dict]:
+    """The textbook's spin button, and a scroll bar, linked to the current-position input (I7):
+    a click turns the crank by 1 (degree, or length unit), a page by the sweep's step; a spin
+    button beside the grid parameter's input (the pump's s1). controls.py writes them."""
+    mech = t.mechanism
+    lo, hi = (0, 360) if mech.input_is_angle else (t.sweep.start, t.sweep.stop)
+    page = t.sweep.step
+    ws["G4"] = f"drag or click to move the input {mech.input_word}:"
+    ws["G4"].alignment = Alignment(horizontal="right", vertical="center")
+    # anchors: zero-based column, pixel offset, row, pixel offset (top left, then bottom right)
+    out = [control_record("Scroll", "I7", lo, hi, 1, page, t.position, (7, 0, 3, 2, 10, 0, 3, 18)),
+           control_record("Spin", "I7", lo, hi, 1, page, t.position, (10, 4, 6, 1, 10, 24, 8, 0))]
+    if mech.grid:
+        param = mech.grid[0]
+        row = int(inputs[param]["cell"][1:]) - 1
+        values = t.grid_values
+        out.append(control_record("Spin", inputs[param]["cell"], min(values), max(values), 1,
+                                  1, t.values()[param], (5, 4, row, 1, 5, 24, row + 1, 0)))
+    return [c for c in out if c is not None]
 
 
 def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
@@ -251,12 +284,13 @@ def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
                 (("Link", 8), ("Joint", 8), ("x", 11), ("y", 11)))
     cells: dict[str, list[str]] = {}
     row = 7
+    x_col, y_col = DRAWING_COLUMNS
     for j in model.joints:
         _text(ws, f"M{row}", j.name)
-        for col, expr in (("N", j.x), ("O", j.y)):
+        for col, expr in ((x_col, j.x), (y_col, j.y)):
             ws[f"{col}{row}"] = "=" + render(expr, resolve)
             ws[f"{col}{row}"].number_format = number_format(LENGTH)
-        cells[j.name] = [f"N{row}", f"O{row}"]
+        cells[j.name] = [f"{x_col}{row}", f"{y_col}{row}"]
         row += 1
     drawing = []
     row += 1
@@ -265,9 +299,9 @@ def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
         for name in link:
             _text(ws, f"L{row}", f"link {i}")
             _text(ws, f"M{row}", name)
-            ws[f"N{row}"] = f"={cells[name][0]}"
-            ws[f"O{row}"] = f"={cells[name][1]}"
-            for col in "NO":
+            ws[f"{x_col}{row}"] = f"={cells[name][0]}"
+            ws[f"{y_col}{row}"] = f"={cells[name][1]}"
+            for col in DRAWING_COLUMNS:
                 ws[f"{col}{row}"].number_format = number_format(LENGTH)
             row += 1
         drawing.append({"joints": list(link), "rows": [first, row - 1]})

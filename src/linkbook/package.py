@@ -1,0 +1,292 @@
+"""The last pass over a package openpyxl saved: what openpyxl cannot write, or writes in a form
+that Excel's own validator (the Open XML SDK, `openxml-audit` here) does not accept.
+
+One streaming copy of the zip does all of it:
+- text cells become shared strings (openpyxl writes every text cell as an inline string, which
+  Excel moves into a new shared-strings part the first time it saves);
+- the children of each `<font>` in styles.xml are put in the schema's order (openpyxl writes the
+  default font's `color` after `family`);
+- form controls (controls.py) are added to the sheets that have them;
+- with `values`, every formula cell gets its cached value (cached.py).
+
+Every other part, and every other byte of the parts it touches, is copied unchanged. Worksheet
+parts are streamed in chunks cut at row ends, so a sheet of 90 MB is never in memory twice.
+"""
+from __future__ import annotations
+
+import posixpath
+import re
+import zipfile
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+from defusedxml import ElementTree
+
+from . import cached
+from .controls import CTRL_TYPE, VML_TYPE, Control, SheetControls
+from .files import write_atomic
+
+MAIN_NS = "http://schemas.openxmlformats.org/spreadsheetml/2006/main"
+REL_NS = "http://schemas.openxmlformats.org/officeDocument/2006/relationships"
+PKG_REL_NS = "http://schemas.openxmlformats.org/package/2006/relationships"
+SST_PART = "xl/sharedStrings.xml"
+SST_TYPE = "application/vnd.openxmlformats-officedocument.spreadsheetml.sharedStrings+xml"
+SST_REL = f"{REL_NS}/sharedStrings"
+CHUNK = 4 * 1024 * 1024
+# An inline-string cell as openpyxl writes it (no namespace prefix, `t` after `r` and `s`).
+INLINE = re.compile(rb'<c( [^>]*?) t="inlineStr"([^>]*)><is>(.*?)</is></c>', re.S)
+# CT_Font's children in the schema's order.
+FONT_ORDER = ("b", "i", "strike", "condense", "extend", "outline", "shadow", "u", "vertAlign",
+              "sz", "color", "name", "family", "charset", "scheme")
+# Worksheet children that come after <legacyDrawing> and <controls> (CT_Worksheet's sequence).
+AFTER_CONTROLS = ("webPublishItems", "tableParts", "extLst")
+
+
+def finish(path_in, path_out, *, values: dict | None = None,
+           controls: dict[str, list[Control]] | None = None, tidy: bool = True) -> int:
+    """Copy path_in to path_out, finished (see the module's docstring). `values`: (sheet title,
+    'B7') -> value of formula cells, as cached.add_cached_values takes them; `controls`: sheet
+    title -> its form controls; `tidy`: shared strings and fonts in order. Returns how many formula cells got a cached value. path_out may
+    be path_in: the file is replaced only when the copy is complete."""
+    path_in, path_out = Path(path_in), Path(path_out)
+    with zipfile.ZipFile(path_in) as zin:
+        names = set(zin.namelist())
+        parts = sheet_parts(zin)
+        by_part = _values_by_part(values or {}, parts)
+        strings = _SharedStrings() if tidy and SST_PART not in names else None
+        with_controls = _place_controls(controls or {}, parts, names)
+        rels_added = {sc.sheet_part: sc for sc in with_controls}
+        written = 0
+
+        def copy(tmp: Path) -> None:
+            nonlocal written
+            with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:
+                for info in zin.infolist():
+                    name = info.filename
+                    if name in parts.values():
+                        sc = rels_added.get(name)
+                        tail = _controls_tail(sc, _next_rel_id(zin, name)) if sc else None
+                        written += _copy_sheet(zin, zout, info, by_part.get(name), strings, tail)
+                        continue
+                    data = zin.read(info)
+                    if name == "[Content_Types].xml":
+                        data = _content_types(data, with_controls, strings is not None)
+                    elif name == "xl/_rels/workbook.xml.rels" and strings is not None:
+                        data = _add_relationships(data, [(_free_id(data), SST_REL,
+                                                          "sharedStrings.xml")])
+                    elif name == "xl/styles.xml" and tidy:
+                        data = fonts_in_order(data)
+                    elif name == "xl/workbook.xml" and values is not None:
+                        data = cached.full_calc_on_load(data)
+                    elif (owner := _rels_owner(name)) in rels_added:
+                        data = _add_relationships(
+                            data, rels_added[owner].relationships(_max_id(data) + 1))
+                    zout.writestr(_same_entry(info), data)
+                for sc in with_controls:
+                    rels = _rels_part(sc.sheet_part)
+                    if rels not in names:
+                        zout.writestr(rels, _add_relationships(EMPTY_RELS, sc.relationships(1)))
+                    for part, data in sc.parts().items():
+                        zout.writestr(part, data)
+                if strings is not None:
+                    zout.writestr(SST_PART, strings.xml())
+
+        write_atomic(path_out, copy)
+    return written
+
+
+EMPTY_RELS = f'<Relationships xmlns="{PKG_REL_NS}"></Relationships>'.encode()
+
+
+# ---------------------------------------------------------------- where each sheet lives
+def sheet_parts(zin: zipfile.ZipFile) -> dict[str, str]:
+    """Sheet title -> zip part name, from xl/workbook.xml and its relationships."""
+    book = ElementTree.fromstring(zin.read("xl/workbook.xml"))
+    rels = ElementTree.fromstring(zin.read("xl/_rels/workbook.xml.rels"))
+    targets = {r.get("Id"): r.get("Target") for r in rels.iter(f"{{{PKG_REL_NS}}}Relationship")}
+    parts = {}
+    for sheet in book.iter(f"{{{MAIN_NS}}}sheet"):
+        target = targets.get(sheet.get(f"{{{REL_NS}}}id"))
+        if target:
+            parts[sheet.get("name")] = _part_name(target)
+    return parts
+
+
+def _part_name(target: str) -> str:
+    """A relationship target is relative to xl/ unless it starts with '/'."""
+    if target.startswith("/"):
+        return target.lstrip("/")
+    return posixpath.normpath(posixpath.join("xl", target))
+
+
+def _rels_part(part: str) -> str:
+    folder, name = posixpath.split(part)
+    return posixpath.join(folder, "_rels", name + ".rels")
+
+
+def _rels_owner(rels: str) -> str | None:
+    folder, name = posixpath.split(rels)
+    if posixpath.basename(folder) != "_rels" or not name.endswith(".rels"):
+        return None
+    return posixpath.join(posixpath.dirname(folder), name[:-len(".rels")])
+
+
+def _values_by_part(values: dict, parts: dict[str, str]) -> dict[str, dict[bytes, object]]:
+    by_part: dict[str, dict[bytes, object]] = {}
+    for (sheet, cell), value in values.items():
+        part = parts.get(sheet)
+        if part is not None:
+            by_part.setdefault(part, {})[cell.replace("$", "").upper().encode()] = value
+    return by_part
+
+
+def _same_entry(info: zipfile.ZipInfo) -> zipfile.ZipInfo:
+    """A fresh entry with the original's name, date and compression."""
+    out = zipfile.ZipInfo(info.filename, date_time=info.date_time)
+    out.compress_type = info.compress_type
+    out.external_attr = info.external_attr
+    return out
+
+
+# ---------------------------------------------------------------- worksheet parts
+def _copy_sheet(zin, zout, info, cells: dict[bytes, object] | None,
+                strings: "_SharedStrings | None", tail) -> int:
+    """Stream one worksheet part through the cell rewriters, cut at row ends; `tail` edits
+    what follows the last row (where `<legacyDrawing>` and `<controls>` go)."""
+    count = [0]
+
+    def rewrite(match: re.Match) -> bytes:
+        new = cached.cell_with_value(match, cells)
+        if new is not None:
+            count[0] += 1
+            return new
+        if strings is not None:
+            return strings.cell(match.group(0))
+        return match.group(0)
+
+    def convert(text: bytes) -> bytes:
+        if cells:
+            return cached.CELL.sub(rewrite, text)
+        if strings is not None:
+            return INLINE.sub(strings.inline, text)
+        return text
+
+    with zin.open(info) as src, zout.open(_same_entry(info), "w", force_zip64=True) as dst:
+        pending = b""
+        while chunk := src.read(CHUNK):
+            pending += chunk
+            cut = pending.rfind(b"</row>")
+            if cut < 0:
+                continue
+            cut += len(b"</row>")
+            dst.write(convert(pending[:cut]))
+            pending = pending[cut:]
+        last = convert(pending)
+        dst.write(tail(last) if tail else last)
+    return count[0]
+
+
+class _SharedStrings:
+    """The shared-strings table, filled as the sheets stream by: an inline string's `<is>` and a
+    shared string's `<si>` have the same content model, so the content moves over byte for byte."""
+
+    def __init__(self) -> None:
+        self.index: dict[bytes, int] = {}
+        self.count = 0
+
+    def inline(self, m: re.Match) -> bytes:
+        self.count += 1
+        i = self.index.setdefault(m.group(3), len(self.index))
+        return b"<c" + m.group(1) + b' t="s"' + m.group(2) + b"><v>" + str(i).encode() + b"</v></c>"
+
+    def cell(self, element: bytes) -> bytes:
+        m = INLINE.fullmatch(element)
+        return self.inline(m) if m else element
+
+    def xml(self) -> bytes:
+        items = b"".join(b"<si>" + body + b"</si>" for body in self.index)
+        return (b'<?xml version="1.0" encoding="UTF-8" standalone="yes"?>\n'
+                + f'<sst xmlns="{MAIN_NS}" count="{self.count}" '
+                  f'uniqueCount="{len(self.index)}">'.encode() + items + b"</sst>")
+
+
+# ---------------------------------------------------------------- form controls
+def _place_controls(controls: dict[str, list[Control]], parts: dict[str, str],
+                    names: set[str]) -> list[SheetControls]:
+    """Number the new VML drawings and control property parts after any the package has."""
+    drawing = _highest(names, r"xl/drawings/vmlDrawing(\d+)\.vml")
+    prop = _highest(names, r"xl/ctrlProps/ctrlProp(\d+)\.xml")
+    out = []
+    for sheet, items in controls.items():
+        if sheet not in parts or not items:
+            continue
+        drawing += 1
+        out.append(SheetControls(parts[sheet], tuple(items), drawing, prop + 1))
+        prop += len(items)
+    return out
+
+
+def _highest(names: set[str], pattern: str) -> int:
+    numbers = [int(m.group(1)) for n in names if (m := re.fullmatch(pattern, n))]
+    return max(numbers, default=0)
+
+
+def _next_rel_id(zin: zipfile.ZipFile, sheet_part: str) -> int:
+    rels = _rels_part(sheet_part)
+    return _max_id(zin.read(rels)) + 1 if rels in zin.namelist() else 1
+
+
+def _controls_tail(sc: SheetControls, first_id: int):
+    """Put `<legacyDrawing>` and `<controls>` where CT_Worksheet's sequence wants them: before
+    webPublishItems, tableParts and extLst, or else at the end."""
+    def tail(text: bytes) -> bytes:
+        at = min((i for name in AFTER_CONTROLS
+                  if (i := text.find(b"<" + name.encode())) >= 0),
+                 default=text.rfind(b"</worksheet>"))
+        return text[:at] + sc.sheet_xml(first_id).encode() + text[at:]
+    return tail
+
+
+# ---------------------------------------------------------------- small parts
+def _max_id(rels: bytes) -> int:
+    return max((int(n) for n in re.findall(rb'Id="rId(\d+)"', rels)), default=0)
+
+
+def _free_id(rels: bytes) -> str:
+    return f"rId{_max_id(rels) + 1}"
+
+
+def _add_relationships(rels: bytes, new: list[tuple[str, str, str]]) -> bytes:
+    items = "".join(f"<Relationship Id={quoteattr(i)} Type={quoteattr(t)} "
+                    f"Target={quoteattr(target)}/>" for i, t, target in new)
+    end = rels.rfind(b"</Relationships>")
+    return rels[:end] + items.encode() + rels[end:]
+
+
+def _content_types(xml: bytes, with_controls: list[SheetControls], sst: bool) -> bytes:
+    add = []
+    if with_controls and b'Extension="vml"' not in xml:
+        add.append(f'<Default Extension="vml" ContentType="{VML_TYPE}"/>')
+    for sc in with_controls:
+        for i in range(len(sc.controls)):
+            add.append(f'<Override PartName="/{sc.prop_part(i)}" ContentType="{CTRL_TYPE}"/>')
+    if sst:
+        add.append(f'<Override PartName="/{SST_PART}" ContentType="{SST_TYPE}"/>')
+    end = xml.rfind(b"</Types>")
+    return xml[:end] + "".join(add).encode() + xml[end:]
+
+
+def fonts_in_order(styles: bytes) -> bytes:
+    """styles.xml with each `<font>`'s children in CT_Font's order (openpyxl writes the default
+    font as name, family, color, sz, scheme)."""
+    rank = {name.encode(): i for i, name in enumerate(FONT_ORDER)}
+
+    def order(m: re.Match) -> bytes:
+        children = re.findall(rb"<(\w+)\b[^>]*/>", m.group(2))
+        elements = re.findall(rb"<\w+\b[^>]*/>", m.group(2))
+        if len(elements) != len(children) or b"".join(elements) != m.group(2):
+            return m.group(0)           # not a run of empty elements: leave it alone
+        ordered = sorted(zip(children, elements), key=lambda ce: rank.get(ce[0], len(rank)))
+        return m.group(1) + b"".join(e for _, e in ordered) + m.group(3)
+
+    return re.sub(rb"(<font>)(.*?)(</font>)", order, styles, flags=re.S)
