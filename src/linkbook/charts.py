@@ -12,18 +12,23 @@ from openpyxl.chart import Reference, ScatterChart, Series
 from openpyxl.chart.axis import ChartLines
 from openpyxl.chart.data_source import NumFmt
 from openpyxl.chart.layout import Layout, ManualLayout
+from openpyxl.chart.shapes import GraphicalProperties
 from openpyxl.utils import column_index_from_string, get_column_letter
 
 from .model import ANG_ACCEL, ANG_SPEED, LENGTH, Model, header, unit_text
 from .templates import Template
-from .workbook import CHARTS, GRID, MECH, MOTION_SHEET, SWEEP, Built
+from .workbook import CHARTS, DRAWING_COLUMNS, GRID, MECH, MOTION_SHEET, SWEEP, Built
 
 LINE_EMU = 22000          # 1.7 pt
 DRAWING_CM = 15.0
+# The drawing's colours, set in the file (not left to the theme) so that `linkbook animate`
+# draws each link as the workbook does: link 1, 2, ... then the traced point's path.
+LINK_COLOURS = ("4F81BD", "C0504D", "9BBB59", "F79646", "4BACC6", "1F497D", "948A54")
+PATH_COLOUR = "8064A2"
 
 
 def _series(ws, x_col: str, y_col: str, rows: tuple[int, int], title: str,
-            *, markers: bool = False, width: int = LINE_EMU) -> Series:
+            *, markers: bool = False, width: int = LINE_EMU, colour: str | None = None) -> Series:
     x = Reference(ws, min_col=column_index_from_string(x_col), min_row=rows[0], max_row=rows[1])
     y = Reference(ws, min_col=column_index_from_string(y_col), min_row=rows[0], max_row=rows[1])
     s = Series(y, x, title=title)
@@ -32,6 +37,11 @@ def _series(ws, x_col: str, y_col: str, rows: tuple[int, int], title: str,
     if markers:
         s.marker.size = 7
     s.graphicalProperties.line.width = width
+    if colour:
+        s.graphicalProperties.line.solidFill = colour
+        if markers:
+            s.marker.graphicalProperties = GraphicalProperties(solidFill=colour)
+            s.marker.graphicalProperties.line.solidFill = colour
     return s
 
 
@@ -110,12 +120,14 @@ def _drawing(wb, t, model: Model, meta: dict, values: dict) -> None:
     for i, link in enumerate(pos["drawing"], start=1):
         names = "".join(link["joints"][:-1] if link["joints"][0] == link["joints"][-1]
                         else link["joints"])
-        chart.series.append(_series(ws, "N", "O", tuple(link["rows"]), f"link {i}: {names}",
-                                    markers=True, width=38000))
+        chart.series.append(_series(ws, *DRAWING_COLUMNS, tuple(link["rows"]),
+                                    f"link {i}: {names}", markers=True, width=38000,
+                                    colour=LINK_COLOURS[(i - 1) % len(LINK_COLOURS)]))
     if model.path:
         x_key, y_key = model.path
         chart.series.append(_series(wb[SWEEP], sweep["columns"][x_key], sweep["columns"][y_key],
-                                    rows, f"path of {y_key[1:]}", width=12700))
+                                    rows, f"path of {y_key[1:]}", width=12700,
+                                    colour=PATH_COLOUR))
     xs, ys = [], []
     for joint in model.joints:
         for key, out in ((joint.x, xs), (joint.y, ys)):

@@ -75,6 +75,33 @@ def _parser() -> argparse.ArgumentParser:
                         "(the full ExcelModel, slow), libreoffice (recalculate in soffice)")
     v.add_argument("--json", action="store_true", help="print the report as JSON")
 
+    a = sub.add_parser("animate", help="write a GIF (or MP4) of the mechanism moving through its "
+                                       "sweep",
+                       description="Draw the mechanism at every input value of the book's sweep "
+                                   "(or by --step) and write the frames as a looping GIF: links "
+                                   "coloured as in the workbook's drawing, fixed pivots marked, "
+                                   "the traced point's path as it forms, equal scales on x and "
+                                   "y, the input value on each frame. Each frame is the book's "
+                                   "own drawing data, evaluated with the input cell set to that "
+                                   "value, so a book edited in Excel animates as edited; values "
+                                   "where the loop cannot close (#N/A) are left out, with a "
+                                   "note on the frames. An .mp4 output (H.264) needs the "
+                                   "imageio-ffmpeg package: pip install 'linkbook[video]'.",
+                       epilog="examples:\n  linkbook animate fourbar.xlsx            # fourbar.gif "
+                              "beside it\n  linkbook animate jansen.xlsx -o leg.gif --step 2 "
+                              "--fps 30 --size 800\n  linkbook animate pump.xlsx -o pump.mp4",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    a.add_argument("book", metavar="BOOK.xlsx")
+    a.add_argument("-o", "--output", metavar="OUT.gif",
+                   help="where to write, .gif or .mp4 (default: BOOK.gif next to the book)")
+    a.add_argument("--fps", type=_positive_int(1, 100), default=20,
+                   help="frames per second (1-100, default 20)")
+    a.add_argument("--size", type=_even_size, default=600,
+                   help="width and height in pixels (an even number, 100-4000, default 600)")
+    a.add_argument("--step", type=_positive_float, default=None,
+                   help="input step between frames (degrees, or the length unit for a linear "
+                        "actuator; default: the book's sweep step)")
+
     p = sub.add_parser("preview", help="render every sheet and chart of a workbook to PNG",
                        description="Convert a workbook to PDF with LibreOffice and each page to "
                                    "PNG with pdftoppm (needs soffice and poppler-utils).")
@@ -105,6 +132,8 @@ def _main(argv: list[str] | None) -> int:
             return _verify(args)
         if args.command == "preview":
             return _preview(args)
+        if args.command == "animate":
+            return _animate(args)
     except InputError as exc:
         print(f"linkbook: error: {exc}", file=sys.stderr)
         return 2
@@ -144,6 +173,60 @@ def _print_report(report) -> None:
             print(f"  {m.sheet}!{m.cell}: expected {m.expected}, got {m.got}")
     print(f"{'all agree' if report.ok else 'DISAGREES'}: {report.cells} formula cells, "
           f"max |Δ| {report.max_abs:.2e}")
+
+
+def _positive_int(lo: int, hi: int):
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be from {lo} to {hi} (got {value})")
+        return value
+    return parse
+
+
+def _even_size(text: str) -> int:
+    value = _positive_int(100, 4000)(text)
+    if value % 2:
+        raise argparse.ArgumentTypeError(f"must be even (got {value}): video frames are "
+                                          "made of 2 × 2 blocks")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive number (got {text})")
+    return value
+
+
+def _animate(args) -> int:
+    from .animate import AnimationError, frames_of, render, terminal_progress, write_video
+    from .files import write_atomic
+    from .safety import UnsafeFile
+    book = Path(args.book)
+    out = Path(args.output) if args.output else book.with_suffix(".gif")
+    kind = out.suffix.lower().lstrip(".")
+    if kind not in ("gif", "mp4"):
+        raise InputError("--output", f"a .gif or .mp4 file (got {out.name})")
+    try:
+        if not book.is_file():
+            raise AnimationError(f"{book}: no such file")
+        anim = frames_of(book, args.step)
+        images = render(anim, args.size, terminal_progress())
+        write_atomic(out, lambda tmp: write_video(images, tmp, args.fps, kind))
+    except (AnimationError, UnsafeFile) as exc:
+        print(f"linkbook: error: {exc}", file=sys.stderr)
+        return 2
+    skipped = len(anim.frames) - len(anim.drawn)
+    note = f" ({skipped} left out: the loop cannot close there)" if skipped else ""
+    print(f"wrote {out}: {len(images)} frames{note}")
+    return 0
 
 
 def _preview(args) -> int:

@@ -52,6 +52,7 @@ import contextlib
 import functools
 import io
 import re
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -132,6 +133,13 @@ def evaluate(wb: openpyxl.Workbook, known: dict | None = None) -> dict[tuple[str
     (as this function returns them) of formula cells that are taken as they are, not evaluated:
     the caller vouches that nothing they read has changed since."""
     return Engine(wb, known=known).run()
+
+
+def vary(wb: openpyxl.Workbook, cell: tuple[str, str], inputs, read) -> Iterator[dict]:
+    """For each value of `inputs` put into the input cell `cell` ((sheet title, 'I7')): the
+    values (as evaluate() gives them) of the cells in `read`. The book is evaluated once; then
+    only the formulas downstream of the input cell are evaluated again for each value."""
+    return Engine(wb).vary(cell[0], cell[1], inputs, read)
 
 
 def evaluate_file(path) -> dict[tuple[str, str], object]:
@@ -773,22 +781,26 @@ class Engine:
 
     # ---- pipeline
     def run(self) -> dict[tuple[str, str], object]:
-        if self.groups or self.constants:
-            raise EngineError("an Engine runs once; make a new one")
-        formulas_by_sheet = self._read_cells()
-        self._group(formulas_by_sheet)
-        for g in self.groups:
-            self._plan(g)
-        self._allocate()
+        self._prepare()
         # Overflow warnings would only repeat what the #NUM!/#VALUE! results say; 'ignore' and
         # numpy's default 'warn' give the same values.
         with np.errstate(all="ignore"):
-            for component in self._untangled_components():
+            for component in self.order:
                 self._evaluate_component(component)
         batches = {id(g.batch): g.batch for g in self.groups}.values()   # groups share them
         self.stats["row_by_row_nodes"] = sum(b.row_by_row for b in batches)
         self.stats["numeric_nodes"] = sum(b.numeric for b in batches)
         return self._values()
+
+    def _prepare(self) -> None:
+        """Group, plan, allocate and order: everything but the evaluation."""
+        if self.groups or self.constants:
+            raise EngineError("an Engine runs once; make a new one")
+        self._group(self._read_cells())
+        for g in self.groups:
+            self._plan(g)
+        self._allocate()
+        self.order = self._untangled_components()
 
     # ---- 1. cells
     def _read_cells(self) -> dict[str, list[tuple[int, int, str]]]:
@@ -1034,24 +1046,147 @@ class Engine:
 
     # ---- 5. order
     def _group_deps(self, g: Group) -> set[int]:
-        deps = set()
+        deps = self._found_in(g, self.owner)
+        deps.discard(-1)
+        return deps
+
+    def _found_in(self, g: Group, grids: dict[str, np.ndarray]) -> set[int]:
+        """The values of `grids` (one per sheet, shaped like the value grid) over every cell
+        that group g reads."""
+        found = set()
         if g.mode == "each":
             for i in range(len(g.members)):
                 for sheet, r1, c1, r2, c2 in g.reads(i):
-                    deps.update(np.unique(self.owner[sheet][r1:r2 + 1, c1:c2 + 1]).tolist())
+                    found.update(np.unique(grids[sheet][r1:r2 + 1, c1:c2 + 1]).tolist())
         else:
             for d in g.inputs:
-                owner = self.owner[d.sheet]
+                grid = grids[d.sheet]
                 if not d.is_range:
                     r1, c1, _, _ = d.at(g.rows, g.cols)
-                    deps.update(np.unique(owner[r1, c1]).tolist())
+                    found.update(np.unique(grid[r1, c1]).tolist())
                     continue
                 hosts = [(g.rows[0], g.cols[0])] if d.is_absolute else zip(g.rows, g.cols)
                 for row, col in hosts:
                     _, r1, c1, r2, c2 = d.rect(int(row), int(col))
-                    deps.update(np.unique(owner[r1:r2 + 1, c1:c2 + 1]).tolist())
-        deps.discard(-1)
-        return deps
+                    found.update(np.unique(grid[r1:r2 + 1, c1:c2 + 1]).tolist())
+        return found
+
+    def vary(self, sheet: str, cell: str, inputs, read) -> Iterator[dict]:
+        """For each value of `inputs` put into the constant cell (sheet, cell), the values of
+        the cells `read` ((sheet, 'B7') each; None for a cell outside every sheet).
+
+        Only what the read cells need is evaluated: once what does not move with the input,
+        then what does, once for all the input values together: the input values are one more
+        batch dimension of the compiled vector functions (a group that cannot take it is
+        evaluated value by value, cell by cell). Groups count whole, so a little more than
+        needed may be evaluated, never less."""
+        self._prepare()
+        row, col = openpyxl.utils.cell.coordinate_to_tuple(cell)
+        grid = self.grid.get(sheet)
+        if grid is None or row >= grid.shape[0] or col >= grid.shape[1]:
+            raise EngineError(f"no cell {sheet}!{cell}")
+        if self.owner[sheet][row, col] >= 0:
+            raise EngineError(f"{sheet}!{cell} holds a formula, not an input value")
+        targets = []
+        for s, a1 in read:
+            r, c = openpyxl.utils.cell.coordinate_to_tuple(a1)
+            if s in self.grid and r < self.grid[s].shape[0] and c < self.grid[s].shape[1]:
+                targets.append((s, a1, r, c))
+        deps = {g.gid: self._group_deps(g) for g in self.groups}
+        needed = _closure({int(self.owner[s][r, c]) for s, _, r, c in targets} - {-1}, deps)
+        with np.errstate(all="ignore"):
+            for component in self.order:          # what the read cells need, once
+                if needed.intersection(component):
+                    self._evaluate_component(component)
+        inputs = list(inputs)
+        varying = {(sheet, row, col): np.array(inputs, dtype=object)}
+        readers: dict[int, set[int]] = {}
+        for gid, ds in deps.items():
+            for d in ds:
+                readers.setdefault(d, set()).add(gid)
+        marks = {s: np.zeros(g.shape, dtype=np.int8) for s, g in self.grid.items()}
+        marks[sheet][row, col] = 1
+        first = {gid for gid in needed if 1 in self._found_in(self.groups[gid], marks)}
+        reached = _closure(first, readers) & needed
+        with np.errstate(all="ignore"):
+            for component in self.order:          # then what moves with the input, per value
+                if not reached.intersection(component):
+                    continue
+                if len(component) == 1 and component[0] not in self.self_reading \
+                        and self._vary_vector(self.groups[component[0]], varying, len(inputs)):
+                    continue
+                self._vary_cells(component, varying, len(inputs))
+        for f in range(len(inputs)):
+            out = dict.fromkeys(read)
+            for s, a1, r, c in targets:
+                value = varying[(s, r, c)][f] if (s, r, c) in varying else self.grid[s][r, c]
+                out[(s, a1)] = _public_value(value, self.owner[s][r, c] >= 0)
+            yield out
+
+    def _vary_vector(self, g: Group, varying: dict, n: int) -> bool:
+        """One call of g's vector function for all members × all input values; False (nothing
+        stored) where g has no vector form or the result is not one value per row."""
+        if g.mode not in ("vector", "cell") or not g.info.functions <= VECTOR_SAFE \
+                or any(d.is_range for d in g.inputs):
+            return False
+        func, batch, inputs = ((g.func, g.batch, g.inputs) if g.mode == "vector"
+                               else self._vector_form(g))
+        if func is None:
+            return False
+        m = len(g.members)
+        args = []
+        for d in inputs:
+            r1, c1, _, _ = d.at(g.rows, g.cols)
+            rows, cols = np.broadcast_arrays(r1, c1, g.rows)[:2]
+            column = np.empty((m, n), dtype=object)
+            for i, (r, c) in enumerate(zip(rows.tolist(), cols.tolist())):
+                column[i, :] = varying.get((d.sheet, r, c), self.grid[d.sheet][r, c])
+            args.append(column.reshape(m * n, 1))
+        batch.n = m * n
+        try:
+            out = _replace_empty(np.asarray(_call(func, args), dtype=object))
+        except Exception:
+            return False
+        finally:
+            batch.n = 1
+        if out.size != m * n or any(isinstance(v, np.ndarray) for v in out.reshape(-1)):
+            return False
+        out = out.reshape(m, n)
+        for i, member in enumerate(g.members):
+            values = np.empty(n, dtype=object)
+            values[:] = list(out[i])
+            varying[(g.sheet, member.row, member.col)] = values
+        return True
+
+    def _vector_form(self, g: Group):
+        """(vector-compiled function, its batch, the reference behind each of its inputs) of a
+        group planned cell by cell; (None, None, None) where it has none."""
+        rep = self._representative(g)
+        if rep is None:
+            return None, None, None
+        mode, batch, info = g.mode, g.batch, g.info
+        g.mode, g.batch = "vector", _Batch()
+        try:
+            compiled = self._compiled(g, *rep)
+            if compiled is None:
+                return None, None, None
+            func, positions = compiled
+            return func, g.batch, [g.descs[i] for i in positions]  # the batch may be a cached one
+        finally:
+            g.mode, g.batch, g.info = mode, batch, info
+
+    def _vary_cells(self, component: list[int], varying: dict, n: int) -> None:
+        """The fallback: the component evaluated cell by cell, once per input value."""
+        cells = [(self.groups[gid].sheet, m.row, m.col)
+                 for gid in component for m in self.groups[gid].members]
+        results = {key: np.empty(n, dtype=object) for key in cells}
+        for f in range(n):
+            for (s, r, c), values in varying.items():
+                self.grid[s][r, c] = values[f]
+            self._evaluate_component(component)
+            for key in cells:
+                results[key][f] = self.grid[key[0]][key[1], key[2]]
+        varying.update(results)
 
     def _components(self) -> list[list[int]]:
         """Strongly connected components of the group graph, dependencies first (Tarjan)."""
@@ -1255,6 +1390,17 @@ class Engine:
             for m in g.members:
                 out[(g.sheet, _a1(m.row, m.col))] = _public_value(grid[m.row, m.col], True)
         return out
+
+
+def _closure(start: set[int], edges: dict[int, set[int]]) -> set[int]:
+    """Every node reached from `start` along `edges` (start included)."""
+    reached, todo = set(start), list(start)
+    while todo:
+        for nxt in edges.get(todo.pop(), ()):
+            if nxt not in reached:
+                reached.add(nxt)
+                todo.append(nxt)
+    return reached
 
 
 def _same_cells(desc: RefDesc, template, rep: _Member, host_sheet: str, refs: References) -> bool:

@@ -1,0 +1,370 @@
+"""`linkbook animate`: the mechanism drawing over the whole sweep, as a GIF.
+
+Every frame is what the workbook's own drawing shows when its input cell (the one the spin
+button moves) holds that frame's value: the book's formulas are evaluated by the fast engine
+with the input cell set, and the links are read from the drawing data the chart plots. So a book
+edited in Excel animates as edited. Only the cells downstream of the input cell are evaluated
+again for each frame (engine.downstream).
+
+Frames where the drawing data is not a number (#N/A: the loop cannot close there) are left out,
+and a note on every frame says how many were.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from . import engine
+from . import workbook as layout
+from .charts import LINK_COLOURS, PATH_COLOUR
+
+DEFAULT_FPS = 20
+DEFAULT_SIZE = 600
+MAX_FRAMES = 3600
+MAX_SIZE = 4000
+
+
+class AnimationError(Exception):
+    """The book cannot be animated (said in one line)."""
+
+
+@dataclass
+class Frame:
+    value: float                                       # the input (degrees or length)
+    links: list[list[tuple[float, float]]] | None      # None: the loop cannot close here
+    points: dict[str, tuple[float, float]] = field(default_factory=dict)
+
+
+@dataclass
+class Animation:
+    title: str
+    symbol: str                   # θ12, s
+    unit: str                     # deg or the length unit
+    length_unit: str
+    link_names: list[str]
+    traced: str | None
+    frames: list[Frame]
+    whole_turn: bool = True       # else the GIF plays forward, then back
+
+
+    @property
+    def drawn(self) -> list[Frame]:
+        return [f for f in self.frames if f.links is not None]
+
+
+def frames_of(path: Path, step: float | None = None) -> Animation:
+    """Evaluate the book at every input value of its sweep (or from the sweep's start to its end
+    by `step`) and read the drawing data of each."""
+    from .safety import load_workbook_safely
+    wb = load_workbook_safely(path)
+    meta = layout.read_meta(wb)
+    if meta is None or "position" not in meta or "sweep" not in meta:
+        raise AnimationError(f"{path}: not a linkbook workbook (no build record sheet)")
+    pos, sweep = meta["position"], meta["sweep"]
+    sheet, cell = pos["sheet"], pos["input_cell"]
+    if sheet not in wb.sheetnames:
+        raise AnimationError(f"{path}: the sheet {sheet!r} is missing")
+    inputs = _input_values(_sweep_column(wb, sweep), step)
+    x_col, y_col = layout.DRAWING_COLUMNS
+    read = [(sheet, f"{col}{r}") for link in pos["drawing"] for r in range(link["rows"][0],
+                                                                        link["rows"][1] + 1)
+            for col in (x_col, y_col)] + [(sheet, c) for xy in pos["joints"].values() for c in xy]
+    try:
+        frames = [_frame(now, sheet, pos, value)
+                  for value, now in zip(inputs, engine.vary(wb, (sheet, cell), inputs, read))]
+    except engine.EngineError as exc:
+        raise AnimationError(f"{path}: {exc}") from None
+    symbol, unit = _input_label(wb, sheet, cell, meta)
+    return Animation(meta.get("title", path.stem), symbol, unit, meta.get("length_unit", ""),
+                     _link_names(pos), pos.get("traced"), frames,
+                     whole_turn=abs(inputs[-1] + (inputs[1] - inputs[0]) - inputs[0] - 360.0)
+                     < 1e-9)
+
+
+def _sweep_column(wb, sweep: dict) -> list[float]:
+    """The Sweep sheet's input column as the book holds it now (numbers only)."""
+    if sweep.get("sheet") not in wb.sheetnames:
+        raise AnimationError(f"the sheet {sweep.get('sheet')!r} is missing")
+    ws = wb[sweep["sheet"]]
+    first, last = sweep["rows"]
+    column = [ws[f"A{r}"].value for r in range(first, last + 1)]
+    return [float(v) for v in column if _number(v)]
+
+
+def _input_values(column: list[float], step: float | None) -> list[float]:
+    """The sweep's own input values, or its range by `step`. A whole turn leaves out its last
+    value, the first one again, so that the GIF loops smoothly."""
+    if len(column) < 2:
+        raise AnimationError("the Sweep sheet's input column holds fewer than two numbers")
+    start, stop = column[0], column[-1]
+    if step is not None:
+        count = int(math.floor((stop - start) / step + 1e-9)) + 1
+        if count > MAX_FRAMES:
+            raise AnimationError(f"--step {step:g} makes {count} frames (at most {MAX_FRAMES})")
+        column = [start + i * step for i in range(count)]
+    if abs((column[-1] - column[0]) - 360.0) < 1e-9 and len(column) > 2:
+        column = column[:-1]
+    return column
+
+
+def _frame(values: dict, sheet: str, pos: dict, value: float) -> Frame:
+    x_col, y_col = layout.DRAWING_COLUMNS
+    links = []
+    for link in pos["drawing"]:
+        r0, r1 = link["rows"]
+        xy = [(values.get((sheet, f"{x_col}{r}")), values.get((sheet, f"{y_col}{r}")))
+              for r in range(r0, r1 + 1)]
+        if not all(_number(x) and _number(y) for x, y in xy):
+            return Frame(value, None)
+        links.append([(float(x), float(y)) for x, y in xy])
+    points = {}
+    for name, (cx, cy) in pos["joints"].items():
+        x, y = values.get((sheet, cx)), values.get((sheet, cy))
+        if _number(x) and _number(y):
+            points[name] = (float(x), float(y))
+    return Frame(value, links, points)
+
+
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _link_names(pos: dict) -> list[str]:
+    names = []
+    for i, link in enumerate(pos["drawing"], start=1):
+        joints = link["joints"]
+        body = joints[:-1] if len(joints) > 2 and joints[0] == joints[-1] else joints
+        names.append(f"link {i}: {''.join(body)}")
+    return names
+
+
+def _input_label(wb, sheet: str, cell: str, meta: dict) -> tuple[str, str]:
+    """The input's symbol and unit as the book labels them (the cells beside the input)."""
+    ws = wb[sheet]
+    row = int("".join(ch for ch in cell if ch.isdigit()))
+    symbol = ws[f"H{row}"].value
+    unit = ws[f"J{row}"].value
+    return (symbol if isinstance(symbol, str) else meta.get("input", "input"),
+            unit if isinstance(unit, str) else "")
+
+
+# ---------------------------------------------------------------- drawing
+class _View:
+    """Model coordinates to pixels: equal scales on x and y, y up."""
+
+    def __init__(self, frames: list[Frame], box: tuple[int, int, int, int]):
+        xs = [x for f in frames for link in f.links for x, _ in link]
+        ys = [y for f in frames for link in f.links for _, y in link]
+        left, top, right, bottom = box
+        span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-12) * 1.08
+        self.scale = min(right - left, bottom - top) / span
+        self.cx, self.cy = (max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2
+        self.px, self.py = (left + right) / 2, (top + bottom) / 2
+        self.box = box
+        self.lo_x, self.hi_x = self.cx - (right - left) / 2 / self.scale, \
+            self.cx + (right - left) / 2 / self.scale
+        self.lo_y, self.hi_y = self.cy - (bottom - top) / 2 / self.scale, \
+            self.cy + (bottom - top) / 2 / self.scale
+
+    def __call__(self, x: float, y: float) -> tuple[float, float]:
+        return self.px + (x - self.cx) * self.scale, self.py - (y - self.cy) * self.scale
+
+
+def _nice_step(span: float) -> float:
+    raw = span / 6
+    power = 10 ** math.floor(math.log10(raw))
+    return next(m * power for m in (1, 2, 2.5, 5, 10) if m * power >= raw)
+
+
+def _tick(v: float, step: float) -> str:
+    decimals = max(0, -int(math.floor(math.log10(step))))
+    return f"{v:.{decimals}f}" if decimals else f"{v:.0f}"
+
+
+def render(anim: Animation, size: int = DEFAULT_SIZE, progress=None) -> list:
+    """One RGB image per drawn frame (and, unless the input makes a whole turn, the same frames
+    again backwards, so that the loop has no jump)."""
+    from PIL import Image, ImageDraw, ImageFont
+    drawn = anim.drawn
+    if not drawn:
+        raise AnimationError("the loop cannot close at any input value: nothing to draw")
+    font = _font(ImageFont, max(11, size // 45))
+    small = _font(ImageFont, max(10, size // 55))
+    margin_l, margin_t = int(size * 0.11), int(size * 0.09)
+    legend_h = int(size * 0.06) * ((len(anim.link_names) + (1 if anim.traced else 0) + 2) // 3)
+    plot = (margin_l, margin_t, size - int(size * 0.04), size - int(size * 0.09) - legend_h)
+    view = _View(drawn, plot)
+    fixed = _fixed_points(drawn)
+    skipped = len(anim.frames) - len(drawn)
+    background = _background(Image, ImageDraw, anim, view, size, font, small, skipped, legend_h)
+    pieces: list[list[tuple[float, float]]] = [[]]    # the path, cut where frames are left out
+    images = []
+    for frame in anim.frames:
+        if frame.links is None:
+            if pieces[-1]:
+                pieces.append([])
+            continue
+        im = background.copy()
+        d = ImageDraw.Draw(im)
+        if anim.traced and anim.traced in frame.points:
+            pieces[-1].append(view(*frame.points[anim.traced]))
+            for piece in pieces:
+                if len(piece) > 1:
+                    d.line(piece, fill=PATH_COLOUR_RGB, width=max(1, size // 300))
+        width = max(2, size // 120)
+        for k, link in enumerate(frame.links):
+            colour = _rgb(LINK_COLOURS[k % len(LINK_COLOURS)])
+            pts = [view(x, y) for x, y in link]
+            d.line(pts, fill=colour, width=width, joint="curve")
+            r = width * 1.3
+            for px, py in pts:
+                d.ellipse((px - r, py - r, px + r, py + r), fill=colour)
+        for name in fixed:
+            _ground_mark(d, view(*drawn[0].points[name]), size)
+        d.text((plot[0] + 6, plot[1] + 4), f"{anim.symbol} = {_format_input(frame.value, anim.unit)}",
+               fill=(0, 0, 0), font=font)
+        images.append(im)
+        if progress:
+            progress(len(images), len(drawn))
+    if not anim.whole_turn and len(images) > 2:
+        images += images[-2:0:-1]         # an actuator's stroke, or part of a turn: and back
+    return images
+
+
+PATH_COLOUR_RGB = tuple(int(PATH_COLOUR[i:i + 2], 16) for i in (0, 2, 4))
+
+
+def _rgb(hex6: str) -> tuple[int, int, int]:
+    return tuple(int(hex6[i:i + 2], 16) for i in (0, 2, 4))
+
+
+def _format_input(v: float, unit: str) -> str:
+    number = f"{v:.0f}" if abs(v - round(v)) < 1e-9 else f"{v:.2f}"
+    return f"{number}°" if unit == "deg" else f"{number} {unit}".rstrip()
+
+
+def _font(ImageFont, px: int):
+    for name in ("DejaVuSans.ttf", "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+                 "LiberationSans-Regular.ttf", "Carlito-Regular.ttf"):
+        try:
+            return ImageFont.truetype(name, px)
+        except OSError:
+            continue
+    return ImageFont.load_default()
+
+
+def _fixed_points(frames: list[Frame]) -> list[str]:
+    """Joints that do not move over the sweep: the fixed pivots."""
+    names = set(frames[0].points)
+    for f in frames[1:]:
+        names &= set(f.points)
+    scale = max((abs(c) for f in frames for p in f.points.values() for c in p), default=1.0)
+    return sorted(n for n in names
+                  if all(math.dist(f.points[n], frames[0].points[n]) <= 1e-9 * scale
+                         for f in frames))
+
+
+def _ground_mark(d, at: tuple[float, float], size: int) -> None:
+    """A fixed pivot: a triangle under the joint and a hatched ground line."""
+    x, y = at
+    h = size / 45
+    d.polygon([(x, y), (x - h * 0.7, y + h), (x + h * 0.7, y + h)], outline=(0, 0, 0),
+              fill=(235, 235, 235))
+    d.line([(x - h, y + h), (x + h, y + h)], fill=(0, 0, 0), width=2)
+    for k in range(5):
+        sx = x - h + k * h / 2
+        d.line([(sx, y + h), (sx - h / 3, y + h * 1.35)], fill=(0, 0, 0), width=1)
+
+
+def _background(Image, ImageDraw, anim: Animation, view: _View, size: int, font, small,
+                skipped: int, legend_h: int):
+    im = Image.new("RGB", (size, size), (255, 255, 255))
+    d = ImageDraw.Draw(im)
+    left, top, right, bottom = view.box
+    d.text((size / 2, top * 0.45), anim.title, fill=(0, 0, 0), font=font, anchor="mm")
+    step = _nice_step(min(view.hi_x - view.lo_x, view.hi_y - view.lo_y))
+    for lo, hi, vertical in ((view.lo_x, view.hi_x, True), (view.lo_y, view.hi_y, False)):
+        v = math.ceil(lo / step) * step
+        while v <= hi + 1e-12 * step:
+            if vertical:
+                px, _ = view(v, view.cy)
+                d.line([(px, top), (px, bottom)], fill=(225, 225, 225))
+                d.text((px, bottom + 4), _tick(v, step), fill=(80, 80, 80), font=small,
+                       anchor="mt")
+            else:
+                _, py = view(view.cx, v)
+                d.line([(left, py), (right, py)], fill=(225, 225, 225))
+                d.text((left - 4, py), _tick(v, step), fill=(80, 80, 80), font=small,
+                       anchor="rm")
+            v += step
+    d.rectangle(view.box, outline=(150, 150, 150))
+    unit = anim.length_unit
+    d.text(((left + right) / 2, bottom + 6 + small.size), f"x [{unit}]", fill=(0, 0, 0),
+           font=small, anchor="mt")
+    d.text((4, (top + bottom) / 2), f"y [{unit}]", fill=(0, 0, 0), font=small, anchor="lm")
+    entries = [(name, _rgb(LINK_COLOURS[k % len(LINK_COLOURS)]))
+               for k, name in enumerate(anim.link_names)]
+    if anim.traced:
+        entries.append((f"path of {anim.traced}", PATH_COLOUR_RGB))
+    row_h = legend_h / max(1, (len(entries) + 2) // 3)
+    y0 = size - legend_h - (size * 0.02)
+    for k, (name, colour) in enumerate(entries):
+        x = left + (k % 3) * (right - left) / 3
+        y = y0 + (k // 3) * row_h + row_h / 2
+        d.line([(x, y), (x + 22, y)], fill=colour, width=4)
+        d.text((x + 28, y), name, fill=(0, 0, 0), font=small, anchor="lm")
+    if skipped:
+        d.text((size / 2, top * 0.8), f"{skipped} of {len(anim.frames)} input values left "
+                                      "out: the loop cannot close there", fill=(170, 0, 0),
+               font=small, anchor="mm")
+    return im
+
+
+def write_video(images: list, out: Path, fps: int, kind: str) -> None:
+    """A GIF (Pillow), or an H.264 MP4 (the ffmpeg that the imageio-ffmpeg package ships)."""
+    if kind == "gif":
+        write_gif(images, out, fps)
+    else:
+        write_mp4(images, out, fps)
+
+
+def write_mp4(images: list, out: Path, fps: int) -> None:
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        raise AnimationError("writing .mp4 needs the imageio-ffmpeg package: "
+                             "pip install 'linkbook[video]' (or write a .gif)") from None
+    width, height = images[0].size
+    writer = imageio_ffmpeg.write_frames(
+        str(out), (width, height), fps=fps, codec="libx264", pix_fmt_out="yuv420p",
+        macro_block_size=2, quality=7, output_params=["-f", "mp4", "-movflags", "+faststart"])
+    writer.send(None)
+    for im in images:
+        writer.send(im.tobytes())
+    writer.close()
+
+
+def write_gif(images: list, out: Path, fps: int) -> None:
+    """A looping GIF, one palette for all frames (the background's and the links' colours)."""
+    from PIL import Image
+    palette_source = images[len(images) // 2].quantize(colors=64, method=Image.Quantize.MEDIANCUT)
+    frames = [im.quantize(palette=palette_source, dither=Image.Dither.NONE) for im in images]
+    frames[0].save(out, save_all=True, append_images=frames[1:], duration=round(1000 / fps),
+                   loop=0, optimize=False, disposal=1, format="GIF")
+
+
+def terminal_progress(stream=sys.stderr):
+    """A one-line progress bar on a terminal; nothing when the output is not one."""
+    if not stream.isatty():
+        return None
+
+    def show(done: int, total: int) -> None:
+        width = 30
+        filled = round(width * done / total)
+        stream.write(f"\r  [{'#' * filled}{'.' * (width - filled)}] {done}/{total} frames")
+        if done == total:
+            stream.write("\n")
+        stream.flush()
+    return show
