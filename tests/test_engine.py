@@ -172,12 +172,14 @@ def edge_book(sheet: str = "Data sheet") -> openpyxl.Workbook:
 def test_constants_names_and_empty_cells_match_excel_model(tmp_path):
     path = tmp_path / "edge.xlsx"
     edge_book().save(path)
-    ours = engine.evaluate_file(path)
+    ours = engine.evaluate_file(path, excel_model_constants=True)
     compare(ours, engine.evaluate_formulas_model(path))
-    compare(engine.evaluate(edge_book()), ours)
+    compare(engine.evaluate(edge_book(), excel_model_constants=True), ours)
     assert ours[("Other 2", "B1")] == "5x"          # 5.0 is saved as 5
     assert ours[("Data sheet", "A8")] == 0.0          # 1e-17 rounded to 15 decimals, as ExcelModel
     assert ours[("Other 2", "B7")] == 1.0             # a name of an empty cell is 0
+    # without ExcelModel's rounding, a constant is the double the file holds (as in Excel)
+    assert engine.evaluate_file(path)[("Data sheet", "A8")] == 1e-17
 
 
 def test_sheet_name_with_apostrophe():

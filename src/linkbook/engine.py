@@ -125,14 +125,18 @@ class CircularReferenceError(EngineError):
 
 # --------------------------------------------------------------------------- public API
 
-def evaluate(wb: openpyxl.Workbook, known: dict | None = None) -> dict[tuple[str, str], object]:
+def evaluate(wb: openpyxl.Workbook, known: dict | None = None,
+             excel_model_constants: bool = False) -> dict[tuple[str, str], object]:
     """Value of every non-empty cell of every worksheet, keyed by (sheet title, 'B7').
 
     Formula cells get a float, a `formulas` XlError (#N/A, #NUM!, #DIV/0!, ...), or a str/bool
     where the formula yields one; constants keep their type (ints stay ints).  `known`: values
     (as this function returns them) of formula cells that are taken as they are, not evaluated:
-    the caller vouches that nothing they read has changed since."""
-    return Engine(wb, known=known).run()
+    the caller vouches that nothing they read has changed since. Number constants are read as
+    the double the file holds, as Excel and LibreOffice read them; `excel_model_constants`
+    rounds them to 15 decimals first, as formulas.ExcelModel does (which loses digits of small
+    numbers: 1.2345678901234e-5 becomes 1.2345678901e-5), for bit-for-bit comparisons with it."""
+    return Engine(wb, known=known, excel_model_constants=excel_model_constants).run()
 
 
 def vary(wb: openpyxl.Workbook, cell: tuple[str, str], inputs, read) -> Iterator[dict]:
@@ -142,9 +146,10 @@ def vary(wb: openpyxl.Workbook, cell: tuple[str, str], inputs, read) -> Iterator
     return Engine(wb).vary(cell[0], cell[1], inputs, read)
 
 
-def evaluate_file(path) -> dict[tuple[str, str], object]:
+def evaluate_file(path, excel_model_constants: bool = False) -> dict[tuple[str, str], object]:
     """evaluate() of the workbook at `path`, loaded with its formulas (not data_only)."""
-    return evaluate(openpyxl.load_workbook(path, data_only=False))
+    return evaluate(openpyxl.load_workbook(path, data_only=False),
+                    excel_model_constants=excel_model_constants)
 
 
 def shape_of(formula: str, cell: str, sheet: str = "Sheet", wb=None) -> str:
@@ -383,7 +388,7 @@ class References:
     def sheet(self, text: str) -> str:
         title = self.titles.get(text.upper())
         if title is None:
-            raise UnsupportedFormulaError(f"reference to unknown sheet {text!r}")
+            raise UnsupportedFormulaError(f"the sheet {text!r} does not exist in the workbook")
         return title
 
     def is_name(self, ident: str) -> bool:
@@ -408,7 +413,10 @@ class References:
         if parsed is None:
             if _NAME_TEXT.match(text) and self.is_name(text):
                 return self.name(text)
-            raise UnsupportedFormulaError(f"unsupported reference {text!r}")
+            if _NAME_TEXT.match(text):
+                raise UnsupportedFormulaError(f"the name {text} is not defined in the workbook")
+            raise UnsupportedFormulaError(f"the reference {text!r} (a whole row or column, or "
+                                          "not a cell or range) cannot be evaluated here")
         sheet = self.sheet(parsed[0]) if parsed[0] is not None else host_sheet
         return self._desc((sheet, parsed[1]), row, col)
 
@@ -503,7 +511,8 @@ def _tokenize(formula: str) -> TokenInfo:
     for tok in tokens:
         if isinstance(tok, Range):
             if tok.attr.get("indirect") or tok.attr.get("anchor"):
-                raise UnsupportedFormulaError(f"dynamic reference in {formula!r}")
+                raise UnsupportedFormulaError("a reference made at run time (INDIRECT, OFFSET) "
+                                              "cannot be evaluated here")
             text = tok.source[:tok.end_match]
             start = len(formula) - len(tok.source) + len(text) - len(text.lstrip())
             spans.append((start, start + len(text.strip())))
@@ -516,7 +525,8 @@ def _tokenize(formula: str) -> TokenInfo:
             functions.add(tok.name)
     bad = functions & DYNAMIC
     if bad:
-        raise UnsupportedFormulaError(f"{sorted(bad)} in {formula!r}")
+        raise UnsupportedFormulaError(f"{', '.join(sorted(bad))} cannot be evaluated here (its "
+                                      f"result depends on more than the cells it names)")
     return TokenInfo(spans, keys, functions, builder)
 
 
@@ -765,8 +775,10 @@ class Group:
 class Engine:
     """One evaluation of one workbook; `stats` tells how it was grouped and run."""
 
-    def __init__(self, wb: openpyxl.Workbook, vectorize: bool = True, known: dict | None = None):
+    def __init__(self, wb: openpyxl.Workbook, vectorize: bool = True, known: dict | None = None,
+                 excel_model_constants: bool = False):
         self.wb = wb
+        self.excel_model_constants = excel_model_constants
         self.known = known or {}
         self.vectorize = vectorize
         self.refs = References.of(wb)
@@ -817,7 +829,7 @@ class Engine:
                         continue
                     forms.append((row, col, _formula_text(cell)))
                 else:
-                    value = _constant(cell)
+                    value = _constant(cell, self.excel_model_constants)
                     if value is not None:
                         consts[(row, col)] = value
             forms.sort()
@@ -1004,7 +1016,8 @@ class Engine:
     def _range_rect(self, r: dict, host_sheet: str):
         r1, r2, c1, c2 = int(r["r1"]), int(r["r2"]), r["n1"], r["n2"]
         if not (1 <= r1 <= r2 < MAX_ROW and 1 <= c1 <= c2 < MAX_COL):
-            raise UnsupportedFormulaError(f"whole-row/column or invalid range {r['name']!r}")
+            raise UnsupportedFormulaError(f"the whole-row/column or invalid range {r['name']!r} "
+                                          "cannot be evaluated here")
         sid = r.get("sheet_id") or ""
         if sid.startswith("'"):
             sid = sid[1:-1].replace("''", "'")
@@ -1429,15 +1442,16 @@ def _formula_text(cell) -> str:
     return value[1:] if value.startswith("==") else value
 
 
-def _constant(cell):
-    """A constant as ExcelModel sees it after a save: '%.16g' numbers, floats rounded to 15."""
+def _constant(cell, excel_model: bool = False):
+    """A constant as it reads after a save ('%.16g' numbers); with `excel_model`, floats
+    rounded to 15 decimals as ExcelModel rounds them."""
     value, kind = cell.value, cell.data_type
     if kind == "n" and not isinstance(value, bool):
         text = safe_string(value)
         if text == "":
             return None  # NaN and infinities are written as empty cells
         value = float(text) if any(ch in text for ch in ".eE") else int(text)
-        return round(value, 15) if isinstance(value, float) else value
+        return round(value, 15) if excel_model and isinstance(value, float) else value
     if value == "":
         return None  # saved as an empty inline string, read back as no value
     if kind == "e":
