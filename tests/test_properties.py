@@ -15,7 +15,8 @@ from hypothesis import strategies as st
 from conftest import checks_of, formula_cells
 from linkbook import engine, templates, workbook
 from linkbook.language import STEP_KEYS
-from linkbook.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, RATE_KIND
+from linkbook.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
+                                 OFFSET_KIND, RATE_KIND)
 
 EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
 TALLY: Counter = Counter()
@@ -82,3 +83,42 @@ def test_every_step_type_is_covered():
     used = {step["type"] for name in FAMILIES
             for step in templates.load(name).mechanism.description["steps"]}
     assert used == set(STEP_KEYS), set(STEP_KEYS) - used
+
+
+MAGNITUDE_EXAMPLES = int(os.environ.get("LINKBOOK_MAGNITUDE_EXAMPLES", "60"))
+
+
+def scaled(t: templates.Template, factor: float) -> templates.Template:
+    """The same mechanism in another length unit: every length, offset, actuator length and
+    linear rate times `factor`; angles, branches and angular rates as they are."""
+    linear_rates = set(MOTION_SYMBOLS[LENGTH_KIND])
+    params = tuple(dataclasses.replace(p, value=p.value * factor)
+                   if p.kind in (LENGTH_KIND, OFFSET_KIND)
+                   or (p.kind == RATE_KIND and p.symbol in linear_rates) else p
+                   for p in t.parameters)
+    sweep, position = t.sweep, t.position
+    if not t.mechanism.input_is_angle:
+        sweep = templates.Sweep(sweep.start * factor, sweep.stop * factor, sweep.step * factor)
+        position *= factor
+    return dataclasses.replace(t, parameters=params, sweep=sweep, position=position,
+                               grid_values=tuple(v * factor for v in t.grid_values))
+
+
+@settings(max_examples=MAGNITUDE_EXAMPLES, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(family=st.sampled_from(FAMILIES), power=st.integers(-5, 5), stretch=st.floats(0.5, 2.0))
+def test_every_magnitude_of_the_domain_verifies(family, power, stretch):
+    """A book built from accepted input verifies, whatever the unit: the bundled mechanisms at
+    10⁻⁵ to 10⁵ times their size (micrometres to kilometres, in effect) pass the same checks,
+    with bounds that scale with the mechanism (verify.PER)."""
+    base = templates.load(family)
+    t = scaled(base, stretch * 10.0 ** power)
+    t = dataclasses.replace(t, sweep=dataclasses.replace(
+        t.sweep, step=t.sweep.step if not t.mechanism.input_is_angle else 30.0),
+        stroke_step=30.0)
+    templates.check_sweep(t)                    # inside the supported domain
+    built = workbook.build(t)
+    checks = checks_of(built, engine.evaluate(built.workbook))
+    bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
+    assert not bad, (family, power, bad[:5])
+    TALLY[("magnitudes", "examples")] += 1

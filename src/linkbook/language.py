@@ -854,14 +854,14 @@ class Compiler:
             if not isinstance(link, list) or len(link) < 2:
                 raise DescriptionError(where, f"must list two or more points (got {link!r})")
             for j, name in enumerate(link):
-                if name not in self.points:
+                if not isinstance(name, str) or name not in self.points:
                     raise DescriptionError(f"{where}[{j}]", f"point {name!r} is not defined")
             m.links.append(tuple(link))
         used = list(dict.fromkeys(n for link in m.links for n in link))
         m.joints = [Joint(n, *(p.text for p in self.points[n])) for n in used]
         if "trace" in d:
             t = d["trace"]
-            if t not in self.points or t in self.ground:
+            if not isinstance(t, str) or t not in self.points or t in self.ground:
                 raise DescriptionError(f"{self.field}.trace", f"must be a moving point "
                                                               f"(got {t!r})")
             x, y = (e.text[1:-1] for e in self.points[t])
@@ -871,7 +871,8 @@ class Compiler:
             m.path = (x, y)
             self.traced = t
         if "output" in d:
-            if d["output"] not in shown or shown[d["output"]].unit != LENGTH:
+            if not isinstance(d["output"], str) or d["output"] not in shown \
+                    or shown[d["output"]].unit != LENGTH:
                 # the summary's smallest and largest value: a length has one; an angle only
                 # within a window of its own
                 raise DescriptionError(f"{self.field}.output", f"{d['output']!r} is not a shown "

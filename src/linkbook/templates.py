@@ -12,7 +12,8 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, RATE_KIND, Mechanism
+from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND,
+                         RATE_KIND, Mechanism)
 
 def _template_dir() -> Path:
     """Installed: templates/ is packaged inside linkbook; from a checkout: the repo's templates/."""
@@ -25,6 +26,12 @@ TEMPLATE_DIR = _template_dir()
 EXCEL_MAX_ROWS = 1_048_576
 EXCEL_MAX_COLUMNS = 16_384
 BRANCH_WORDS = {"open": 1.0, "crossed": -1.0}
+# The numbers a book supports (in the template's length unit): within these, every step keeps
+# about 9 significant digits in double precision and no square or product can overflow, so a
+# book built from accepted input always verifies. Outside them, build and verify refuse.
+LENGTH_RANGE = (1e-6, 1e9)       # a length; an offset may also be 0 (or up to 1e9 either way)
+RATE_LIMIT = 1e9                 # |ω|, |α|, |v|, |a| of the input
+LENGTH_SPAN = 1e9                # the largest length over the smallest
 
 
 class InputError(Exception):
@@ -131,9 +138,32 @@ def check_value(field: str, kind: str, raw: object) -> float:
     value = parse_number(field, raw)
     if kind == LENGTH_KIND and value <= 0:
         raise InputError(field, f"must be a positive length (got {raw!r})")
+    lo, hi = LENGTH_RANGE
+    if kind == LENGTH_KIND and not lo <= value <= hi:
+        raise InputError(field, f"must be a length from {lo:g} to {hi:g} (got {raw!r})")
+    if kind == OFFSET_KIND and abs(value) > hi:
+        raise InputError(field, f"must be from {-hi:g} to {hi:g} (got {raw!r})")
+    if kind == RATE_KIND and abs(value) > RATE_LIMIT:
+        raise InputError(field, f"must be from {-RATE_LIMIT:g} to {RATE_LIMIT:g} (got {raw!r})")
     if kind == ANGLE_KIND and not -360 <= value <= 360:
         raise InputError(field, f"must be an angle from -360 to 360 degrees (got {raw!r})")
     return value
+
+
+def check_lengths_together(values: dict[str, float], kinds: dict[str, str],
+                           where: str = "") -> None:
+    """The largest length over the smallest at most LENGTH_SPAN: beyond it, the small one is
+    below the rounding of the large one. (An offset may be anything up to LENGTH_RANGE[1]: one
+    far below the others acts as the zero it nearly is.)"""
+    lengths = {k: abs(v) for k, v in values.items() if kinds.get(k) == LENGTH_KIND}
+    if len(lengths) < 2:
+        return
+    small = min(lengths, key=lengths.get)
+    large = max(lengths, key=lengths.get)
+    if lengths[large] > LENGTH_SPAN * lengths[small]:
+        raise InputError(f"{where}{small}", f"{values[small]:g} is too small beside {large} = "
+                                            f"{values[large]:g} (at most {LENGTH_SPAN:g} "
+                                            "times apart)")
 
 
 def parse_list(field: str, kind: str, text: object) -> tuple[float, ...]:
@@ -181,7 +211,30 @@ def _need(data: dict, key: str, origin: str, kind: type | tuple = str):
     value = data[key]
     if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
         raise InputError(f"{origin}: {key}", f"has the wrong type (got {value!r})")
+    if isinstance(value, str):
+        check_text(f"{origin}: {key}", value)
     return value
+
+
+def _optional_text(data: dict, key: str, origin: str) -> str:
+    return _need(data, key, origin) if key in data else ""
+
+
+CELL_TEXT_MAX = 32_767          # characters in one Excel cell
+
+
+def check_text(field: str, text: str) -> str:
+    """Text that goes into a cell: no control characters (a workbook cannot hold them), and
+    not longer than a cell holds."""
+    from openpyxl.cell.cell import ILLEGAL_CHARACTERS_RE
+    bad = ILLEGAL_CHARACTERS_RE.search(text)
+    if bad:
+        raise InputError(field, f"contains the control character U+{ord(bad.group()):04X}, "
+                                "which a workbook cannot hold")
+    if len(text) > CELL_TEXT_MAX // 4:
+        raise InputError(field, f"is {len(text):,} characters long (at most "
+                                f"{CELL_TEXT_MAX // 4:,})")
+    return text
 
 
 def from_data(name: str, data: dict, origin: str = "template") -> Template:
@@ -233,8 +286,8 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
                                  _need(grid, "values", f"{origin}: grid", list))
         stroke_step = parse_number(f"{origin}: grid.stroke_step", grid.get("stroke_step", 1.0))
     template = Template(
-        name=name, title=_need(data, "title", origin), source=data.get("source", ""),
-        description=data.get("description", ""), mechanism=mech, length_unit=length_unit,
+        name=name, title=_need(data, "title", origin), source=_optional_text(data, "source", origin),
+        description=_optional_text(data, "description", origin), mechanism=mech, length_unit=length_unit,
         parameters=tuple(params), sweep=sweep, position=position, grid_values=grid_values,
         stroke_step=stroke_step)
     check_sweep(template)
@@ -305,7 +358,17 @@ def _check_unique_names(params: list[Parameter], origin: str) -> None:
 
 
 def check_sweep(t: Template) -> None:
-    """Positive step, start < stop, and tables inside Excel's limits — before any work."""
+    """Positive step, start < stop, and tables inside Excel's limits — before any work; and
+    lengths that fit one book (check_lengths_together)."""
+    values = t.values()
+    if t.mechanism.grid:
+        values = {**values, **{f"{t.mechanism.grid[0]}[{i}]": v
+                               for i, v in enumerate(t.grid_values)}}
+    kinds = {p.symbol: p.kind for p in t.parameters}
+    if t.mechanism.grid:
+        kinds.update({f"{t.mechanism.grid[0]}[{i}]": kinds[t.mechanism.grid[0]]
+                      for i in range(len(t.grid_values))})
+    check_lengths_together(values, kinds, "parameters.")
     s = t.sweep
     unit = "degrees" if t.mechanism.input_is_angle else t.length_unit
     if s.step <= 0:

@@ -15,10 +15,15 @@ import numpy as np
 
 from . import generic, workbook as layout
 from .workbook import summary_prefix
-from .templates import InputError, check_value
+from .templates import InputError, check_lengths_together, check_value
 
 ABS_TOL = 1e-9
 ANGLE_UNITS = {"rad": 2 * math.pi, "deg": 360.0}
+# The bound is ABS_TOL per PER units of a quantity's natural magnitude: the mechanism's size S
+# for a length (S² for an area), 1 for an angle or a ratio, each times the input's rate for a
+# velocity or an acceleration. So a mechanism in metres and the same one in micrometres are
+# judged alike: |Δ| ≤ 1e-12·S for a length, 1e-9 for an angle.
+PER = 1e3
 
 
 class UnusableFile(Exception):
@@ -40,27 +45,34 @@ class Check:
     name: str
     size: float = math.inf      # the mechanism's size S (sum of its input lengths)
     rate: float = 1.0           # per second, per second²: a velocity's or acceleration's scale
+    scale: float | None = None  # the unit's natural magnitude: S (length), S² (area); None for
+                                # a quantity with no length in it (an angle, a ratio, a count)
     cells: int = 0
     max_abs: float = 0.0
     na_expected: int = 0
     na_agree: int = 0
     dead_centre: int = 0        # rates at a dead centre: not determined by the data
     mismatches: list[Mismatch] = field(default_factory=list)
+    judged: set[tuple[str, str]] = field(default_factory=set, repr=False)  # (sheet, cell)
 
     @property
     def ok(self) -> bool:
         return not self.mismatches
 
     def limit(self, expected: float, tol: float = ABS_TOL, relative: bool = False) -> float:
-        """|Δ| allowed. `relative` (LibreOffice keeps 15 digits): tol·max(1, |x|). Otherwise tol
-        for every value up to the mechanism's own size S. Larger values only arise near a
-        singular position (the pump's plunger as its slot turns parallel to the plunger line,
-        s15 ~ 1/cos θ14), where the error of any double-precision evaluation grows like |x|²/S:
-        there the bound is tol·(|x|/S)²."""
+        """|Δ| allowed: tol per PER units of the quantity's magnitude (see PER): for a length
+        m = S·rate and the bound tol·m/PER, for an angle m = rate and the bound tol·m. Where a
+        value only gets near a singular position (the pump's plunger as its slot turns parallel
+        to the plunger line, s15 ~ 1/cos θ14; an angular velocity near a dead centre) the error
+        of any double-precision evaluation grows like |x|²/m, and so does the bound:
+        tol·|x|²/(PER·m) once that is larger. `relative` (LibreOffice keeps 15 digits):
+        tol·max(|x|, the bound's unit)."""
+        linear = self.scale is not None
+        magnitude = max((self.scale if linear else 1.0) * self.rate, 1e-300)
+        base = tol * magnitude / PER if linear else tol * magnitude
         if relative:
-            return tol * max(1.0, abs(expected))
-        rate = max(self.rate, 1e-300)
-        return tol * rate * max(1.0, (abs(expected) / (self.size * rate)) ** 2)
+            return max(tol * abs(expected), base)
+        return max(base, tol * expected * expected / (PER * magnitude))
 
     def as_dict(self) -> dict:
         return {"block": self.block, "column": self.name, "cells": self.cells,
@@ -75,14 +87,27 @@ class Report:
     mechanism: str
     engine: str
     checks: list[Check]
+    formula_cells: int = 0                    # in the whole book
+    unjudged: list[tuple[str, str]] = field(default_factory=list)   # formula cells not compared
+
+    @property
+    def disagrees(self) -> bool:
+        return any(not c.ok for c in self.checks)
 
     @property
     def ok(self) -> bool:
-        return all(c.ok for c in self.checks)
+        return not self.disagrees and not self.unjudged
+
+    @property
+    def status(self) -> int:
+        """The exit status: 0 every formula cell agrees, 1 a cell disagrees, 2 some formula
+        cells cannot be judged (and none disagrees)."""
+        return 1 if self.disagrees else 2 if self.unjudged else 0
 
     @property
     def cells(self) -> int:
-        return sum(c.cells for c in self.checks)
+        """Formula cells compared with the reference (each counted once)."""
+        return len(set().union(*(c.judged for c in self.checks)))
 
     @property
     def max_abs(self) -> float:
@@ -100,12 +125,32 @@ def inputs_of(wb, meta: dict) -> dict[str, float]:
             values[symbol] = check_value(f"input {symbol} (cell {info['cell']})", info["kind"], raw)
         except InputError as exc:
             raise UnusableFile(str(exc)) from None
+    try:
+        check_lengths_together(values, {s: i["kind"] for s, i in meta["inputs"].items()},
+                               "input ")
+    except InputError as exc:
+        raise UnusableFile(str(exc)) from None
     return values
 
 
+INPUT_LIMIT = 3600.0     # degrees either way for an angle input (the input cell's validation)
+
+
 def _angles(ws, column: str, rows: list[int]) -> np.ndarray:
-    return np.array([_number(ws, f"{column}{r}", "input angle")
+    return np.array([_input(ws, f"{column}{r}", "input value")
                      for r in range(rows[0], rows[1] + 1)])
+
+
+def _input(ws, cell: str, what: str) -> float:
+    """An input angle (or actuator length): a number within the supported domain."""
+    from .templates import LENGTH_RANGE
+    v = _number(ws, cell, what)
+    limit = max(INPUT_LIMIT, LENGTH_RANGE[1])
+    if not abs(v) <= limit:
+        raise UnusableFile(f"{ws.title}!{cell}: {what} {v:g} is outside the supported range "
+                           f"(±{INPUT_LIMIT:g}° for an angle, at most {LENGTH_RANGE[1]:g} for "
+                           "a length)")
+    return v
 
 
 def _number(ws, cell: str, what: str) -> float:
@@ -146,6 +191,7 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
     for i, (cell, value, exp) in enumerate(zip(cells, got,
                                                np.broadcast_to(expected, (len(cells),)))):
         check.cells += 1
+        check.judged.add((sheet, cell))
         exp = float(exp)
         if math.isnan(exp) and dead is not None and dead[i]:
             # a dead centre (to within the reference's own accuracy there): a rate is not
@@ -177,6 +223,15 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
 def _show(value, error_code):
     code = error_code(value)
     return code if code else value
+
+
+def unit_scale(unit: str, size: float) -> float | None:
+    """The natural magnitude of a unit: S for a length (also per second, per second²), S² for
+    an area; None for an angle, a ratio or a count (a quantity with no length in it)."""
+    from .model import ACCEL, AREA, LENGTH, SPEED
+    if unit in (LENGTH, SPEED, ACCEL):
+        return size
+    return size * size if unit == AREA else None
 
 
 def column_unit(model, key: str) -> str:
@@ -220,7 +275,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     checks: list[Check] = []
 
     def run(block, name, sheet, cells, expected, unit, slope=None, rate=1.0, dead=None):
-        c = Check(block, name, size, rate)
+        c = Check(block, name, size, rate, unit_scale(unit, size))
         compare(c, sheet, cells, [values.get((sheet, x)) for x in cells], expected, unit,
                 is_error, error_code, tol, relative, slope, dead)
         checks.append(c)
@@ -243,7 +298,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
 
     # The current position, the joints and the drawing rows.
     pos = meta["position"]
-    angle = _number(wb[pos["sheet"]], pos["input_cell"], f"the current input {mech.input_word}")
+    angle = _input(wb[pos["sheet"]], pos["input_cell"], f"the current input {mech.input_word}")
     one = solver.solve(params, np.array([angle]))
     for key, cell in pos["cells"].items():
         unit = column_unit(model, key)
@@ -262,6 +317,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
             drawing_expected += list(joint_values[name])
     run("joints", "drawing rows", pos["sheet"], drawing_cells, np.array(drawing_expected),
         "length")
+    checks.append(_check_links(pos, solver.description, ref, size))
 
     # Derived constants.
     for key, info in meta.get("constants", {}).items():   # solve() returns them as floats
@@ -276,6 +332,59 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         checks += _check_grid(wb, meta, solver, params, values, is_error, error_code, tol,
                               relative, size)
     return checks
+
+
+def joined_pairs(description: dict, ref: dict, size: float) -> set[frozenset]:
+    """Pairs of points the reference knows are joined, found without the description's list of
+    links: a step's new point and each point the step names (a crank's pivot, a dyad's two
+    ends, a slider's line, an actuator's ends; a vector's two ends), and any two points whose
+    distance never changes over the sweep (a rigid link, the ground)."""
+    pairs = set()
+    for step in description.get("steps", []):
+        if not isinstance(step, dict):
+            continue
+        named = _point_names({k: v for k, v in step.items()
+                              if k not in ("point", "columns", "type", "key")})
+        if isinstance(step.get("point"), str):
+            pairs.update(frozenset((step["point"], name)) for name in named)
+        else:       # a vector (from, to): the two points it measures between
+            pairs.update(frozenset((a, b)) for a in named for b in named if a != b)
+    points = ref.get("points", {})
+    names = sorted(points)
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            (xa, ya), (xb, yb) = points[a], points[b]
+            d = np.hypot(np.asarray(xa, float) - xb, np.asarray(ya, float) - yb)
+            d = d[np.isfinite(d)]
+            if d.size and np.ptp(d) <= 1e-9 * size:
+                pairs.add(frozenset((a, b)))
+    return pairs
+
+
+def _point_names(value) -> list[str]:
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, dict):
+        return [n for v in value.values() for n in _point_names(v)]
+    if isinstance(value, list):
+        return [n for v in value for n in _point_names(v)]
+    return []
+
+
+def _check_links(pos: dict, description: dict, ref: dict, size: float) -> Check:
+    """Each segment the drawing draws joins two points the reference knows are joined (a check
+    of the drawing's structure: its cells are compared in "drawing rows")."""
+    c = Check("joints", "drawn links", size)
+    joined = joined_pairs(description, ref, size)
+    x_col = layout.DRAWING_COLUMNS[0]
+    for link in pos["drawing"]:
+        names = link["joints"]
+        for i, (a, b) in enumerate(zip(names, names[1:])):
+            if a != b and frozenset((a, b)) not in joined:
+                c.mismatches.append(Mismatch(pos["sheet"], f"{x_col}{link['rows'][0] + i + 1}",
+                                             f"a link between joined points",
+                                             f"{a}–{b}, which nothing joins"))
+    return c
 
 
 def motion_rates(mech, params: dict, size: float) -> tuple[float, float]:
@@ -311,9 +420,9 @@ def _check_motion(meta, model, solver, params, angles, ref, one, angle, scale, s
     run(sheet, mech.input_column, sheet, [f"A{now}"], np.array([angle]), mech.input_unit)
     for key, letter in motion["columns"].items():
         unit = model.get(key).unit
-        # a determinant is a position measured (an area's scale is S)
-        rate = {ACCEL: rate2, ANG_ACCEL: rate2, AREA: size, LENGTH: 1.0, RATIO: 1.0}.get(unit,
-                                                                                     rate1)
+        # a determinant is a position measured (an area's scale is S², see unit_scale)
+        rate = {ACCEL: rate2, ANG_ACCEL: rate2, AREA: 1.0, LENGTH: 1.0, RATIO: 1.0}.get(unit,
+                                                                                    rate1)
         run(sheet, key, sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)], _expected(ref, key),
             unit, slope(angles, key, unit), rate, ref.get("dead_centre"))
         run("motion now", key, sheet, [f"{letter}{now}"], _expected(one, key), unit,
@@ -330,16 +439,21 @@ DASH = layout.DASH
 
 
 def compare_exact(check: Check, sheet: str, cells: list[str], got: list, expected: list,
-                  slack: list | None = None) -> None:
+                  slack: list | None = None, scales: list | None = None) -> None:
     """Text (and bookkeeping) cells: the same text, or the same number within the bound
-    (plus `slack`, for an extreme taken at a limit position)."""
-    for cell, value, exp, extra in zip(cells, got, expected, slack or [0.0] * len(cells)):
+    (plus `slack`, for an extreme taken at a limit position; `scales`: each cell's unit's
+    magnitude, see unit_scale, else the check's own)."""
+    for i, (cell, value, exp) in enumerate(zip(cells, got, expected)):
+        extra = slack[i] if slack else 0.0
         check.cells += 1
+        check.judged.add((sheet, cell))
         if isinstance(exp, str) or isinstance(value, str):
             if value != exp:
                 check.mismatches.append(Mismatch(sheet, cell, exp, value))
             continue
-        if not isinstance(value, (int, float)) or abs(float(value) - exp) > check.limit(exp) + extra:
+        bound = (Check(check.block, check.name, check.size, check.rate, scales[i])
+                 if scales else check).limit(exp)
+        if not isinstance(value, (int, float)) or abs(float(value) - exp) > bound + extra:
             check.mismatches.append(Mismatch(sheet, cell, exp, value))
         else:
             check.max_abs = max(check.max_abs, abs(float(value) - exp))
@@ -361,9 +475,10 @@ def _check_assembly(wb, meta, model, solver, params, angles, ref, values, size) 
     closes = np.asarray(ref["assembled"], dtype=bool)
     starts, ends = _gaps(angles, closes)
     checks = []
+    input_scale = unit_scale(solver.mechanism.input_unit, size)
     for key, expected in (("closes", [1.0 if c else 0.0 for c in closes]),
                           ("gap_from", starts), ("gap_to", ends)):
-        c = Check(layout.SWEEP, key, size)
+        c = Check(layout.SWEEP, key, size, scale=None if key == "closes" else input_scale)
         cells = [f"{cols[key]}{r}" for r in range(r0, r1 + 1)]
         compare_exact(c, sweep["sheet"], cells, [values.get((sweep["sheet"], x)) for x in cells],
                       expected)
@@ -374,7 +489,8 @@ def _check_assembly(wb, meta, model, solver, params, angles, ref, values, size) 
     c = Check("summary", "geometry", size)
     for key, info in summary.items():
         compare_exact(c, layout.MECH, [info["cell"]], [values.get((layout.MECH, info["cell"]))],
-                      [expected[key]], [slack.get(key, 0.0)])
+                      [expected[key]], [slack.get(key, 0.0)],
+                      [unit_scale(info.get("unit", ""), size)])
     checks.append(c)
     return checks
 
@@ -484,9 +600,20 @@ def _check_grid(wb, meta, solver, params, values, is_error, error_code, tol, rel
         angles = _angles(ws, "A", block["rows"])
         if block is grid:
             adjust = [_number(ws, f"{c}{grid['param_row']}", f"{param}") for c in grid["columns"]]
+            kind = meta["inputs"][param]["kind"]
+            try:
+                adjust = [check_value(f"{param} (cell {block['sheet']}!{c}{grid['param_row']})",
+                                      kind, v) for c, v in zip(grid["columns"], adjust)]
+                check_lengths_together({**params, **{f"{param}@{c}": v for c, v in
+                                                     zip(grid["columns"], adjust)}},
+                                       {**{s: i["kind"] for s, i in meta["inputs"].items()},
+                                        **{f"{param}@{c}": kind for c in grid["columns"]}},
+                                       "input ")
+            except InputError as exc:
+                raise UnusableFile(str(exc)) from None
         expected = _grid_reference(solver, params, param, angles, adjust)
         expected_by_block[block["sheet"]] = expected
-        c = Check(block["sheet"], f"{grid['key']} grid", size)
+        c = Check(block["sheet"], f"{grid['key']} grid", size, scale=size)
         slope = _slope(solver, params, angles, solver.mechanism.grid[1], "length", param,
                        adjust)
         for j, letter in enumerate(block["columns"]):
@@ -497,14 +624,14 @@ def _check_grid(wb, meta, solver, params, values, is_error, error_code, tol, rel
         checks.append(c)
         if own_sweep and block is stroke:
             heads = [f"{x}{stroke['param_row']}" for x in stroke["columns"]]
-            h = Check(block["sheet"], f"{param} header", size)
+            h = Check(block["sheet"], f"{param} header", size, scale=size)
             compare(h, block["sheet"], heads, [values.get((block["sheet"], x)) for x in heads],
                     np.array(adjust), "length", is_error, error_code, tol, relative)
             checks.append(h)
     fine = expected_by_block[stroke["sheet"]]
     strokes = np.ptp(fine, axis=0)          # NaN where some angle cannot close
     cells = [f"{c}{grid['stroke_row']}" for c in grid["columns"]]
-    s = Check(grid["sheet"], "stroke", size)
+    s = Check(grid["sheet"], "stroke", size, scale=size)
     compare(s, grid["sheet"], cells, [values.get((grid["sheet"], x)) for x in cells], strokes,
             "length", is_error, error_code, tol, relative)
     checks.append(s)
@@ -513,6 +640,8 @@ def _check_grid(wb, meta, solver, params, values, is_error, error_code, tol, rel
 
 # ---------------------------------------------------------------- the command
 def verify(path: Path, engine: str = "vector") -> Report:
+    """Every formula cell of the book at `path` compared with the independent reference.
+    Raises UnusableFile (or safety.UnsafeFile) with one line when the file cannot be verified."""
     from .safety import load_workbook_safely
     wb = load_workbook_safely(path)
     meta = layout.read_meta(wb)
@@ -520,15 +649,54 @@ def verify(path: Path, engine: str = "vector") -> Report:
         raise UnusableFile(f"{path}: not a linkbook workbook (no build record sheet)")
     from . import engine as engines
     is_error, error_code, relative = engines.is_error, engines.error_code, False
-    if engine == "vector":
-        values = engines.evaluate(wb)
-    elif engine == "formulas":
-        values = engines.evaluate_formulas_model(path)
-    elif engine == "libreoffice":
-        from . import office
-        values = office.recalculated_values(path)
-        is_error, error_code, relative = office.is_error, office.error_code, True
-    else:
-        raise UnusableFile(f"unknown engine {engine!r}")
-    checks = check_book(wb, meta, values, is_error, error_code, relative=relative)
-    return Report(str(path), meta["mechanism"], engine, checks)
+    try:
+        if engine == "vector":
+            values = engines.evaluate(wb)
+        elif engine == "formulas":
+            values = engines.evaluate_formulas_model(path)
+        elif engine == "libreoffice":
+            from . import office
+            values = office.recalculated_values(path)
+            is_error, error_code, relative = office.is_error, office.error_code, True
+        else:
+            raise UnusableFile(f"unknown engine {engine!r}")
+    except engines.EngineError as exc:
+        raise UnusableFile(f"{path}: {exc}") from None
+    try:
+        checks = check_book(wb, meta, values, is_error, error_code, relative=relative)
+    except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
+        raise UnusableFile(f"{path}: the build record (sheet {layout.META}) does not match the "
+                           f"workbook ({type(exc).__name__}: {exc})") from None
+    formulas = formula_cells(wb)
+    judged = set().union(*(c.judged for c in checks))
+    return Report(str(path), meta["mechanism"], engine, checks, len(formulas),
+                  sorted(formulas - judged, key=_cell_order))
+
+
+def formula_cells(wb) -> set[tuple[str, str]]:
+    return {(ws.title, c.coordinate) for ws in wb.worksheets for c in ws._cells.values()
+            if c.data_type == "f"}
+
+
+def _cell_order(key: tuple[str, str]) -> tuple:
+    from openpyxl.utils.cell import coordinate_from_string, column_index_from_string
+    col, row = coordinate_from_string(key[1])
+    return key[0], column_index_from_string(col), row
+
+
+def cell_ranges(cells: list[tuple[str, str]], most: int = 6) -> str:
+    """'Sweep!F5:F77, Mechanism!I9' for sorted (sheet, cell) pairs: runs down a column joined;
+    after `most` runs, how many more."""
+    from openpyxl.utils.cell import coordinate_from_string
+    runs: list[list] = []
+    for sheet, cell in cells:
+        col, row = coordinate_from_string(cell)
+        last = runs[-1] if runs else None
+        if last and last[0] == sheet and last[1] == col and last[3] == row - 1:
+            last[3] = row
+        else:
+            runs.append([sheet, col, row, row])
+    text = [f"{s}!{c}{a}" if a == b else f"{s}!{c}{a}:{c}{b}" for s, c, a, b in runs[:most]]
+    if len(runs) > most:
+        text.append(f"and {len(runs) - most} more ranges")
+    return ", ".join(text)

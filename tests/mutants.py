@@ -1,0 +1,156 @@
+"""Mutation testing: small deliberate bugs in a copy of the formula writer, each of which must be
+caught by `linkbook verify` (on the bundled books and on books aimed at it) and by the tests.
+
+    python tests/mutants.py                 # every mutant: verify, then the fast tests
+    python tests/mutants.py --only sign     # mutants whose name contains "sign"
+    python tests/mutants.py --no-tests      # verify only (a minute a mutant)
+
+Each mutant is one text substitution in a copy of the repository (src/, templates/, tests/ and
+docs/, with ../shared beside it). "verify" is caught when a build fails or any verify exits
+non-zero; "tests" when the fast test files fail. The table at the end is the closing note's.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+BUNDLED = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
+FAST_TESTS = ["tests/test_verdict.py", "tests/test_published.py", "tests/test_motion.py",
+              "tests/test_language.py"]
+NON_GRASHOF = ["--set", "a1=100", "--set", "a2=60", "--set", "a3=50", "--set", "a4=40"]
+DEAD_CENTRE = ["--set", "a1=10", "--set", "a2=20", "--set", "a3=4", "--set", "a4=6",
+               "--set", "b3=3", "--set", "c3=2", "--step", "10"]
+NEAR_CHANGE_POINT = ["--set", "a4=42.69"]       # s + l exceeds p + q by 1e-4 of it
+RAM_DEAD_CENTRE = ["--set", "a4=100", "--set", "a5=300", "--set", "b1=-190"]
+
+
+@dataclass
+class Mutant:
+    name: str
+    path: str                   # relative to the repository
+    old: str
+    new: str
+    books: list = field(default_factory=list)   # (template, extra build arguments) aimed at it
+
+
+MUTANTS = [
+    Mutant("sign: a dyad's output angle ϕ + ψ for ϕ − ψ", "src/linkbook/steps.py",
+           'f"{{{angle}}}-{{{branch}}}*{{{psi.key}}}{q_offset}"',
+           'f"{{{angle}}}+{{{branch}}}*{{{psi.key}}}{q_offset}"'),
+    Mutant("branch: the slider's assembly branch flipped", "src/linkbook/steps.py",
+           'f"{turn}PI()/2+{{{branch}}}*(PI()/2-"', 'f"{turn}PI()/2-{{{branch}}}*(PI()/2-"'),
+    Mutant("guard: ACOS without IFERROR (#NUM! for #N/A)", "src/linkbook/steps.py",
+           'return f"IFERROR(ACOS({arg}),NA())"', 'return f"ACOS({arg})"',
+           [("fourbar", NON_GRASHOF)]),
+    Mutant("constant: the input angle off by 1e-9", "src/linkbook/steps.py",
+           'f"RADIANS({{{key}_deg}})"', 'f"RADIANS({{{key}_deg}})*(1+1E-9)"'),
+    Mutant("drawing: every link's rows drawn from its first joint", "src/linkbook/workbook.py",
+           'ws[f"{x_col}{row}"] = f"={cells[name][0]}"',
+           'ws[f"{x_col}{row}"] = f"={cells[link[0]][0]}"'),
+    Mutant("drawing: the last link ends at the first link's first point",
+           "src/linkbook/language.py",
+           "        used = list(dict.fromkeys(n for link in m.links for n in link))",
+           "        m.links[-1] = m.links[-1][:-1] + (m.links[0][0],)\n"
+           "        used = list(dict.fromkeys(n for link in m.links for n in link))"),
+    Mutant("guard: a rate's dead-centre test dropped (#DIV/0! for #N/A)",
+           "src/linkbook/motion.py",
+           'return f"IF({den}=0,NA(),{_p(num)}/{_p(den)})"', 'return f"{_p(num)}/{_p(den)}"',
+           [("fourbar", DEAD_CENTRE)]),
+    Mutant("constant: the Grashof threshold 1e-12 made 1e-3", "src/linkbook/workbook.py",
+           "{others}*(1+1E-12)", "{others}*(1+1E-3)", [("fourbar", NEAR_CHANGE_POINT)]),
+    Mutant("condition: the quick-return ratio without its (a4 - a5) dead-centre test",
+           "templates/quick-return.toml",
+           "+ IFERROR((b1/(a4-a5)>=COS(alpha))*(b1/(a4-a5)<=1),0),", ",",
+           [("quick-return", RAM_DEAD_CENTRE)]),
+    Mutant("sampling: the stroke sheet 10 times coarser", "src/linkbook/workbook.py",
+           "    step = t.stroke_step\n", "    step = t.stroke_step * 10\n",
+           [("pump", ["--step", "5"])]),
+    Mutant("window: a degree view without its 360° window", "src/linkbook/workbook.py",
+           'return f"=MOD(DEGREES({ref}){shift},360){back}"', 'return f"=DEGREES({ref})"'),
+]
+
+
+def copy_repository(dest: Path) -> Path:
+    repo = dest / "linkbook"
+    for part in ("src", "templates", "tests", "docs"):
+        shutil.copytree(ROOT / part, repo / part,
+                        ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+    for base in (ROOT.parent / "shared", ROOT / "shared"):
+        if base.is_dir():
+            os.symlink(base, dest / "shared")
+            break
+    return repo
+
+
+def apply(repo: Path, m: Mutant) -> None:
+    path = repo / m.path
+    text = path.read_text(encoding="utf-8")
+    if text.count(m.old) != 1:
+        raise SystemExit(f"mutant {m.name!r}: the text to change occurs {text.count(m.old)} "
+                         f"times in {m.path} (must be once)")
+    path.write_text(text.replace(m.old, m.new), encoding="utf-8")
+
+
+def run(repo: Path, args: list[str], timeout: int = 900) -> int:
+    env = {**os.environ, "PYTHONPATH": str(repo / "src"), "TQDM_DISABLE": "1"}
+    proc = subprocess.run(args, cwd=repo, env=env, capture_output=True, text=True,
+                          timeout=timeout)
+    return proc.returncode
+
+
+def caught_by_verify(repo: Path, m: Mutant, work: Path) -> str:
+    books = [(name, []) for name in BUNDLED] + m.books
+    for i, (name, extra) in enumerate(books):
+        book = work / f"{i}-{name}.xlsx"
+        if run(repo, [sys.executable, "-m", "linkbook", "build", name, *extra, "-o",
+                      str(book)]) != 0:
+            return f"build of {name} {' '.join(extra)} failed"
+        if run(repo, [sys.executable, "-m", "linkbook", "verify", str(book)]) != 0:
+            return f"{name} {' '.join(extra)}".strip()
+    return ""
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--only", default="", help="run the mutants whose name contains this")
+    ap.add_argument("--no-tests", action="store_true", help="verify only")
+    opts = ap.parse_args()
+    rows = []
+    for m in MUTANTS:
+        if opts.only not in m.name:
+            continue
+        start = time.perf_counter()
+        with tempfile.TemporaryDirectory(prefix="linkbook-mutant-") as tmp:
+            repo = copy_repository(Path(tmp))
+            apply(repo, m)
+            work = Path(tmp) / "books"
+            work.mkdir()
+            by_verify = caught_by_verify(repo, m, work)
+            by_tests = "" if opts.no_tests else (
+                "failed" if run(repo, [sys.executable, "-m", "pytest", "-x", "-q",
+                                       "-p", "no:cacheprovider", *FAST_TESTS],
+                                timeout=1800) != 0 else "")
+        rows.append((m.name, by_verify, by_tests, time.perf_counter() - start))
+        print(f"{m.name}: verify {'caught (' + by_verify + ')' if by_verify else 'MISSED'}"
+              f"{'' if opts.no_tests else ', tests ' + ('caught' if by_tests else 'MISSED')}",
+              flush=True)
+    print()
+    print(f"{'mutant':72} {'verify':8} {'tests':8}")
+    for name, v, t, _ in rows:
+        print(f"{name:72} {'caught' if v else 'MISSED':8} "
+              f"{'-' if opts.no_tests else 'caught' if t else 'MISSED':8}")
+    survivors = [r for r in rows if not r[1] or (not opts.no_tests and not r[2])]
+    print(f"\n{len(rows) - len(survivors)} of {len(rows)} mutants caught")
+    return 1 if survivors else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

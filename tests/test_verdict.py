@@ -1,0 +1,177 @@
+"""verify's verdict is total and honest (issue 15): every formula cell judged or named, nothing
+expected from the writer's own record of links, one domain for numbers, exit codes that mean one
+thing each. The cases are the ones the issue measured."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import openpyxl
+import pytest
+from conftest import template
+
+from linkbook import build, cli
+from linkbook import workbook as layout
+from linkbook.templates import InputError, with_overrides
+
+
+@pytest.fixture(scope="module")
+def fourbar(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("verdict") / "fourbar.xlsx"
+    build.build_file(template("fourbar"), path)
+    return path
+
+
+def _edited(src: Path, dst: Path, edit) -> Path:
+    wb = openpyxl.load_workbook(src)
+    meta = layout.read_meta(wb)
+    edit(wb, meta)
+    del wb[layout.META]
+    layout._write_meta(wb.create_sheet(layout.META), meta)
+    wb.save(dst)
+    return dst
+
+
+def _verify(path: Path, capsys) -> tuple[int, str]:
+    code = cli.main(["verify", str(path)])
+    out = capsys.readouterr()
+    return code, (out.out + out.err).strip().splitlines()[-1]
+
+
+def test_a_fresh_book_has_every_formula_cell_compared(fourbar, capsys):
+    code, last = _verify(fourbar, capsys)
+    wb = openpyxl.load_workbook(fourbar)
+    count = sum(1 for ws in wb.worksheets for c in ws._cells.values() if c.data_type == "f")
+    assert code == 0 and last.startswith(f"all agree: {count} of {count} formula cells compared")
+
+
+def test_a_column_missing_from_the_record_is_not_passed(fourbar, tmp_path, capsys):
+    """xC + 5 and xC deleted from the build record: its cells are named, never 'all agree'."""
+    def edit(wb, meta):
+        letter = meta["sweep"]["columns"].pop("xC")
+        first, last = meta["sweep"]["rows"]
+        for r in range(first, last + 1):
+            wb["Sweep"][f"{letter}{r}"] = wb["Sweep"][f"{letter}{r}"].value + "+5"
+    code, last = _verify(_edited(fourbar, tmp_path / "trimmed.xlsx", edit), capsys)
+    assert code in (1, 2) and not last.startswith("all agree"), last
+
+    def unknown_only(wb, meta):            # a column no other formula reads
+        meta["summary"].pop("mu_max")
+    code, last = _verify(_edited(fourbar, tmp_path / "unknown.xlsx", unknown_only), capsys)
+    assert code == 2 and last.startswith("CANNOT JUDGE 1 formula cells") and "Mechanism!C" in last
+
+
+def test_a_formula_of_the_users_own_is_named(fourbar, tmp_path, capsys):
+    def edit(wb, meta):
+        wb["Mechanism"]["Z3"] = "=a_2*2"
+    code, last = _verify(_edited(fourbar, tmp_path / "own.xlsx", edit), capsys)
+    assert code == 2 and "Mechanism!Z3" in last
+
+
+def test_a_joint_drawn_at_the_wrong_point_disagrees(fourbar, tmp_path, capsys):
+    """B's drawing rows read C's cells."""
+    def edit(wb, meta):
+        pos = meta["position"]
+        x_c, y_c = pos["joints"]["C"]
+        for link in pos["drawing"]:
+            for i, name in enumerate(link["joints"]):
+                if name == "B":
+                    r = link["rows"][0] + i
+                    wb["Mechanism"][f"N{r}"] = f"={x_c}"
+                    wb["Mechanism"][f"O{r}"] = f"={y_c}"
+    code, last = _verify(_edited(fourbar, tmp_path / "misdrawn.xlsx", edit), capsys)
+    assert code == 1 and last.startswith("DISAGREES"), last
+
+
+def test_a_link_between_points_nothing_joins_disagrees(fourbar, tmp_path, capsys):
+    """The rocker drawn B–A0, in the record and in the cells alike (a writer's bug)."""
+    def edit(wb, meta):
+        pos = meta["position"]
+        rocker = next(link for link in pos["drawing"] if link["joints"] == ["B", "B0"])
+        rocker["joints"] = ["B", "A0"]
+        x, y = pos["joints"]["A0"]
+        r = rocker["rows"][1]
+        wb["Mechanism"][f"N{r}"] = f"={x}"
+        wb["Mechanism"][f"O{r}"] = f"={y}"
+    path = _edited(fourbar, tmp_path / "wrong-link.xlsx", edit)
+    code = cli.main(["verify", str(path)])
+    text = capsys.readouterr().out
+    assert code == 1 and "B–A0, which nothing joins" in text
+
+
+@pytest.mark.parametrize("value", ["1e308", "1e155", "1e30", "1e-9"])
+def test_lengths_outside_the_domain_are_refused_at_build(value, tmp_path, capsys):
+    out = tmp_path / "x.xlsx"
+    assert cli.main(["build", "fourbar", "--set", f"a2={value}", "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("linkbook: error: --set a2: must be a length")
+    assert not out.exists()
+
+
+def test_lengths_too_far_apart_are_refused():
+    with pytest.raises(InputError, match="too small beside"):
+        with_overrides(template("fourbar"), ["a1=1e9", "a2=1e9", "a3=1e9", "a4=1e9",
+                                             "b3=1e-3"])
+
+
+@pytest.mark.parametrize("value", [1e30, 1e308, -5.0, "abc"])
+def test_an_input_edited_outside_the_domain_cannot_be_verified(fourbar, tmp_path, capsys,
+                                                                value):
+    def edit(wb, meta):
+        wb["Mechanism"][meta["inputs"]["a2"]["cell"]] = value
+    code, last = _verify(_edited(fourbar, tmp_path / "edited.xlsx", edit), capsys)
+    assert code == 2 and last.startswith("linkbook: error: input a2"), last
+
+
+@pytest.mark.parametrize("factor", [1e-3, 1e-5, 1e3, 1e5])
+def test_the_same_mechanism_in_another_unit_verifies(tmp_path, capsys, factor):
+    """Metres, micrometres, kilometres: the bound scales with the mechanism's size."""
+    t = template("fourbar")
+    sets = [f"{p.symbol}={p.value * factor!r}" for p in t.parameters if p.kind == "length"]
+    out = tmp_path / "scaled.xlsx"
+    assert cli.main(["build", "fourbar", *sum((["--set", s] for s in sets), []),
+                     "-o", str(out)]) == 0
+    capsys.readouterr()
+    code, last = _verify(out, capsys)
+    assert code == 0, last
+
+
+# ---------------------------------------------------------------- the quick-return ratio
+def _ratio_from_the_ram(meta: dict, inputs: dict, step: float = 0.01) -> float:
+    """Forward/return time of the quick-return's ram, from the reference's ram positions over a
+    fine turn of the crank (not from the template's formula): the crank angles between the
+    ram's two reversals. NaN where the ram link cannot close somewhere, or the ram reverses
+    more than twice (a dead centre of the ram dyad inside the rocker's swing)."""
+    import numpy as np
+    from linkbook.verify import Reference
+    angles = np.arange(0.0, 360.0, step)
+    s = np.asarray(Reference(meta).solve(inputs, angles)["s16"], dtype=float)
+    if not np.isfinite(s).all():
+        return float("nan")
+    ds = np.diff(np.append(s, s[0]))
+    turns = np.nonzero(np.sign(ds) != np.sign(np.roll(ds, 1)))[0]
+    if len(turns) != 2:
+        return float("nan")
+    forward = (turns[1] - turns[0]) * step
+    return max(forward, 360.0 - forward) / min(forward, 360.0 - forward)
+
+
+@pytest.mark.parametrize("sets", [(), ("a4=100", "a5=300", "b1=-190"), ("a5=30",),
+                                  ("b1=380",), ("a4=300", "a5=100", "b1=-250"),
+                                  ("a4=200", "a5=250", "b1=30")])
+def test_the_quick_return_ratio_follows_the_ram(sets):
+    """The book's Q (an expression step, which the reference evaluates from the same text)
+    against the ram's own reversals: a number where the ram reverses twice per turn, #N/A where
+    it cannot (the b1 < 0, a5 > a4 case included)."""
+    import math
+
+    from conftest import built
+
+    from linkbook import engine, verify
+    b, values = built("quick-return", sets)
+    inputs = verify.inputs_of(b.workbook, b.meta)
+    expected = _ratio_from_the_ram(b.meta, inputs)
+    got = values[("Mechanism", b.meta["constants"]["time_ratio"]["cell"])]
+    if math.isnan(expected):
+        assert engine.error_code(got) == "#N/A", (sets, got)
+    else:
+        assert got == pytest.approx(expected, rel=2e-3), sets
