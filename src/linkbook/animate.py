@@ -18,7 +18,7 @@ from pathlib import Path
 
 from . import engine
 from . import workbook as layout
-from .charts import LINK_COLOURS, PATH_COLOUR
+from .charts import LINK_COLOURS, PATH_COLOUR, nice_step
 
 DEFAULT_FPS = 20
 DEFAULT_SIZE = 600
@@ -172,12 +172,6 @@ class _View:
         return self.px + (x - self.cx) * self.scale, self.py - (y - self.cy) * self.scale
 
 
-def _nice_step(span: float) -> float:
-    raw = span / 6
-    power = 10 ** math.floor(math.log10(raw))
-    return next(m * power for m in (1, 2, 2.5, 5, 10) if m * power >= raw)
-
-
 def _tick(v: float, step: float) -> str:
     decimals = max(0, -int(math.floor(math.log10(step))))
     return f"{v:.{decimals}f}" if decimals else f"{v:.0f}"
@@ -284,7 +278,7 @@ def _background(Image, ImageDraw, anim: Animation, view: _View, size: int, font,
     d = ImageDraw.Draw(im)
     left, top, right, bottom = view.box
     d.text((size / 2, top * 0.45), anim.title, fill=(0, 0, 0), font=font, anchor="mm")
-    step = _nice_step(min(view.hi_x - view.lo_x, view.hi_y - view.lo_y))
+    step = nice_step(min(view.hi_x - view.lo_x, view.hi_y - view.lo_y))
     for lo, hi, vertical in ((view.lo_x, view.hi_x, True), (view.lo_y, view.hi_y, False)):
         v = math.ceil(lo / step) * step
         while v <= hi + 1e-12 * step:

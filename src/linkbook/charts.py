@@ -64,7 +64,7 @@ def _chart(title: str, x_title: str, y_title: str) -> ScatterChart:
     return c
 
 
-def _nice_step(span: float) -> float:
+def nice_step(span: float) -> float:
     """A 1-2-5 grid step giving about 6 divisions."""
     raw = span / 6
     power = 10 ** math.floor(math.log10(raw))
@@ -78,7 +78,7 @@ def _equal_axes(chart: ScatterChart, xs: list[float], ys: list[float], size_cm: 
     if not xs or not ys:
         return
     span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-9) * 1.12
-    step = _nice_step(span)
+    step = nice_step(span)
     cx, cy = (max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2
     half = math.ceil(span / 2 / step) * step
     for axis, centre in ((chart.x_axis, cx), (chart.y_axis, cy)):
