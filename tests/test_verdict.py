@@ -175,3 +175,49 @@ def test_the_quick_return_ratio_follows_the_ram(sets):
         assert engine.error_code(got) == "#N/A", (sets, got)
     else:
         assert got == pytest.approx(expected, rel=2e-3), sets
+
+
+# ---------------------------------------------------------------- the bound
+def test_the_bound_is_the_documented_one():
+    """README: 1e-12·S for a length (times the rate for a velocity), 1e-9 for an angle; beyond
+    its magnitude m a value may differ by 1e-12·|x|²/m; an angle itself never grows."""
+    from linkbook.verify import Check
+    S = 500.0
+    length = Check("b", "x", S, 1.0, S)
+    assert length.limit(100.0) == pytest.approx(5e-10)
+    assert length.limit(5000.0) == pytest.approx(1e-12 * 5000.0 ** 2 / S)
+    speed = Check("b", "v", S, 10.0, S)
+    assert speed.limit(10.0) == pytest.approx(5e-9)
+    angle = Check("b", "θ", S)
+    assert angle.limit(359.0, grows=False) == pytest.approx(1e-9)
+    omega = Check("b", "ω", S, 5.0)
+    assert omega.limit(1.0) == pytest.approx(5e-9)
+    assert omega.limit(5000.0) == pytest.approx(1e-12 * 5000.0 ** 2 / 5.0)
+    micro = Check("b", "x", S * 1e-6, 1.0, S * 1e-6)   # the same mechanism in other units
+    assert micro.limit(100.0e-6) == pytest.approx(length.limit(100.0) * 1e-6)
+
+
+def test_a_linkage_near_its_change_point_is_classed_as_the_reference_does():
+    """s + l exceeds p + q by 1e-4 of it: non-Grashof (a threshold of 1e-3 would say Grashof)."""
+    from conftest import built, checks_of
+    b, values = built("fourbar", ("a4=42.69",))
+    bad = [(c.name, m) for c in checks_of(b, values) for m in c.mismatches]
+    assert not bad, bad[:3]
+    cell = b.meta["summary"]["grashof"]["cell"]
+    assert values[("Mechanism", cell)].startswith("non-Grashof")
+
+
+@pytest.mark.parametrize("argv, says", [(["--step", "500"], "larger than the sweep")])
+def test_animate_refuses_what_it_cannot_draw(fourbar, capsys, argv, says):
+    assert cli.main(["animate", str(fourbar), *argv]) == 2
+    assert says in capsys.readouterr().err
+
+
+def test_animate_of_a_sweep_edited_to_run_backwards(fourbar, tmp_path, capsys):
+    def edit(wb, meta):
+        first, last = meta["sweep"]["rows"]
+        for r in range(first, last + 1):
+            wb["Sweep"][f"A{r}"] = -5.0 * r
+    path = _edited(fourbar, tmp_path / "backwards.xlsx", edit)
+    assert cli.main(["animate", str(path), "--step", "10"]) == 2
+    assert "rising" in capsys.readouterr().err

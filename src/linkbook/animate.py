@@ -4,7 +4,7 @@ Every frame is what the workbook's own drawing shows when its input cell (the on
 button moves) holds that frame's value: the book's formulas are evaluated by the fast engine
 with the input cell set, and the links are read from the drawing data the chart plots. So a book
 edited in Excel animates as edited. Only the cells downstream of the input cell are evaluated
-again for each frame (engine.downstream).
+again, all frame values at once (engine.vary).
 
 Frames where the drawing data is not a number (#N/A: the loop cannot close there) are left out,
 and a note on every frame says how many were.
@@ -62,11 +62,20 @@ def frames_of(path: Path, step: float | None = None) -> Animation:
     meta = layout.read_meta(wb)
     if meta is None or "position" not in meta or "sweep" not in meta:
         raise AnimationError(f"{path}: not a linkbook workbook (no build record sheet)")
+    try:
+        return _frames(path, wb, meta, step)
+    except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
+        raise AnimationError(f"{path}: the build record (sheet {layout.META}) does not match "
+                             f"the workbook ({type(exc).__name__}: {exc})") from None
+
+
+def _frames(path: Path, wb, meta: dict, step: float | None) -> Animation:
     pos, sweep = meta["position"], meta["sweep"]
     sheet, cell = pos["sheet"], pos["input_cell"]
     if sheet not in wb.sheetnames:
         raise AnimationError(f"{path}: the sheet {sheet!r} is missing")
-    inputs = _input_values(_sweep_column(wb, sweep), step)
+    inputs = _input_values(_sweep_column(wb, sweep), step,
+                           _input_label(wb, sheet, cell, meta)[1] == "deg")
     x_col, y_col = layout.DRAWING_COLUMNS
     read = [(sheet, f"{col}{r}") for link in pos["drawing"] for r in range(link["rows"][0],
                                                                         link["rows"][1] + 1)
@@ -77,10 +86,10 @@ def frames_of(path: Path, step: float | None = None) -> Animation:
     except engine.EngineError as exc:
         raise AnimationError(f"{path}: {exc}") from None
     symbol, unit = _input_label(wb, sheet, cell, meta)
+    whole_turn = unit == "deg" and abs(inputs[-1] + (inputs[1] - inputs[0]) - inputs[0]
+                                       - 360.0) < 1e-9
     return Animation(meta.get("title", path.stem), symbol, unit, meta.get("length_unit", ""),
-                     _link_names(pos), pos.get("traced"), frames,
-                     whole_turn=abs(inputs[-1] + (inputs[1] - inputs[0]) - inputs[0] - 360.0)
-                     < 1e-9)
+                     _link_names(pos), pos.get("traced"), frames, whole_turn=whole_turn)
 
 
 def _sweep_column(wb, sweep: dict) -> list[float]:
@@ -93,18 +102,22 @@ def _sweep_column(wb, sweep: dict) -> list[float]:
     return [float(v) for v in column if _number(v)]
 
 
-def _input_values(column: list[float], step: float | None) -> list[float]:
+def _input_values(column: list[float], step: float | None, is_angle: bool = True) -> list[float]:
     """The sweep's own input values, or its range by `step`. A whole turn leaves out its last
     value, the first one again, so that the GIF loops smoothly."""
-    if len(column) < 2:
-        raise AnimationError("the Sweep sheet's input column holds fewer than two numbers")
+    if len(column) < 2 or column[-1] <= column[0]:
+        raise AnimationError("the Sweep sheet's input column must hold two or more numbers, "
+                             "rising")
     start, stop = column[0], column[-1]
     if step is not None:
         count = int(math.floor((stop - start) / step + 1e-9)) + 1
         if count > MAX_FRAMES:
             raise AnimationError(f"--step {step:g} makes {count} frames (at most {MAX_FRAMES})")
+        if count < 2:
+            raise AnimationError(f"--step {step:g} is larger than the sweep "
+                                 f"({start:g} to {stop:g}): one frame")
         column = [start + i * step for i in range(count)]
-    if abs((column[-1] - column[0]) - 360.0) < 1e-9 and len(column) > 2:
+    if is_angle and abs((column[-1] - column[0]) - 360.0) < 1e-9 and len(column) > 2:
         column = column[:-1]
     return column
 

@@ -250,6 +250,9 @@ def _animate(args) -> int:
         anim = frames_of(book, args.step)
         images = render(anim, args.size, terminal_progress())
         write_atomic(out, lambda tmp: write_video(images, tmp, args.fps, kind))
+    except OSError as exc:
+        print(f"linkbook: error: cannot write {out}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
     except (AnimationError, UnsafeFile) as exc:
         print(f"linkbook: error: {exc}", file=sys.stderr)
         return 2

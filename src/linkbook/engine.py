@@ -1094,6 +1094,7 @@ class Engine:
         evaluated value by value, cell by cell). Groups count whole, so a little more than
         needed may be evaluated, never less."""
         self._prepare()
+        read = list(read)
         row, col = openpyxl.utils.cell.coordinate_to_tuple(cell)
         grid = self.grid.get(sheet)
         if grid is None or row >= grid.shape[0] or col >= grid.shape[1]:
@@ -1443,8 +1444,8 @@ def _formula_text(cell) -> str:
 
 
 def _constant(cell, excel_model: bool = False):
-    """A constant as it reads after a save ('%.16g' numbers); with `excel_model`, floats
-    rounded to 15 decimals as ExcelModel rounds them."""
+    """A constant as it reads after a save (openpyxl writes numbers as '%.16g'); with
+    `excel_model`, floats rounded to 15 decimals as ExcelModel rounds them."""
     value, kind = cell.value, cell.data_type
     if kind == "n" and not isinstance(value, bool):
         text = safe_string(value)

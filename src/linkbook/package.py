@@ -38,8 +38,11 @@ INLINE = re.compile(rb'<c( [^>]*?) t="inlineStr"([^>]*)><is>(.*?)</is></c>', re.
 # CT_Font's children in the schema's order.
 FONT_ORDER = ("b", "i", "strike", "condense", "extend", "outline", "shadow", "u", "vertAlign",
               "sz", "color", "name", "family", "charset", "scheme")
-# Worksheet children that come after <legacyDrawing> and <controls> (CT_Worksheet's sequence).
-AFTER_CONTROLS = ("webPublishItems", "tableParts", "extLst")
+# Worksheet children that come after <legacyDrawing> (CT_Worksheet's sequence; <controls> comes
+# after legacyDrawingHF, drawingHF, picture and oleObjects, but a sheet with those has no place
+# for both without splitting them, and linkbook's sheets have none).
+AFTER_CONTROLS = ("legacyDrawingHF", "drawingHF", "picture", "oleObjects", "controls",
+                  "webPublishItems", "tableParts", "extLst")
 
 
 def finish(path_in, path_out, *, values: dict | None = None,
@@ -237,9 +240,11 @@ def _next_rel_id(zin: zipfile.ZipFile, sheet_part: str) -> int:
 
 
 def _controls_tail(sc: SheetControls, first_id: int):
-    """Put `<legacyDrawing>` and `<controls>` where CT_Worksheet's sequence wants them: before
-    webPublishItems, tableParts and extLst, or else at the end."""
+    """Put `<legacyDrawing>` and `<controls>` after `<drawing>`, before anything CT_Worksheet's
+    sequence puts after them (AFTER_CONTROLS), or else at the end."""
     def tail(text: bytes) -> bytes:
+        if b"<legacyDrawing " in text or b"<controls>" in text:
+            raise ValueError(f"{sc.sheet_part} already has a legacy drawing or controls")
         at = min((i for name in AFTER_CONTROLS
                   if (i := text.find(b"<" + name.encode())) >= 0),
                  default=text.rfind(b"</worksheet>"))

@@ -224,8 +224,8 @@ CELL_TEXT_MAX = 32_767          # characters in one Excel cell
 
 
 def check_text(field: str, text: str) -> str:
-    """Text that goes into a cell: no control characters (a workbook cannot hold them), and
-    not longer than a cell holds."""
+    """Text that goes into a cell: no control characters (a workbook cannot hold them), and at
+    most a quarter of what a cell holds (labels share cells with units and notes)."""
     from openpyxl.cell.cell import ILLEGAL_CHARACTERS_RE
     bad = ILLEGAL_CHARACTERS_RE.search(text)
     if bad:

@@ -59,19 +59,23 @@ class Check:
     def ok(self) -> bool:
         return not self.mismatches
 
-    def limit(self, expected: float, tol: float = ABS_TOL, relative: bool = False) -> float:
+    def limit(self, expected: float, tol: float = ABS_TOL, relative: bool = False,
+              grows: bool = True) -> float:
         """|Δ| allowed: tol per PER units of the quantity's magnitude (see PER): for a length
-        m = S·rate and the bound tol·m/PER, for an angle m = rate and the bound tol·m. Where a
-        value only gets near a singular position (the pump's plunger as its slot turns parallel
-        to the plunger line, s15 ~ 1/cos θ14; an angular velocity near a dead centre) the error
-        of any double-precision evaluation grows like |x|²/m, and so does the bound:
-        tol·|x|²/(PER·m) once that is larger. `relative` (LibreOffice keeps 15 digits):
-        tol·max(|x|, the bound's unit)."""
+        m = S·rate and the bound tol·m/PER, for an angle or an angular rate m = rate and the
+        bound tol·m. Where a value only gets near a singular position (the pump's plunger as its
+        slot turns parallel to the plunger line, s15 ~ 1/cos θ14; an angular velocity near a
+        dead centre, ω ~ 1/det) the error of any double-precision evaluation grows like |x|²/m,
+        and so does the bound once that is larger: tol·|x|²/(PER·m), which is the length's
+        base bound times (|x|/m)². An angle itself (`grows` False: it is periodic, it never
+        gets large) keeps tol. `relative` (LibreOffice keeps 15 digits): tol·max(|x|, base)."""
         linear = self.scale is not None
         magnitude = max((self.scale if linear else 1.0) * self.rate, 1e-300)
         base = tol * magnitude / PER if linear else tol * magnitude
         if relative:
             return max(tol * abs(expected), base)
+        if not grows:
+            return base
         return max(base, tol * expected * expected / (PER * magnitude))
 
     def as_dict(self) -> dict:
@@ -136,20 +140,19 @@ def inputs_of(wb, meta: dict) -> dict[str, float]:
 INPUT_LIMIT = 3600.0     # degrees either way for an angle input (the input cell's validation)
 
 
-def _angles(ws, column: str, rows: list[int]) -> np.ndarray:
-    return np.array([_input(ws, f"{column}{r}", "input value")
+def _angles(ws, column: str, rows: list[int], is_angle: bool) -> np.ndarray:
+    return np.array([_input(ws, f"{column}{r}", "input value", is_angle)
                      for r in range(rows[0], rows[1] + 1)])
 
 
-def _input(ws, cell: str, what: str) -> float:
+def _input(ws, cell: str, what: str, is_angle: bool) -> float:
     """An input angle (or actuator length): a number within the supported domain."""
     from .templates import LENGTH_RANGE
     v = _number(ws, cell, what)
-    limit = max(INPUT_LIMIT, LENGTH_RANGE[1])
+    limit, unit = (INPUT_LIMIT, "°") if is_angle else (LENGTH_RANGE[1], "")
     if not abs(v) <= limit:
         raise UnusableFile(f"{ws.title}!{cell}: {what} {v:g} is outside the supported range "
-                           f"(±{INPUT_LIMIT:g}° for an angle, at most {LENGTH_RANGE[1]:g} for "
-                           "a length)")
+                           f"(±{limit:g}{unit})")
     return v
 
 
@@ -195,8 +198,13 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
         exp = float(exp)
         if math.isnan(exp) and dead is not None and dead[i]:
             # a dead centre (to within the reference's own accuracy there): a rate is not
-            # determined by the data; #N/A or any number is the workbook's honest answer
-            check.dead_centre += 1
+            # determined by the data; #N/A or any number is the workbook's honest answer, but
+            # not #DIV/0! or another error
+            if is_error(value) and error_code(value) != "#N/A":
+                check.mismatches.append(Mismatch(sheet, cell, "#N/A or a number",
+                                                 _show(value, error_code)))
+            else:
+                check.dead_centre += 1
             continue
         if math.isnan(exp):
             check.na_expected += 1
@@ -213,7 +221,7 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
             diff = (diff + period / 2) % period - period / 2
         diff = abs(diff)
         check.max_abs = max(check.max_abs, diff)
-        limit = check.limit(exp, tol, relative)
+        limit = check.limit(exp, tol, relative, grows=not period)
         if diff > limit and slope is not None:
             limit += ROUNDING * slope(i)
         if diff > limit:
@@ -284,7 +292,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     sweep = meta["sweep"]
     ws = wb[sweep["sheet"]]
     rows = sweep["rows"]
-    angles = _angles(ws, "A", rows)
+    angles = _angles(ws, "A", rows, mech.input_is_angle)
     # the slope of a cell is taken per radian of a crank, per `size` of an actuator's stroke
     scale = math.degrees(1.0) if mech.input_is_angle else size
     ref = solver.solve(params, angles)
@@ -298,7 +306,8 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
 
     # The current position, the joints and the drawing rows.
     pos = meta["position"]
-    angle = _input(wb[pos["sheet"]], pos["input_cell"], f"the current input {mech.input_word}")
+    angle = _input(wb[pos["sheet"]], pos["input_cell"], f"the current input {mech.input_word}",
+                   mech.input_is_angle)
     one = solver.solve(params, np.array([angle]))
     for key, cell in pos["cells"].items():
         unit = column_unit(model, key)
@@ -439,10 +448,10 @@ DASH = layout.DASH
 
 
 def compare_exact(check: Check, sheet: str, cells: list[str], got: list, expected: list,
-                  slack: list | None = None, scales: list | None = None) -> None:
+                  slack: list | None = None, units: list | None = None) -> None:
     """Text (and bookkeeping) cells: the same text, or the same number within the bound
-    (plus `slack`, for an extreme taken at a limit position; `scales`: each cell's unit's
-    magnitude, see unit_scale, else the check's own)."""
+    (plus `slack`, for an extreme taken at a limit position; `units`: each cell's unit, which
+    sets its bound, else the check's own)."""
     for i, (cell, value, exp) in enumerate(zip(cells, got, expected)):
         extra = slack[i] if slack else 0.0
         check.cells += 1
@@ -451,8 +460,12 @@ def compare_exact(check: Check, sheet: str, cells: list[str], got: list, expecte
             if value != exp:
                 check.mismatches.append(Mismatch(sheet, cell, exp, value))
             continue
-        bound = (Check(check.block, check.name, check.size, check.rate, scales[i])
-                 if scales else check).limit(exp)
+        if units:
+            bound = Check(check.block, check.name, check.size, check.rate,
+                          unit_scale(units[i], check.size)).limit(
+                              exp, grows=units[i] not in ANGLE_UNITS)
+        else:
+            bound = check.limit(exp)
         if not isinstance(value, (int, float)) or abs(float(value) - exp) > bound + extra:
             check.mismatches.append(Mismatch(sheet, cell, exp, value))
         else:
@@ -475,13 +488,13 @@ def _check_assembly(wb, meta, model, solver, params, angles, ref, values, size) 
     closes = np.asarray(ref["assembled"], dtype=bool)
     starts, ends = _gaps(angles, closes)
     checks = []
-    input_scale = unit_scale(solver.mechanism.input_unit, size)
     for key, expected in (("closes", [1.0 if c else 0.0 for c in closes]),
                           ("gap_from", starts), ("gap_to", ends)):
-        c = Check(layout.SWEEP, key, size, scale=None if key == "closes" else input_scale)
+        c = Check(layout.SWEEP, key, size)
         cells = [f"{cols[key]}{r}" for r in range(r0, r1 + 1)]
+        unit = "" if key == "closes" else solver.mechanism.input_unit
         compare_exact(c, sweep["sheet"], cells, [values.get((sweep["sheet"], x)) for x in cells],
-                      expected)
+                      expected, units=[unit] * len(cells))
         checks.append(c)
     expected = _summary_expected(model, solver, params, ref, closes, starts, ends)
     slack = _edge_slack(model, ref, closes)
@@ -489,8 +502,7 @@ def _check_assembly(wb, meta, model, solver, params, angles, ref, values, size) 
     c = Check("summary", "geometry", size)
     for key, info in summary.items():
         compare_exact(c, layout.MECH, [info["cell"]], [values.get((layout.MECH, info["cell"]))],
-                      [expected[key]], [slack.get(key, 0.0)],
-                      [unit_scale(info.get("unit", ""), size)])
+                      [expected[key]], [slack.get(key, 0.0)], [info.get("unit", "")])
     checks.append(c)
     return checks
 
@@ -597,7 +609,7 @@ def _check_grid(wb, meta, solver, params, values, is_error, error_code, tol, rel
     own_sweep = stroke["sheet"] != grid["sheet"]     # else the grid is its own stroke sweep
     for block in (grid, stroke) if own_sweep else (grid,):
         ws = wb[block["sheet"]]
-        angles = _angles(ws, "A", block["rows"])
+        angles = _angles(ws, "A", block["rows"], solver.mechanism.input_is_angle)
         if block is grid:
             adjust = [_number(ws, f"{c}{grid['param_row']}", f"{param}") for c in grid["columns"]]
             kind = meta["inputs"][param]["kind"]
@@ -653,7 +665,10 @@ def verify(path: Path, engine: str = "vector") -> Report:
         if engine == "vector":
             values = engines.evaluate(wb)
         elif engine == "formulas":
+            # ExcelModel rounds number constants to 15 decimals (engine.evaluate's
+            # excel_model_constants): judged with the relative bound, as LibreOffice is
             values = engines.evaluate_formulas_model(path)
+            relative = True
         elif engine == "libreoffice":
             from . import office
             values = office.recalculated_values(path)
