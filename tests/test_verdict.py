@@ -221,3 +221,27 @@ def test_animate_of_a_sweep_edited_to_run_backwards(fourbar, tmp_path, capsys):
     path = _edited(fourbar, tmp_path / "backwards.xlsx", edit)
     assert cli.main(["animate", str(path), "--step", "10"]) == 2
     assert "rising" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- the report
+def test_many_books_in_one_call_exit_with_the_worst(fourbar, tmp_path, capsys):
+    junk = tmp_path / "junk.xlsx"
+    junk.write_text("not a workbook")
+    assert cli.main(["verify", str(fourbar), str(fourbar)]) == 0
+    assert capsys.readouterr().out.strip().endswith("2 books: 2 agree, 0 disagree, "
+                                                    "0 cannot be verified")
+    assert cli.main(["verify", str(fourbar), str(junk)]) == 2
+    out = capsys.readouterr()
+    assert "1 cannot be verified" in out.out and "junk.xlsx" in out.err
+
+
+def test_json_says_what_was_judged_and_how(fourbar, capsys):
+    import json
+
+    from linkbook import __version__
+    assert cli.main(["verify", str(fourbar), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["linkbook"] == __version__ and report["mismatches"] == 0
+    assert report["cells"] == report["formula_cells"] > 3000
+    assert report["inputs"]["a2"] == 35.0 and report["tolerance"]["S"] == pytest.approx(434.0)
+    assert "1e-12·S" in report["tolerance"]["length"]

@@ -74,7 +74,8 @@ def _parser() -> argparse.ArgumentParser:
                                    "book's build record does not describe is named, not passed. "
                                    "Exit status: 0 every formula cell agrees, 1 a cell disagrees, "
                                    "2 the file cannot be verified (one line says why and where).")
-    v.add_argument("book", metavar="BOOK.xlsx")
+    v.add_argument("books", nargs="+", metavar="BOOK.xlsx",
+                   help="one or more workbooks; the exit status is the worst of theirs")
     v.add_argument("--engine", choices=("vector", "formulas", "libreoffice"), default="vector",
                    help="vector (default, fast: one compiled formula per column shape), formulas "
                         "(the full ExcelModel, slow), libreoffice (recalculate in soffice)")
@@ -157,25 +158,45 @@ def _main(argv: list[str] | None) -> int:
 
 def _verify(args) -> int:
     import json
+    statuses, reports = [], []
+    for book in args.books:
+        status, report = _verify_one(book, args.engine, quiet=args.json)
+        statuses.append(status)
+        reports.append(report)
+        if not args.json and len(args.books) > 1:
+            print()
+    if args.json:
+        print(json.dumps(reports[0] if len(reports) == 1 else reports, indent=2))
+    elif len(args.books) > 1:
+        counts = [statuses.count(k) for k in (0, 1, 2)]
+        print(f"{len(args.books)} books: {counts[0]} agree, {counts[1]} disagree, "
+              f"{counts[2]} cannot be verified")
+    return max(statuses)
 
+
+def _verify_one(book: str, engine: str, quiet: bool) -> tuple[int, dict]:
+    """(exit status, the report as data) of one book; the text report is printed unless
+    `quiet`, an error line always."""
+    from . import __version__
     from .office import OfficeFailed, OfficeUnavailable
     from .safety import UnsafeFile
-    from .verify import UnusableFile, verify
+    from .verify import TOLERANCE_RULE, UnusableFile, verify
     try:
-        report = verify(Path(args.book), args.engine)
+        report = verify(Path(book), engine)
     except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:
         print(f"linkbook: error: {exc}", file=sys.stderr)
-        return 2
-    if args.json:
-        print(json.dumps({"book": report.path, "mechanism": report.mechanism,
-                          "engine": report.engine, "ok": report.ok, "status": report.status,
-                          "cells": report.cells, "formula_cells": report.formula_cells,
-                          "unjudged": [f"{s}!{c}" for s, c in report.unjudged],
-                          "max_abs_diff": report.max_abs,
-                          "checks": [c.as_dict() for c in report.checks]}, indent=2))
-    else:
+        return 2, {"book": book, "status": 2, "error": str(exc), "linkbook": __version__}
+    if not quiet:
         _print_report(report)
-    return report.status
+    return report.status, {
+        "book": report.path, "mechanism": report.mechanism, "engine": report.engine,
+        "linkbook": __version__, "ok": report.ok, "status": report.status,
+        "cells": report.cells, "formula_cells": report.formula_cells,
+        "mismatches": sum(len(c.mismatches) for c in report.checks),
+        "unjudged": [f"{s}!{c}" for s, c in report.unjudged],
+        "max_abs_diff": report.max_abs, "inputs": report.inputs,
+        "tolerance": {**TOLERANCE_RULE, "S": report.size},
+        "checks": [c.as_dict() for c in report.checks]}
 
 
 def _one_line(exc: Exception) -> str:

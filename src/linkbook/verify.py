@@ -24,6 +24,14 @@ ANGLE_UNITS = {"rad": 2 * math.pi, "deg": 360.0}
 # velocity or an acceleration. So a mechanism in metres and the same one in micrometres are
 # judged alike: |Δ| ≤ 1e-12·S for a length, 1e-9 for an angle.
 PER = 1e3
+TOLERANCE_RULE = {
+    "length": "1e-12·S (S the mechanism's size; S² for an area; times the input's rate for a "
+              "velocity or an acceleration)",
+    "angle": "1e-9 (times the input's rate for an angular velocity or acceleration)",
+    "singular": "a length or a rate beyond its magnitude m may differ by 1e-12·|x|²/m; near a "
+                "limit position a further 1e-12·|∂x/∂θ|, at an isolated one 1e-6",
+    "libreoffice": "1e-9·max(|x|, the unit's bound): it keeps 15 digits",
+}
 
 
 class UnusableFile(Exception):
@@ -93,6 +101,8 @@ class Report:
     checks: list[Check]
     formula_cells: int = 0                    # in the whole book
     unjudged: list[tuple[str, str]] = field(default_factory=list)   # formula cells not compared
+    inputs: dict[str, float] = field(default_factory=dict)          # as read from the book
+    size: float = 0.0                         # S, the mechanism's size
 
     @property
     def disagrees(self) -> bool:
@@ -684,8 +694,10 @@ def verify(path: Path, engine: str = "vector") -> Report:
                            f"workbook ({type(exc).__name__}: {exc})") from None
     formulas = formula_cells(wb)
     judged = set().union(*(c.judged for c in checks))
+    params = inputs_of(wb, meta)
     return Report(str(path), meta["mechanism"], engine, checks, len(formulas),
-                  sorted(formulas - judged, key=_cell_order))
+                  sorted(formulas - judged, key=_cell_order), params,
+                  mechanism_size(meta, params))
 
 
 def formula_cells(wb) -> set[tuple[str, str]]:
