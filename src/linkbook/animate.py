@@ -240,11 +240,11 @@ def render(anim: Animation, size: int = DEFAULT_SIZE, progress=None) -> list:
     return images
 
 
-PATH_COLOUR_RGB = tuple(int(PATH_COLOUR[i:i + 2], 16) for i in (0, 2, 4))
-
-
 def _rgb(hex6: str) -> tuple[int, int, int]:
     return tuple(int(hex6[i:i + 2], 16) for i in (0, 2, 4))
+
+
+PATH_COLOUR_RGB = _rgb(PATH_COLOUR)
 
 
 def _format_input(v: float, unit: str) -> str:

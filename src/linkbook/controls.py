@@ -87,6 +87,7 @@ class SheetControls:
     controls: tuple[Control, ...]
     drawing_number: int               # N of vmlDrawingN.vml, and the VML shape id block
     first_prop: int                   # N of the first ctrlPropN.xml
+    first_rel: int                    # N of the first new relationship id rIdN of the sheet
 
     @property
     def vml_part(self) -> str:
@@ -108,16 +109,18 @@ class SheetControls:
             out[self.prop_part(i)] = control_properties(c).encode()
         return out
 
-    def relationships(self, first_id: int) -> list[tuple[str, str, str]]:
+    def relationships(self) -> list[tuple[str, str, str]]:
         """(Id, Type, Target) of the sheet's new relationships: the VML drawing, then each
         control's properties."""
+        first_id = self.first_rel
         rels = [(f"rId{first_id}", VML_REL, "/" + self.vml_part)]
         for i in range(len(self.controls)):
             rels.append((f"rId{first_id + 1 + i}", CTRL_REL, "/" + self.prop_part(i)))
         return rels
 
-    def sheet_xml(self, first_id: int) -> str:
+    def sheet_xml(self) -> str:
         """`<legacyDrawing>` and the `<controls>` list, for the worksheet part."""
+        first_id = self.first_rel
         items = []
         for i, (c, name) in enumerate(zip(self.controls, self.names())):
             col0, dx0, row0, dy0, col1, dx1, row1, dy1 = c.anchor

@@ -1156,20 +1156,11 @@ class Engine:
             for i, (r, c) in enumerate(zip(rows.tolist(), cols.tolist())):
                 column[i, :] = varying.get((d.sheet, r, c), self.grid[d.sheet][r, c])
             args.append(column.reshape(m * n, 1))
-        batch.n = m * n
-        try:
-            out = _replace_empty(np.asarray(_call(func, args), dtype=object))
-        except Exception:
+        values = _per_row(func, batch, args, m * n, bool(inputs))
+        if values is None:
             return False
-        finally:
-            batch.n = 1
-        if out.size != m * n or any(isinstance(v, np.ndarray) for v in out.reshape(-1)):
-            return False
-        out = out.reshape(m, n)
         for i, member in enumerate(g.members):
-            values = np.empty(n, dtype=object)
-            values[:] = list(out[i])
-            varying[(g.sheet, member.row, member.col)] = values
+            varying[(g.sheet, member.row, member.col)] = values[i * n:(i + 1) * n]
         return True
 
     def _vector_form(self, g: Group):
@@ -1310,19 +1301,10 @@ class Engine:
             r1, c1, _, _ = d.at(g.rows, g.cols)
             rows, cols = np.broadcast_arrays(r1, c1, g.rows)[:2]  # absolute refs: one cell, n times
             args.append(self.grid[d.sheet][rows, cols].reshape(n, 1))
-        g.batch.n = n
-        try:
-            out = _replace_empty(np.asarray(_call(g.func, args), dtype=object))
-        except Exception:   # e.g. _NotScalar: the per-cell path below reports real errors
-            out = None
-        finally:
-            g.batch.n = 1
-        per_row = out is not None and (out.size == n or (out.size == 1 and not g.inputs))
-        if not per_row or any(isinstance(v, np.ndarray) for v in out.reshape(-1)):
+        values = _per_row(g.func, g.batch, args, n, bool(g.inputs))
+        if values is None:
             self.stats["vector_fallbacks"] += 1
             return False
-        values = np.empty(n, object)
-        values[:] = list(out.reshape(-1)) if out.size == n else [out.reshape(-1)[0]] * n
         self.grid[g.sheet][g.rows, g.cols] = values
         return True
 
@@ -1404,6 +1386,26 @@ class Engine:
             for m in g.members:
                 out[(g.sheet, _a1(m.row, m.col))] = _public_value(grid[m.row, m.col], True)
         return out
+
+
+def _per_row(func, batch: _Batch, args: list, n: int, takes_inputs: bool) -> np.ndarray | None:
+    """One call of a vector-compiled function over n rows: its n results (an object array), or
+    None where the call fails or does not give one value per row (a formula without inputs
+    gives one value, which every row shares)."""
+    batch.n = n
+    try:
+        out = _replace_empty(np.asarray(_call(func, args), dtype=object))
+    except Exception:   # e.g. _NotScalar: the per-cell path reports real errors
+        return None
+    finally:
+        batch.n = 1
+    flat = out.reshape(-1)
+    if not (out.size == n or (out.size == 1 and not takes_inputs)) \
+            or any(isinstance(v, np.ndarray) for v in flat):
+        return None
+    values = np.empty(n, object)
+    values[:] = list(flat) if out.size == n else [flat[0]] * n
+    return values
 
 
 def _closure(start: set[int], edges: dict[int, set[int]]) -> set[int]:

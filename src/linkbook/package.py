@@ -57,7 +57,7 @@ def finish(path_in, path_out, *, values: dict | None = None,
         parts = sheet_parts(zin)
         by_part = _values_by_part(values or {}, parts)
         strings = _SharedStrings() if tidy and SST_PART not in names else None
-        with_controls = _place_controls(controls or {}, parts, names)
+        with_controls = _place_controls(zin, controls or {}, parts)
         rels_added = {sc.sheet_part: sc for sc in with_controls}
         written = 0
 
@@ -68,7 +68,7 @@ def finish(path_in, path_out, *, values: dict | None = None,
                     name = info.filename
                     if name in parts.values():
                         sc = rels_added.get(name)
-                        tail = _controls_tail(sc, _next_rel_id(zin, name)) if sc else None
+                        tail = _controls_tail(sc) if sc else None
                         written += _copy_sheet(zin, zout, info, by_part.get(name), strings, tail)
                         continue
                     data = zin.read(info)
@@ -82,13 +82,12 @@ def finish(path_in, path_out, *, values: dict | None = None,
                     elif name == "xl/workbook.xml" and values is not None:
                         data = cached.full_calc_on_load(data)
                     elif (owner := _rels_owner(name)) in rels_added:
-                        data = _add_relationships(
-                            data, rels_added[owner].relationships(_max_id(data) + 1))
+                        data = _add_relationships(data, rels_added[owner].relationships())
                     zout.writestr(_same_entry(info), data)
                 for sc in with_controls:
                     rels = _rels_part(sc.sheet_part)
                     if rels not in names:
-                        zout.writestr(rels, _add_relationships(EMPTY_RELS, sc.relationships(1)))
+                        zout.writestr(rels, _add_relationships(EMPTY_RELS, sc.relationships()))
                     for part, data in sc.parts().items():
                         zout.writestr(part, data)
                 if strings is not None:
@@ -214,9 +213,11 @@ class _SharedStrings:
 
 
 # ---------------------------------------------------------------- form controls
-def _place_controls(controls: dict[str, list[Control]], parts: dict[str, str],
-                    names: set[str]) -> list[SheetControls]:
-    """Number the new VML drawings and control property parts after any the package has."""
+def _place_controls(zin: zipfile.ZipFile, controls: dict[str, list[Control]],
+                    parts: dict[str, str]) -> list[SheetControls]:
+    """Number the new VML drawings, control property parts and each sheet's new relationships
+    after any the package has."""
+    names = set(zin.namelist())
     drawing = _highest(names, r"xl/drawings/vmlDrawing(\d+)\.vml")
     prop = _highest(names, r"xl/ctrlProps/ctrlProp(\d+)\.xml")
     out = []
@@ -224,7 +225,9 @@ def _place_controls(controls: dict[str, list[Control]], parts: dict[str, str],
         if sheet not in parts or not items:
             continue
         drawing += 1
-        out.append(SheetControls(parts[sheet], tuple(items), drawing, prop + 1))
+        rels = _rels_part(parts[sheet])
+        first_rel = _max_id(zin.read(rels)) + 1 if rels in names else 1
+        out.append(SheetControls(parts[sheet], tuple(items), drawing, prop + 1, first_rel))
         prop += len(items)
     return out
 
@@ -234,12 +237,7 @@ def _highest(names: set[str], pattern: str) -> int:
     return max(numbers, default=0)
 
 
-def _next_rel_id(zin: zipfile.ZipFile, sheet_part: str) -> int:
-    rels = _rels_part(sheet_part)
-    return _max_id(zin.read(rels)) + 1 if rels in zin.namelist() else 1
-
-
-def _controls_tail(sc: SheetControls, first_id: int):
+def _controls_tail(sc: SheetControls):
     """Put `<legacyDrawing>` and `<controls>` after `<drawing>`, before anything CT_Worksheet's
     sequence puts after them (AFTER_CONTROLS), or else at the end."""
     def tail(text: bytes) -> bytes:
@@ -248,7 +246,7 @@ def _controls_tail(sc: SheetControls, first_id: int):
         at = min((i for name in AFTER_CONTROLS
                   if (i := text.find(b"<" + name.encode())) >= 0),
                  default=text.rfind(b"</worksheet>"))
-        return text[:at] + sc.sheet_xml(first_id).encode() + text[at:]
+        return text[:at] + sc.sheet_xml().encode() + text[at:]
     return tail
 
 
