@@ -135,6 +135,9 @@ BAD = [
                                                     "length": "a3", "through": "A",
                                                     "along": ["A", "A"], "branch": 1}),
      ["(slider S).along", "two different points"]),
+    ("a time ratio of an unknown column", _add_step({"type": "expression", "key": "Q",
+                                                     "formula": "1", "time_ratio_of": "s99"}),
+     ["(expression Q).time_ratio_of", "must be the key of an earlier column"]),
 ]
 
 
@@ -242,7 +245,7 @@ def test_a_grid_of_any_described_mechanism_is_verified():
     assert not bad, bad[:5]
     assert sum(c.cells for c in checks) == len(formula_cells(b.workbook))
     grid = b.meta["grid"]
-    assert [c.name for c in checks if c.block == "Grid"] == ["yF grid", "stroke"]
+    assert [c.name for c in checks if c.block == "Grid"] == ["yF grid", "stroke", "stroke sampling"]
     assert all("Mechanism!" not in str(b.workbook["Grid"][f"{c}{grid['rows'][0]}"].value)
                for c in grid["columns"])        # self-contained: names and its own row only
 
@@ -342,8 +345,7 @@ def test_every_option_on_random_dimensions():
         "e6": st.floats(-40, 40), "side": st.sampled_from([1, -1]),
         "br": st.sampled_from([1, -1])}))
     def check(values):
-        b = workbook.build(_every_option(**values))
-        computed = engine.evaluate(b.workbook)
+        b, computed = build.make(_every_option(**values))
         checks = checks_of(b, computed)
         bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
         assert not bad, (values, bad[:5])

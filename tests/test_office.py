@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT / "src") not in sys.path:        # conftest does this too; kept for --noconftest
     sys.path.insert(0, str(ROOT / "src"))
 
-from linkbook import cached, charts, office, package, templates, verify, workbook  # noqa: E402
+from linkbook import build, cached, charts, office, package, templates, verify, workbook  # noqa: E402
 
 REL_TOL = 1e-9          # LibreOffice stores 15 significant digits
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")      # cannot turn fully: #N/A rows
@@ -55,8 +55,8 @@ def _formula_cells(wb) -> dict[tuple[str, str], str]:
 
 
 def _built_and_values(name: str, sets, tmp: Path):
-    """A workbook (no charts), saved, and every cell as LibreOffice recalculates it."""
-    b = workbook.build(_template(name, sets))
+    """A finished workbook, saved, and every cell as LibreOffice recalculates it."""
+    b, _ = build.make(_template(name, sets))
     path = tmp / f"{name}.xlsx"
     b.workbook.save(path)
     return b, path, office.recalculated_values(path)

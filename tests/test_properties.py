@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conftest import checks_of, formula_cells
-from linkbook import engine, templates, workbook
+from linkbook import build, templates
 from linkbook.language import STEP_KEYS
 from linkbook.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
                                  OFFSET_KIND, RATE_KIND)
@@ -64,8 +64,7 @@ def test_random_dimensions_match_the_reference(family):
     @given(dimensions(base))
     def check(values):
         t = with_values(base, values)
-        built = workbook.build(t)
-        computed = engine.evaluate(built.workbook)
+        built, computed = build.make(t)       # the finished book: degree windows chosen
         checks = checks_of(built, computed)
         bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
         assert not bad, (values, bad[:5])
@@ -117,8 +116,8 @@ def test_every_magnitude_of_the_domain_verifies(family, power, stretch):
         t.sweep, step=t.sweep.step if not t.mechanism.input_is_angle else 30.0),
         stroke_step=30.0)
     templates.check_sweep(t)                    # inside the supported domain
-    built = workbook.build(t)
-    checks = checks_of(built, engine.evaluate(built.workbook))
+    built, computed = build.make(t)
+    checks = checks_of(built, computed)
     bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
     assert not bad, (family, power, bad[:5])
     TALLY[("magnitudes", "examples")] += 1

@@ -98,6 +98,37 @@ def test_a_link_between_points_nothing_joins_disagrees(fourbar, tmp_path, capsys
     assert code == 1 and "B–A0, which nothing joins" in text
 
 
+@pytest.mark.parametrize("window", ["raw", "shifted"])
+def test_a_degree_view_outside_its_window_disagrees(fourbar, tmp_path, capsys, window):
+    """θ13's degree view as plain DEGREES() (no window: the column jumps by 360° where ϕ − ψ
+    crosses ±180°), or moved a whole turn up (every value right modulo 360°, but the window
+    starts beyond 180°): verify names a cell of the column."""
+    def edit(wb, meta):
+        letter, source = meta["sweep"]["columns"]["theta13_deg"], meta["sweep"]["columns"]["theta13"]
+        first, last = meta["sweep"]["rows"]
+        for r in range(first, last + 1):
+            wb["Sweep"][f"{letter}{r}"] = (f"=DEGREES({source}{r})" if window == "raw" else
+                                           wb["Sweep"][f"{letter}{r}"].value + "+360")
+    code = cli.main(["verify", str(_edited(fourbar, tmp_path / f"{window}.xlsx", edit))])
+    out = capsys.readouterr().out
+    assert code == 1 and "theta13_deg window" in out, out[-2000:]
+
+
+def test_a_stroke_sampled_more_coarsely_than_the_template_asks_disagrees(tmp_path, capsys):
+    """The pump's stroke row is max − min of a 1° sweep. Recorded as if the template asked for
+    0.1°, the 1° sampling falls short of the true stroke by more than a 0.1° one may: named."""
+    path = tmp_path / "pump.xlsx"
+    build.build_file(template("pump"), path)
+    assert cli.main(["verify", str(path)]) == 0
+    capsys.readouterr()
+
+    def edit(wb, meta):
+        meta["grid"]["stroke_step"] = 0.1
+    code = cli.main(["verify", str(_edited(path, tmp_path / "fine.xlsx", edit))])
+    out = capsys.readouterr().out
+    assert code == 1 and "stroke sampling" in out and "the true stroke" in out, out[-1500:]
+
+
 @pytest.mark.parametrize("value", ["1e308", "1e155", "1e30", "1e-9"])
 def test_lengths_outside_the_domain_are_refused_at_build(value, tmp_path, capsys):
     out = tmp_path / "x.xlsx"
@@ -136,45 +167,29 @@ def test_the_same_mechanism_in_another_unit_verifies(tmp_path, capsys, factor):
 
 
 # ---------------------------------------------------------------- the quick-return ratio
-def _ratio_from_the_ram(meta: dict, inputs: dict, step: float = 0.01) -> float:
-    """Forward/return time of the quick-return's ram, from the reference's ram positions over a
-    fine turn of the crank (not from the template's formula): the crank angles between the
-    ram's two reversals. NaN where the ram link cannot close somewhere, or the ram reverses
-    more than twice (a dead centre of the ram dyad inside the rocker's swing)."""
-    import numpy as np
-    from linkbook.verify import Reference
-    angles = np.arange(0.0, 360.0, step)
-    s = np.asarray(Reference(meta).solve(inputs, angles)["s16"], dtype=float)
-    if not np.isfinite(s).all():
-        return float("nan")
-    ds = np.diff(np.append(s, s[0]))
-    turns = np.nonzero(np.sign(ds) != np.sign(np.roll(ds, 1)))[0]
-    if len(turns) != 2:
-        return float("nan")
-    forward = (turns[1] - turns[0]) * step
-    return max(forward, 360.0 - forward) / min(forward, 360.0 - forward)
-
-
 @pytest.mark.parametrize("sets", [(), ("a4=100", "a5=300", "b1=-190"), ("a5=30",),
                                   ("b1=380",), ("a4=300", "a5=100", "b1=-250"),
                                   ("a4=200", "a5=250", "b1=30")])
 def test_the_quick_return_ratio_follows_the_ram(sets):
-    """The book's Q (an expression step, which the reference evaluates from the same text)
-    against the ram's own reversals: a number where the ram reverses twice per turn, #N/A where
-    it cannot (the b1 < 0, a5 > a4 case included)."""
+    """The book's Q against the reference's ram (generic.time_ratio: the crank angles between
+    the ram's two reversals), not the template's formula: a number where the ram reverses twice
+    per turn, #N/A where it cannot (the b1 < 0, a5 > a4 case included). 1.710 is the value the
+    template's comment states for the bundled dimensions."""
     import math
 
     from conftest import built
 
-    from linkbook import engine, verify
+    from linkbook import engine, generic, verify
     b, values = built("quick-return", sets)
     inputs = verify.inputs_of(b.workbook, b.meta)
-    expected = _ratio_from_the_ram(b.meta, inputs)
+    expected = generic.time_ratio(b.meta["description"], inputs, "s16")
     got = values[("Mechanism", b.meta["constants"]["time_ratio"]["cell"])]
     if math.isnan(expected):
         assert engine.error_code(got) == "#N/A", (sets, got)
     else:
-        assert got == pytest.approx(expected, rel=2e-3), sets
+        assert got == pytest.approx(expected, rel=1e-6), sets
+    if not sets:
+        assert expected == pytest.approx(1.710, abs=5e-4)
 
 
 # ---------------------------------------------------------------- the bound

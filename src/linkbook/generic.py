@@ -48,7 +48,8 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["solve", "pivots", "fourbar_loops", "limit_angles", "evaluate"]
+__all__ = ["solve", "pivots", "fourbar_loops", "limit_angles", "evaluate",
+           "refined_extreme", "time_ratio"]
 
 _TAU = 2.0 * math.pi
 _HALF_PI = 0.5 * math.pi
@@ -1526,6 +1527,49 @@ class _Motion:
 # --------------------------------------------------------------------------------------------
 # Public API
 # --------------------------------------------------------------------------------------------
+
+FINE_STEP = 0.1       # degrees: the reference's own sampling of a turn for extremes
+
+
+def refined_extreme(description: Mapping, params: Mapping[str, float], key: str,
+                    angles: np.ndarray, values: np.ndarray, pick: Callable,
+                    rounds: int = 6) -> tuple[float, float]:
+    """(input angle, value) of column `key`'s extreme (`pick`: np.argmax or np.argmin) over
+    sampled `angles`, refined by resampling 21 points around the best one, tenfold finer each
+    round (six rounds from a 0.1° sampling: 1e-7°, where the value is flat to round-off)."""
+    i = int(pick(values))
+    angle = float(angles[i])
+    width = float(np.max(np.diff(angles))) if len(angles) > 1 else FINE_STEP
+    for _ in range(rounds):
+        near = np.linspace(angle - width, angle + width, 21)
+        v = np.asarray(solve(description, params, near)[key], dtype=float)
+        if not np.isfinite(v).all():
+            break
+        i = int(pick(v))
+        angle, width = float(near[i]), width / 10.0
+    value = float(np.asarray(solve(description, params, np.array([angle]))[key])[0])
+    return angle, value
+
+
+def time_ratio(description: Mapping, params: Mapping[str, float], key: str) -> float:
+    """A quick-return ratio measured on the motion, not from any formula: column `key` (an
+    output that moves forward and back once per turn of the input) over a turn sampled every
+    FINE_STEP; the input angles of its two reversals (its refined maximum and minimum) split
+    the turn into the longer and the shorter stroke: longer / shorter. NaN where some sampled
+    angle cannot close, or where the output reverses other than twice per turn."""
+    angles = np.arange(0.0, 360.0, FINE_STEP)
+    values = np.asarray(solve(description, params, angles)[key], dtype=float)
+    if not np.isfinite(values).all():
+        return math.nan
+    steps = np.diff(np.append(values, values[0]))
+    steps = steps[steps != 0.0]
+    if np.count_nonzero(np.sign(steps) != np.sign(np.roll(steps, 1))) != 2:
+        return math.nan
+    top, _ = refined_extreme(description, params, key, angles, values, np.argmax)
+    low, _ = refined_extreme(description, params, key, angles, values, np.argmin)
+    one = (low - top) % 360.0
+    return max(one, 360.0 - one) / min(one, 360.0 - one)
+
 
 def solve(description: Mapping, params: Mapping[str, float], angles_deg) -> dict:
     """Position analysis of a described mechanism at each input angle (degrees, 1-D array-like).

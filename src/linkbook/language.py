@@ -239,7 +239,7 @@ STEP_KEYS = {
              {"slot_angle", "direction"}),
     "vector": ({"from", "to", "key"}, set()),
     "distance": ({"between", "key"}, {"symbol", "label"}),
-    "expression": ({"key", "formula"}, {"symbol", "label", "unit", "shown"}),
+    "expression": ({"key", "formula"}, {"symbol", "label", "unit", "shown", "time_ratio_of"}),
 }
 UNITS = {"length": LENGTH, "rad": RAD, "-": "-"}
 COMMON_KEYS = {"type", "columns"}
@@ -779,6 +779,11 @@ class Compiler:
             raise DescriptionError(f"{field}.shown", "must be true or false")
         known = self.symbols | self.swept | {q.key for q in self.model.quantities}
         body = expression(f"{field}.formula", s["formula"], known)
+        if "time_ratio_of" in s:
+            of = s["time_ratio_of"]
+            if not isinstance(of, str) or of not in {q.key for q in self.model.quantities}:
+                raise DescriptionError(f"{field}.time_ratio_of",
+                                       f"must be the key of an earlier column (got {of!r})")
         formula = f"IFERROR({body.text},NA())"
         sym = Sym(k, _text(f"{field}.symbol", s.get("symbol", k)),
                   _text(f"{field}.label", s.get("label", k)), shown=shown)

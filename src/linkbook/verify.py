@@ -337,9 +337,19 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     run("joints", "drawing rows", pos["sheet"], drawing_cells, np.array(drawing_expected),
         "length")
     checks.append(_check_links(pos, solver.description, ref, size))
+    checks += _check_degree_windows(model, mech.input_column, sweep, pos, ref, values, size)
 
-    # Derived constants.
+    # Derived constants: a time ratio from the reversals of its output (the reference's own
+    # motion, not the template's formula); any other from the reference.
+    ratios = time_ratios(solver.description)
     for key, info in meta.get("constants", {}).items():   # solve() returns them as floats
+        if key in ratios:
+            c = Check(f"reversals of {ratios[key]}", key, size)
+            compare(c, layout.MECH, [info["cell"]], [values.get((layout.MECH, info["cell"]))],
+                    np.array([generic.time_ratio(solver.description, params, ratios[key])]),
+                    info["unit"], is_error, error_code, RATIO_TOL, True)
+            checks.append(c)
+            continue
         run("constants", key, layout.MECH, [info["cell"]], np.array([float(ref[key])]),
             info["unit"])
 
@@ -351,6 +361,15 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         checks += _check_grid(wb, meta, solver, params, values, is_error, error_code, tol,
                               relative, size)
     return checks
+
+
+RATIO_TOL = 1e-6     # relative: a reversal's angle is located to 1e-7° (generic.refined_extreme)
+
+
+def time_ratios(description: dict) -> dict[str, str]:
+    """{expression key: output key} for the expressions declared a time ratio (time_ratio_of)."""
+    return {s["key"]: s["time_ratio_of"] for s in description.get("steps", [])
+            if isinstance(s, dict) and s.get("type") == "expression" and "time_ratio_of" in s}
 
 
 def joined_pairs(description: dict, ref: dict, size: float) -> set[frozenset]:
@@ -404,6 +423,61 @@ def _check_links(pos: dict, description: dict, ref: dict, size: float) -> Check:
                                              f"a link between joined points",
                                              f"{a}–{b}, which nothing joins"))
     return c
+
+
+WINDOW_STARTS = (-180.0, 180.0)   # where a degree view's 360° window may start
+FULL_TURN_GAP = 20.0              # an angle whose values leave no wider gap turns all round
+
+
+def _widest_gap(degrees: np.ndarray) -> float:
+    """The widest empty arc (degrees) between an angle's values taken round the circle."""
+    d = np.sort(np.mod(degrees[np.isfinite(degrees)], 360.0))
+    if d.size == 0:
+        return 360.0
+    return float(np.max(np.diff(np.append(d, d[0] + 360.0))))
+
+
+def _check_degree_windows(model, input_column: str, sweep: dict, pos: dict, ref: dict,
+                          values: dict, size: float) -> list[Check]:
+    """How a degree view shows its angle (docs/mechanisms.md): in one 360° window [lo, lo+360)
+    for the sweep column and the current position, lo in [-180°, 180°), cut in the widest gap of
+    the reference's values so that the curve does not jump; [0°, 360°) for an angle that turns
+    all round. The values themselves are compared modulo 360° in the sweep and position
+    checks; this judges the window, from the reference's values, not from the build's choice."""
+    checks = []
+    rows = range(sweep["rows"][0], sweep["rows"][1] + 1)
+    for key, letter in sweep["columns"].items():
+        if not key.endswith("_deg") or key[:-4] not in ref or key == input_column:
+            continue
+        c = Check(layout.SWEEP, f"{key} window", size)
+        cells = [(sweep["sheet"], f"{letter}{r}") for r in rows]
+        if key in pos["cells"]:
+            cells.append((pos["sheet"], pos["cells"][key]))
+        shown = [(cell, float(v)) for cell in cells
+                 if isinstance(v := values.get(cell), (int, float)) and not isinstance(v, bool)
+                 and math.isfinite(v)]
+        checks.append(c)
+        if not shown:
+            continue
+        gap = _widest_gap(np.degrees(np.asarray(ref[key[:-4]], dtype=float)))
+        low = min(shown, key=lambda s: s[1])
+        high = max(shown, key=lambda s: s[1])
+        in_sweep = [v for cell, v in shown if cell[0] == sweep["sheet"]]
+        eps = 1e-9 * 360.0
+        if model.get(key[:-4]).wrap_360 or gap < FULL_TURN_GAP:
+            bad = [(cell, v) for cell, v in shown if not -eps <= v < 360.0 + eps]
+            want = "in [0°, 360°): the angle turns all round"
+        elif low[1] < WINDOW_STARTS[0] - eps or high[1] >= WINDOW_STARTS[1] + 360.0 + eps:
+            bad, want = [low if low[1] < WINDOW_STARTS[0] - eps else high], \
+                "in a 360° window starting in [-180°, 180°)"
+        elif high[1] - low[1] >= 360.0 or (in_sweep and
+                                           max(in_sweep) - min(in_sweep) > 360.0 - gap + 1e-6):
+            bad, want = [high], (f"one window cut in the widest gap ({gap:.4g}°): the column "
+                                 f"spans {360.0 - gap:.6g}°")
+        else:
+            bad = []
+        c.mismatches += [Mismatch(sheet, cell, want, v) for (sheet, cell), v in bad[:1]]
+    return checks
 
 
 def motion_rates(mech, params: dict, size: float) -> tuple[float, float]:
@@ -657,7 +731,60 @@ def _check_grid(wb, meta, solver, params, values, is_error, error_code, tol, rel
     compare(s, grid["sheet"], cells, [values.get((grid["sheet"], x)) for x in cells], strokes,
             "length", is_error, error_code, tol, relative)
     checks.append(s)
+    checks.append(_check_stroke_sampling(solver, params, grid, adjust, values, size))
     return checks
+
+
+FINE_STEP = 0.1          # degrees: the reference's own sweep for a stroke, then refined
+
+
+def _true_extreme(solver, params: dict, key: str, angles: np.ndarray, values: np.ndarray,
+                  pick) -> tuple[float, float]:
+    """(angle, value) of the output's extreme over a turn (`pick` np.argmax or np.argmin):
+    the sampled one, refined four times tenfold around the best sample."""
+    i = int(pick(values))
+    angle, width = float(angles[i]), FINE_STEP
+    for _ in range(4):
+        near = np.linspace(angle - width, angle + width, 21)
+        v = np.asarray(solver.solve(params, near)[key], dtype=float)
+        if not np.isfinite(v).all():
+            break
+        i = int(pick(v))
+        angle, width = float(near[i]), width / 10.0
+    return angle, float(np.asarray(solver.solve(params, np.array([angle]))[key])[0])
+
+
+def _check_stroke_sampling(solver, params: dict, grid: dict, adjust: list, values: dict,
+                           size: float) -> Check:
+    """The stroke under the grid is max − min over a sweep sampled every `stroke_step`
+    degrees (the template's, as recorded): it may fall short of the true stroke (the
+    reference's extremes, refined to 1e-5°) by what a sample h/2 from each extreme loses, and
+    never exceed it. A sweep sampled more coarsely than the template asks misses by more."""
+    key = solver.mechanism.grid[1]
+    h = float(grid.get("stroke_step", 1.0))
+    c = Check(grid["sheet"], "stroke sampling", size, scale=size)
+    angles = np.arange(0.0, 360.0, FINE_STEP)
+    for letter, v in zip(grid["columns"], adjust):
+        cell = f"{letter}{grid['stroke_row']}"
+        got = values.get((grid["sheet"], cell))
+        p = {**params, grid["param"]: v}
+        fine = np.asarray(solver.solve(p, angles)[key], dtype=float)
+        if not np.isfinite(fine).all() or not isinstance(got, (int, float)) \
+                or isinstance(got, bool):
+            continue        # the stroke check at the book's own angles judges this cell
+        top_at, top = _true_extreme(solver, p, key, angles, fine, np.argmax)
+        low_at, low = _true_extreme(solver, p, key, angles, fine, np.argmin)
+        near = solver.solve(p, np.array([top_at - h / 2, top_at + h / 2,
+                                         low_at - h / 2, low_at + h / 2]))[key]
+        near = np.asarray(near, dtype=float)
+        allowance = (top - min(near[0], near[1])) + (max(near[2], near[3]) - low)
+        true = top - low
+        limit = c.limit(true)
+        if not true - allowance - limit <= got <= true + limit:
+            c.mismatches.append(Mismatch(
+                grid["sheet"], cell, f"{true:.10g} (the true stroke; a {h:g}° sampling may "
+                                     f"fall short by {allowance:.3g})", float(got)))
+    return c
 
 
 # ---------------------------------------------------------------- the command

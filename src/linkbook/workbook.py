@@ -83,6 +83,7 @@ def build(t: Template) -> Built:
     meta["controls"] = {MECH: _controls(ws_mech, t, meta["inputs"])}
     if t.mechanism.grid:
         meta["grid"] = _grid_sheet(wb.create_sheet(GRID), t, model, names)
+        meta["grid"]["stroke_step"] = t.stroke_step     # the template's: what verify expects
         # A grid that already samples a whole turn finely enough is its own stroke sweep.
         meta["stroke"] = (meta["grid"] if grid_is_fine(t) else
                           _stroke_sheet(wb.create_sheet(STROKE), t, model, names, meta["grid"]))
