@@ -100,15 +100,15 @@ def test_a_link_between_points_nothing_joins_disagrees(fourbar, tmp_path, capsys
 
 @pytest.mark.parametrize("window", ["raw", "shifted"])
 def test_a_degree_view_outside_its_window_disagrees(fourbar, tmp_path, capsys, window):
-    """θ13's degree view as plain DEGREES() (no window: the column jumps by 360° where ϕ − ψ
-    crosses ±180°), or moved a whole turn up (every value right modulo 360°, but the window
-    starts beyond 180°): verify names a cell of the column."""
+    """θ13's degree view as plain DEGREES() (no window: ϕ − ψ reaches below -180°), or moved a
+    whole turn down (every value right modulo 360°, but the window starts below -180°): verify
+    names a cell of the column."""
     def edit(wb, meta):
         letter, source = meta["sweep"]["columns"]["theta13_deg"], meta["sweep"]["columns"]["theta13"]
         first, last = meta["sweep"]["rows"]
         for r in range(first, last + 1):
             wb["Sweep"][f"{letter}{r}"] = (f"=DEGREES({source}{r})" if window == "raw" else
-                                           wb["Sweep"][f"{letter}{r}"].value + "+360")
+                                           wb["Sweep"][f"{letter}{r}"].value + "-360")
     code = cli.main(["verify", str(_edited(fourbar, tmp_path / f"{window}.xlsx", edit))])
     out = capsys.readouterr().out
     assert code == 1 and "theta13_deg window" in out, out[-2000:]

@@ -426,57 +426,49 @@ def _check_links(pos: dict, description: dict, ref: dict, size: float) -> Check:
 
 
 WINDOW_STARTS = (-180.0, 180.0)   # where a degree view's 360° window may start
-FULL_TURN_GAP = 20.0              # an angle whose values leave no wider gap turns all round
-
-
-def _widest_gap(degrees: np.ndarray) -> float:
-    """The widest empty arc (degrees) between an angle's values taken round the circle."""
-    d = np.sort(np.mod(degrees[np.isfinite(degrees)], 360.0))
-    if d.size == 0:
-        return 360.0
-    return float(np.max(np.diff(np.append(d, d[0] + 360.0))))
 
 
 def _check_degree_windows(model, input_column: str, sweep: dict, pos: dict, ref: dict,
                           values: dict, size: float) -> list[Check]:
     """How a degree view shows its angle (docs/mechanisms.md): in one 360° window [lo, lo+360)
-    for the sweep column and the current position, lo in [-180°, 180°), cut in the widest gap of
-    the reference's values so that the curve does not jump; [0°, 360°) for an angle that turns
-    all round. The values themselves are compared modulo 360° in the sweep and position
-    checks; this judges the window, from the reference's values, not from the build's choice."""
+    for the sweep column and the current position, lo in [-180°, 180°) ([0°, 360°) for an angle
+    that wraps). The build puts lo in the widest gap of the data it had; a user's edit moves the
+    data, not the window, so only the window itself is judged here, from the values shown.
+    The values are compared with the reference modulo 360° in the sweep and position checks."""
     checks = []
     rows = range(sweep["rows"][0], sweep["rows"][1] + 1)
+    eps = 1e-9 * 360.0
     for key, letter in sweep["columns"].items():
         if not key.endswith("_deg") or key[:-4] not in ref or key == input_column:
             continue
         c = Check(layout.SWEEP, f"{key} window", size)
+        checks.append(c)
         cells = [(sweep["sheet"], f"{letter}{r}") for r in rows]
         if key in pos["cells"]:
             cells.append((pos["sheet"], pos["cells"][key]))
         shown = [(cell, float(v)) for cell in cells
                  if isinstance(v := values.get(cell), (int, float)) and not isinstance(v, bool)
                  and math.isfinite(v)]
-        checks.append(c)
         if not shown:
             continue
-        gap = _widest_gap(np.degrees(np.asarray(ref[key[:-4]], dtype=float)))
-        low = min(shown, key=lambda s: s[1])
-        high = max(shown, key=lambda s: s[1])
-        in_sweep = [v for cell, v in shown if cell[0] == sweep["sheet"]]
-        eps = 1e-9 * 360.0
-        if model.get(key[:-4]).wrap_360 or gap < FULL_TURN_GAP:
-            bad = [(cell, v) for cell, v in shown if not -eps <= v < 360.0 + eps]
-            want = "in [0°, 360°): the angle turns all round"
-        elif low[1] < WINDOW_STARTS[0] - eps or high[1] >= WINDOW_STARTS[1] + 360.0 + eps:
-            bad, want = [low if low[1] < WINDOW_STARTS[0] - eps else high], \
-                "in a 360° window starting in [-180°, 180°)"
-        elif high[1] - low[1] >= 360.0 or (in_sweep and
-                                           max(in_sweep) - min(in_sweep) > 360.0 - gap + 1e-6):
-            bad, want = [high], (f"one window cut in the widest gap ({gap:.4g}°): the column "
-                                 f"spans {360.0 - gap:.6g}°")
+        (low_cell, low), (high_cell, high) = (min(shown, key=lambda s: s[1]),
+                                              max(shown, key=lambda s: s[1]))
+        if model.get(key[:-4]).wrap_360:
+            first, last = 0.0, 0.0
         else:
-            bad = []
-        c.mismatches += [Mismatch(sheet, cell, want, v) for (sheet, cell), v in bad[:1]]
+            first, last = WINDOW_STARTS
+        # some lo in [first, last] with low >= lo and high < lo + 360
+        if low < first - eps:
+            bad, want = (low_cell, low), f"at least {first:g}°"
+        elif high >= last + 360.0 + eps:
+            bad, want = (high_cell, high), f"below {last + 360.0:g}°"
+        elif high - low >= 360.0 + eps:
+            bad, want = (high_cell, high), f"within 360° of {low:.10g}° ({low_cell[1]})"
+        else:
+            continue
+        c.mismatches.append(Mismatch(bad[0][0], bad[0][1],
+                                     f"one 360° window starting in [{first:g}°, {last:g}°]: "
+                                     f"{want}", bad[1]))
     return checks
 
 
