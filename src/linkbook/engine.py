@@ -51,6 +51,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import io
+import math
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -61,7 +62,7 @@ import openpyxl
 import schedula as sh
 from formulas import Parser
 from formulas.cell import CELL
-from formulas.functions import Array, replace_empty
+from formulas.functions import FUNCTIONS, Array, flatten, replace_empty, wrap_func
 from formulas.ranges import Ranges
 from formulas.tokens.function import Function
 from formulas.tokens.operand import Error, Range, XlError
@@ -101,6 +102,31 @@ HOST_AWARE = frozenset({"ROW", "COLUMN", "SINGLE", "_XLFN.SINGLE", "@"})
 # Functions whose result depends on cells that are not among the compiled inputs.
 DYNAMIC = frozenset({"INDIRECT", "OFFSET", "ISFORMULA", "_XLFN.ISFORMULA", "FORMULATEXT",
                      "_XLFN.FORMULATEXT", "CELL"})
+
+
+
+def _aggregate(function_num, options, ref, *k):
+    """Excel 2010's AGGREGATE, which `formulas` lacks, in the forms a workbook needs to skip
+    the #N/A rows of a column: MAX (4), MIN (5), LARGE (14, k), SMALL (15, k) with option 6
+    (ignore error values). Any other function or option gives #VALUE! (not evaluated here)."""
+    def scalar(x):
+        return np.ravel(x)[0] if isinstance(x, np.ndarray) else x
+    num, opt = scalar(function_num), scalar(options)
+    if opt != 6 or num not in (4, 5, 14, 15) or (num >= 14) != (len(k) == 1):
+        return Error.errors["#VALUE!"]
+    numbers = sorted(float(v) for v in flatten(ref, check=None)
+                     if isinstance(v, (int, float, np.number))
+                     and not isinstance(v, (bool, np.bool_, XlError)))
+    if num in (4, 5):
+        return (numbers[-1] if num == 4 else numbers[0]) if numbers else 0.0
+    rank = scalar(k[0])
+    if not isinstance(rank, (int, float)) or not 1 <= rank <= len(numbers):
+        return Error.errors["#NUM!"]
+    i = math.ceil(rank) - 1
+    return numbers[-1 - i] if num == 14 else numbers[i]
+
+
+FUNCTIONS["AGGREGATE"] = FUNCTIONS["_XLFN.AGGREGATE"] = wrap_func(_aggregate)
 
 _PARSER = Parser()
 # Compiled functions by (sheet, skeleton, pattern of equal references, mode): see _compiled.

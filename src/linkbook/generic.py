@@ -1528,7 +1528,8 @@ class _Motion:
 # Public API
 # --------------------------------------------------------------------------------------------
 
-FINE_STEP = 0.1       # degrees: the reference's own sampling of a turn for extremes
+EXTREME_STEP = 1.0    # degrees: the reference's sampling of a turn to find an extreme's basin
+REVERSAL_STEP = 0.1   # degrees: ... to count an output's reversals
 
 
 def refined_extreme(description: Mapping, params: Mapping[str, float], key: str,
@@ -1536,10 +1537,11 @@ def refined_extreme(description: Mapping, params: Mapping[str, float], key: str,
                     rounds: int = 6) -> tuple[float, float]:
     """(input angle, value) of column `key`'s extreme (`pick`: np.argmax or np.argmin) over
     sampled `angles`, refined by resampling 21 points around the best one, tenfold finer each
-    round (six rounds from a 0.1° sampling: 1e-7°, where the value is flat to round-off)."""
+    round (six rounds from a 1° sampling: 1e-6°; the value is then exact to round-off)."""
+    params = positions_only(params)
     i = int(pick(values))
     angle = float(angles[i])
-    width = float(np.max(np.diff(angles))) if len(angles) > 1 else FINE_STEP
+    width = float(np.max(np.diff(angles))) if len(angles) > 1 else EXTREME_STEP
     for _ in range(rounds):
         near = np.linspace(angle - width, angle + width, 21)
         v = np.asarray(solve(description, params, near)[key], dtype=float)
@@ -1551,13 +1553,20 @@ def refined_extreme(description: Mapping, params: Mapping[str, float], key: str,
     return angle, value
 
 
+def positions_only(params: Mapping[str, float]) -> dict:
+    """The parameters without the input's speed and acceleration: solve() then skips motion."""
+    rates = {name for pair in _MOTION_PARAMS.values() for name in pair}
+    return {k: v for k, v in params.items() if k not in rates}
+
+
 def time_ratio(description: Mapping, params: Mapping[str, float], key: str) -> float:
     """A quick-return ratio measured on the motion, not from any formula: column `key` (an
     output that moves forward and back once per turn of the input) over a turn sampled every
-    FINE_STEP; the input angles of its two reversals (its refined maximum and minimum) split
+    REVERSAL_STEP; the input angles of its two reversals (its refined maximum and minimum) split
     the turn into the longer and the shorter stroke: longer / shorter. NaN where some sampled
     angle cannot close, or where the output reverses other than twice per turn."""
-    angles = np.arange(0.0, 360.0, FINE_STEP)
+    params = positions_only(params)
+    angles = np.arange(0.0, 360.0, REVERSAL_STEP)
     values = np.asarray(solve(description, params, angles)[key], dtype=float)
     if not np.isfinite(values).all():
         return math.nan
@@ -1565,8 +1574,8 @@ def time_ratio(description: Mapping, params: Mapping[str, float], key: str) -> f
     steps = steps[steps != 0.0]
     if np.count_nonzero(np.sign(steps) != np.sign(np.roll(steps, 1))) != 2:
         return math.nan
-    top, _ = refined_extreme(description, params, key, angles, values, np.argmax)
-    low, _ = refined_extreme(description, params, key, angles, values, np.argmin)
+    top, _ = refined_extreme(description, params, key, angles, values, np.argmax, rounds=5)
+    low, _ = refined_extreme(description, params, key, angles, values, np.argmin, rounds=5)
     one = (low - top) % 360.0
     return max(one, 360.0 - one) / min(one, 360.0 - one)
 

@@ -363,7 +363,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     return checks
 
 
-RATIO_TOL = 1e-6     # relative: a reversal's angle is located to 1e-7° (generic.refined_extreme)
+RATIO_TOL = 1e-6     # relative: a reversal's angle is located to 1e-6° (generic.time_ratio)
 
 
 def time_ratios(description: dict) -> dict[str, str]:
@@ -420,7 +420,7 @@ def _check_links(pos: dict, description: dict, ref: dict, size: float) -> Check:
         for i, (a, b) in enumerate(zip(names, names[1:])):
             if a != b and frozenset((a, b)) not in joined:
                 c.mismatches.append(Mismatch(pos["sheet"], f"{x_col}{link['rows'][0] + i + 1}",
-                                             f"a link between joined points",
+                                             "a link between joined points",
                                              f"{a}–{b}, which nothing joins"))
     return c
 
@@ -727,45 +727,26 @@ def _check_grid(wb, meta, solver, params, values, is_error, error_code, tol, rel
     return checks
 
 
-FINE_STEP = 0.1          # degrees: the reference's own sweep for a stroke, then refined
-
-
-def _true_extreme(solver, params: dict, key: str, angles: np.ndarray, values: np.ndarray,
-                  pick) -> tuple[float, float]:
-    """(angle, value) of the output's extreme over a turn (`pick` np.argmax or np.argmin):
-    the sampled one, refined four times tenfold around the best sample."""
-    i = int(pick(values))
-    angle, width = float(angles[i]), FINE_STEP
-    for _ in range(4):
-        near = np.linspace(angle - width, angle + width, 21)
-        v = np.asarray(solver.solve(params, near)[key], dtype=float)
-        if not np.isfinite(v).all():
-            break
-        i = int(pick(v))
-        angle, width = float(near[i]), width / 10.0
-    return angle, float(np.asarray(solver.solve(params, np.array([angle]))[key])[0])
-
-
 def _check_stroke_sampling(solver, params: dict, grid: dict, adjust: list, values: dict,
                            size: float) -> Check:
     """The stroke under the grid is max − min over a sweep sampled every `stroke_step`
     degrees (the template's, as recorded): it may fall short of the true stroke (the
-    reference's extremes, refined to 1e-5°) by what a sample h/2 from each extreme loses, and
+    reference's extremes, refined to 1e-6°) by what a sample h/2 from each extreme loses, and
     never exceed it. A sweep sampled more coarsely than the template asks misses by more."""
     key = solver.mechanism.grid[1]
     h = float(grid.get("stroke_step", 1.0))
     c = Check(grid["sheet"], "stroke sampling", size, scale=size)
-    angles = np.arange(0.0, 360.0, FINE_STEP)
+    angles = np.arange(0.0, 360.0, generic.EXTREME_STEP)
     for letter, v in zip(grid["columns"], adjust):
         cell = f"{letter}{grid['stroke_row']}"
         got = values.get((grid["sheet"], cell))
-        p = {**params, grid["param"]: v}
+        p = generic.positions_only({**params, grid["param"]: v})
         fine = np.asarray(solver.solve(p, angles)[key], dtype=float)
         if not np.isfinite(fine).all() or not isinstance(got, (int, float)) \
                 or isinstance(got, bool):
             continue        # the stroke check at the book's own angles judges this cell
-        top_at, top = _true_extreme(solver, p, key, angles, fine, np.argmax)
-        low_at, low = _true_extreme(solver, p, key, angles, fine, np.argmin)
+        top_at, top = generic.refined_extreme(solver.description, p, key, angles, fine, np.argmax)
+        low_at, low = generic.refined_extreme(solver.description, p, key, angles, fine, np.argmin)
         near = solver.solve(p, np.array([top_at - h / 2, top_at + h / 2,
                                          low_at - h / 2, low_at + h / 2]))[key]
         near = np.asarray(near, dtype=float)

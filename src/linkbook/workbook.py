@@ -505,10 +505,11 @@ def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int,
 
 
 GAPS_SHOWN = 3
-DASH = "—"     # "no value here" in text cells (SMALL and MINIFS skip text)
-# Functions newer than Excel 2007 are stored with the _xlfn. prefix; without it Excel and
-# LibreOffice show #NAME?.
-MINIFS, MAXIFS = "_xlfn.MINIFS", "_xlfn.MAXIFS"
+DASH = "—"     # "no value here" in text cells (SMALL and AGGREGATE skip text)
+# Excel 2010's AGGREGATE: MIN (5) or MAX (4) with option 6, which skips error values (the #N/A
+# rows of a column). Functions newer than Excel 2007 are stored with the _xlfn. prefix; without
+# it Excel and LibreOffice show #NAME?. (MINIFS/MAXIFS would need Excel 2019.)
+AGGREGATE, MIN_OF, MAX_OF, SKIP_ERRORS = "_xlfn.AGGREGATE", 5, 4, 6
 
 
 def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row: int) -> dict:
@@ -553,9 +554,9 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
             t.mechanism.input_unit, "number_or_dash")
 
     def extremes(prefix: str, what: str, column: str, unit: str, convert: str = "") -> None:
-        # MINIFS/MAXIFS over numbers only: the #N/A rows of a column are skipped.
-        for suffix, fn, word in (("min", MINIFS, "smallest"), ("max", MAXIFS, "largest")):
-            value = f'{fn}({column},{column},">-1E+300")'
+        # over numbers only: the #N/A rows of a column are skipped
+        for suffix, fn, word in (("min", MIN_OF, "smallest"), ("max", MAX_OF, "largest")):
+            value = f"{AGGREGATE}({fn},{SKIP_ERRORS},{column})"
             value = f"{convert}({value})" if convert else value
             put(f"{prefix}_{suffix}", f"{word} {what}",
                 f'=IF(COUNT({column})=0,"{DASH}",{value})', unit, "number_or_dash")
