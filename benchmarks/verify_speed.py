@@ -44,7 +44,7 @@ from linkbook.cli import main
 assert main(["build", NAME, *ARGS, "-o", BOOK]) == 0
 """,
     "vector": """
-from linkbook.verify import verify
+from linkbook.verifier import verify
 report = verify(Path(BOOK), "vector")
 EXTRA["ok"] = report.ok
 EXTRA["cells"] = report.cells
@@ -61,7 +61,7 @@ with tempfile.TemporaryDirectory() as d:
 """,
     "reference": """
 from linkbook.safety import load_workbook_safely
-from linkbook.verify import Reference, inputs_of
+from linkbook.verifier import Reference, inputs_of
 from linkbook.workbook import read_meta
 wb = load_workbook_safely(Path(BOOK))
 meta = read_meta(wb)
@@ -93,7 +93,7 @@ sys.path.insert(0, {src!r})
 import formulas, numpy, openpyxl
 from formulas.functions import get_functions
 get_functions()
-import linkbook.cli, linkbook.engine, linkbook.verify
+import linkbook.cli, linkbook.engine, linkbook.verifier
 NAME, ARGS, BOOK = {name!r}, {args!r}, {book!r}
 EXTRA = {{}}
 t0 = time.perf_counter()

@@ -11,8 +11,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
-from linkbook import build, engine, templates  # noqa: E402
-from linkbook.verify import check_book  # noqa: E402
+from linkbook import builder, engine, templates  # noqa: E402
+from linkbook.verifier import check_book  # noqa: E402
 
 
 def published() -> dict:
@@ -31,7 +31,7 @@ def template(name: str, sets=(), step=None, branch=None) -> templates.Template:
 @lru_cache(maxsize=None)
 def built(name: str, sets: tuple = (), step=None, branch=None):
     """(Built, values) of a template with overrides, evaluated by the vector engine."""
-    return build.make(template(name, sets, step, branch))
+    return builder.make(template(name, sets, step, branch))
 
 
 def formula_cells(wb) -> set[tuple[str, str]]:

@@ -16,7 +16,7 @@ import pytest
 from conftest import template
 from PIL import Image
 
-from linkbook import build, cli, engine, verify, workbook
+from linkbook import builder, cli, engine, verifier, workbook
 from linkbook.animate import AnimationError, frames_of, render, write_mp4
 
 BUNDLED = sorted(p.stem for p in Path(__file__).resolve().parents[1].glob("templates/*.toml"))
@@ -29,9 +29,9 @@ def books(tmp_path_factory) -> dict[str, Path]:
     out = {}
     for name in BUNDLED:
         out[name] = folder / f"{name}.xlsx"
-        build.build_file(template(name), out[name])
+        builder.build_file(template(name), out[name])
     out["non-grashof"] = folder / "non-grashof.xlsx"
-    build.build_file(template("fourbar", NON_GRASHOF), out["non-grashof"])
+    builder.build_file(template("fourbar", NON_GRASHOF), out["non-grashof"])
     return out
 
 
@@ -68,7 +68,7 @@ def test_vary_refuses_a_formula_input(books):
 def _reference_joints(path: Path, angles) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     wb = openpyxl.load_workbook(path)
     meta = workbook.read_meta(wb)
-    ref = verify.Reference(meta).solve(verify.inputs_of(wb, meta), np.asarray(angles, float))
+    ref = verifier.Reference(meta).solve(verifier.inputs_of(wb, meta), np.asarray(angles, float))
     return ref["points"], np.asarray(ref["assembled"], dtype=bool)
 
 

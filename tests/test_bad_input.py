@@ -9,7 +9,7 @@ import openpyxl
 import pytest
 
 from conftest import ROOT
-from linkbook import build as build_module
+from linkbook import builder as build_module
 from linkbook.cli import main
 
 FOURBAR_TOML = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")

@@ -22,7 +22,7 @@ import openpyxl
 import pytest
 from conftest import template
 
-from linkbook import build, package, verify
+from linkbook import builder, package, verifier
 from linkbook.controls import Control
 
 UNO_PYTHON = "/usr/bin/python3"
@@ -32,7 +32,7 @@ BUNDLED = sorted(p.stem for p in Path(__file__).resolve().parents[1].glob("templ
 
 def _build(tmp_path: Path, name: str, sets=(), values=False) -> tuple[Path, object]:
     path = tmp_path / f"{name}{'-values' if values else ''}.xlsx"
-    built = build.build_file(template(name, sets), path, with_values=values)
+    built = builder.build_file(template(name, sets), path, with_values=values)
     return path, built
 
 
@@ -156,7 +156,7 @@ def _cell_index(cell: str) -> list[int]:
 
 
 def _expected_joints(built, inputs: dict, angle: float) -> dict[str, tuple[float, float]]:
-    ref = verify.Reference(built.meta).solve(inputs, np.array([angle]))
+    ref = verifier.Reference(built.meta).solve(inputs, np.array([angle]))
     return {name: (float(x[0]), float(y[0])) for name, (x, y) in ref["points"].items()}
 
 
@@ -184,7 +184,7 @@ def test_libreoffice_moves_the_drawing_with_the_controls(tmp_path, name, values)
         if got["kind"] == "Scroll":
             assert got["page"] == want["page"] and got["horizontal"]
 
-    inputs = verify.inputs_of(built.workbook, built.meta)
+    inputs = verifier.inputs_of(built.workbook, built.meta)
     for move, after in zip(moves, report["after"]):
         angle = move[1] if move[0] < 2 else 95
         if move[0] == 2:

@@ -26,7 +26,7 @@ from conftest import template
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from linkbook import build, cli
+from linkbook import builder, cli
 from linkbook import workbook as layout
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -54,7 +54,7 @@ def books(tmp_path_factory) -> dict[str, bytes]:
     for name, sets, step in (("fourbar", (), 30.0), ("pump", ("s1=20,100",), 60.0),
                              ("boom-cylinder", (), 100.0)):
         path = folder / f"{name}.xlsx"
-        build.build_file(template(name, sets, step), path)
+        builder.build_file(template(name, sets, step), path)
         out[name] = Raw(path.read_bytes())
     return out
 

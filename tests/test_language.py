@@ -12,7 +12,7 @@ import tomllib
 import pytest
 
 from conftest import ROOT, checks_of, formula_cells
-from linkbook import build, engine, templates
+from linkbook import builder, engine, templates
 from linkbook.templates import InputError
 
 
@@ -173,7 +173,7 @@ def _expression_book(formula: str, **extra):
     data["mechanism"]["steps"].append({"type": "expression", "key": "probe", "formula": formula,
                                        **extra})
     data["mechanism"].pop("columns")
-    return build.make(templates.from_data("probe", data))
+    return builder.make(templates.from_data("probe", data))
 
 
 @pytest.mark.parametrize("formula,expected", [
@@ -219,7 +219,7 @@ def test_a_new_step_in_a_copied_template_needs_no_python():
         {"type": "point", "point": "E", "frame": ["D0", "D"], "local": [40, 10]}]
     data["mechanism"]["links"] += [["C", "D"], ["D0", "D", "E"]]
     data["mechanism"].pop("columns")
-    b, values = build.make(templates.from_data("mine", data))
+    b, values = builder.make(templates.from_data("mine", data))
     checks = checks_of(b, values)
     bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
     assert not bad, bad[:5]
@@ -239,7 +239,7 @@ def _jansen_with_grid(output: str, extra_steps=()) -> dict:
 def test_a_grid_of_any_described_mechanism_is_verified():
     """The textbook's adjustment-by-angle grid for Jansen's leg: the foot's height for three
     crank lengths, one self-contained formula per cell, every cell against the reference."""
-    b, values = build.make(templates.from_data("jansen-grid", _jansen_with_grid("yF")))
+    b, values = builder.make(templates.from_data("jansen-grid", _jansen_with_grid("yF")))
     checks = checks_of(b, values)
     bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
     assert not bad, bad[:5]
@@ -256,7 +256,7 @@ def test_a_grid_formula_excel_could_not_open_is_refused():
               {"type": "dyad", "point": "H", "p": "G", "q": "E", "p_length": "h",
                "q_length": "k", "branch": 1}]
     with pytest.raises(InputError) as caught:
-        build.make(templates.from_data("deep", _jansen_with_grid("yH", deeper)))
+        builder.make(templates.from_data("deep", _jansen_with_grid("yH", deeper)))
     assert "grid.output" in str(caught.value) and "Excel allows 8,192" in str(caught.value)
 
 
@@ -319,7 +319,7 @@ def test_every_option_of_every_step_type_is_verified():
     t = _every_option()
     assert {s["type"] for s in t.mechanism.description["steps"]} == set(
         __import__("linkbook.language", fromlist=["STEP_KEYS"]).STEP_KEYS)
-    b, values = build.make(t)
+    b, values = builder.make(t)
     checks = checks_of(b, values)
     bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
     assert not bad, bad[:5]
@@ -335,7 +335,6 @@ def test_every_option_of_every_step_type_is_verified():
 def test_every_option_on_random_dimensions():
     from hypothesis import HealthCheck, given, settings
     from hypothesis import strategies as st
-    from linkbook import workbook
 
     @settings(max_examples=30, deadline=None, derandomize=True,
               suppress_health_check=[HealthCheck.too_slow])
@@ -345,7 +344,7 @@ def test_every_option_on_random_dimensions():
         "e6": st.floats(-40, 40), "side": st.sampled_from([1, -1]),
         "br": st.sampled_from([1, -1])}))
     def check(values):
-        b, computed = build.make(_every_option(**values))
+        b, computed = builder.make(_every_option(**values))
         checks = checks_of(b, computed)
         bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
         assert not bad, (values, bad[:5])
@@ -357,7 +356,7 @@ def test_every_option_on_random_dimensions():
 def test_a_long_description_fits_the_build_record(tmp_path):
     """The record (with the description) is split across cells: Excel holds 32,767 characters in
     one. Forty extra steps make it longer than that; the saved book still verifies."""
-    from linkbook.verify import verify
+    from linkbook.verifier import verify
     data = fourbar_data()
     data["mechanism"].pop("columns")
     for i in range(40):
@@ -366,7 +365,7 @@ def test_a_long_description_fits_the_build_record(tmp_path):
              "columns": {"x": {"label": "a long label " * 20}, "y": {"label": "y " * 100}}})
     t = templates.from_data("long", data)
     path = tmp_path / "long.xlsx"
-    build.build_file(t, path)
+    builder.build_file(t, path)
     import openpyxl
     record = openpyxl.load_workbook(path)["linkbook"]
     assert isinstance(record["A3"].value, str)       # the record did need a second cell
@@ -382,7 +381,7 @@ def test_a_linear_actuator_sweeps_a_length():
     """The boom's input is the cylinder's length: the sweep's first column and the current
     position are lengths, the dyad's side follows them, and everything is verified."""
     t = templates.with_overrides(templates.load("boom-cylinder"), step="25")
-    b, values = build.make(t)
+    b, values = builder.make(t)
     checks = checks_of(b, values)
     bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
     assert not bad, bad[:5]

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from conftest import built, checks_of, template, value_at
-from linkbook import build, generic, templates, verify
+from conftest import built, checks_of
+from linkbook import generic, templates
 
 
 def test_offset_slider_crank_by_hand():

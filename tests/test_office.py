@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT / "src") not in sys.path:        # conftest does this too; kept for --noconftest
     sys.path.insert(0, str(ROOT / "src"))
 
-from linkbook import build, cached, charts, office, package, templates, verify, workbook  # noqa: E402
+from linkbook import builder, cached, charts, office, package, templates, verifier, workbook  # noqa: E402
 
 REL_TOL = 1e-9          # LibreOffice stores 15 significant digits
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")      # cannot turn fully: #N/A rows
@@ -56,7 +56,7 @@ def _formula_cells(wb) -> dict[tuple[str, str], str]:
 
 def _built_and_values(name: str, sets, tmp: Path):
     """A finished workbook, saved, and every cell as LibreOffice recalculates it."""
-    b, _ = build.make(_template(name, sets))
+    b, _ = builder.make(_template(name, sets))
     path = tmp / f"{name}.xlsx"
     b.workbook.save(path)
     return b, path, office.recalculated_values(path)
@@ -368,7 +368,7 @@ def test_libreoffice_matches_reference(lo_books, case):
     assert worst <= REL_TOL
     assert (na_rows > 0) == (case == "non-grashof")
 
-    checks = verify.check_book(b.workbook, b.meta, values, office.is_error, office.error_code,
+    checks = verifier.check_book(b.workbook, b.meta, values, office.is_error, office.error_code,
                                tol=REL_TOL, relative=True)
     bad = [f"{c.block}/{c.name}: {m.sheet}!{m.cell} expected {m.expected!r}, LibreOffice "
            f"{m.got!r}" for c in checks for m in c.mismatches]
@@ -384,7 +384,7 @@ def _sweep_against_reference(b, values) -> tuple[float, int]:
     first, last = sweep["rows"]
     ws = b.workbook[sweep["sheet"]]
     angles = np.array([ws[f"A{r}"].value for r in range(first, last + 1)], dtype=float)
-    ref = verify.Reference(b.meta).solve(verify.inputs_of(b.workbook, b.meta), angles)
+    ref = verifier.Reference(b.meta).solve(verifier.inputs_of(b.workbook, b.meta), angles)
     worst, compared = 0.0, 0
     for key, letter in sweep["columns"].items():
         degrees = key.endswith("_deg")

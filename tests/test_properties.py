@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conftest import checks_of, formula_cells
-from linkbook import build, templates
+from linkbook import builder, templates
 from linkbook.language import STEP_KEYS
 from linkbook.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
                                  OFFSET_KIND, RATE_KIND)
@@ -64,7 +64,7 @@ def test_random_dimensions_match_the_reference(family):
     @given(dimensions(base))
     def check(values):
         t = with_values(base, values)
-        built, computed = build.make(t)       # the finished book: degree windows chosen
+        built, computed = builder.make(t)       # the finished book: degree windows chosen
         checks = checks_of(built, computed)
         bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
         assert not bad, (values, bad[:5])
@@ -109,14 +109,14 @@ def scaled(t: templates.Template, factor: float) -> templates.Template:
 def test_every_magnitude_of_the_domain_verifies(family, power, stretch):
     """A book built from accepted input verifies, whatever the unit: the bundled mechanisms at
     10⁻⁵ to 10⁵ times their size (micrometres to kilometres, in effect) pass the same checks,
-    with bounds that scale with the mechanism (verify.PER)."""
+    with bounds that scale with the mechanism (verifier.PER)."""
     base = templates.load(family)
     t = scaled(base, stretch * 10.0 ** power)
     t = dataclasses.replace(t, sweep=dataclasses.replace(
         t.sweep, step=t.sweep.step if not t.mechanism.input_is_angle else 30.0),
         stroke_step=30.0)
     templates.check_sweep(t)                    # inside the supported domain
-    built, computed = build.make(t)
+    built, computed = builder.make(t)
     checks = checks_of(built, computed)
     bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
     assert not bad, (family, power, bad[:5])

@@ -9,7 +9,7 @@ import openpyxl
 import pytest
 from conftest import template
 
-from linkbook import build, cli
+from linkbook import builder, cli
 from linkbook import workbook as layout
 from linkbook.templates import InputError, with_overrides
 
@@ -17,7 +17,7 @@ from linkbook.templates import InputError, with_overrides
 @pytest.fixture(scope="module")
 def fourbar(tmp_path_factory) -> Path:
     path = tmp_path_factory.mktemp("verdict") / "fourbar.xlsx"
-    build.build_file(template("fourbar"), path)
+    builder.build_file(template("fourbar"), path)
     return path
 
 
@@ -118,7 +118,7 @@ def test_a_stroke_sampled_more_coarsely_than_the_template_asks_disagrees(tmp_pat
     """The pump's stroke row is max − min of a 1° sweep. Recorded as if the template asked for
     0.1°, the 1° sampling falls short of the true stroke by more than a 0.1° one may: named."""
     path = tmp_path / "pump.xlsx"
-    build.build_file(template("pump"), path)
+    builder.build_file(template("pump"), path)
     assert cli.main(["verify", str(path)]) == 0
     capsys.readouterr()
 
@@ -127,6 +127,29 @@ def test_a_stroke_sampled_more_coarsely_than_the_template_asks_disagrees(tmp_pat
     code = cli.main(["verify", str(_edited(path, tmp_path / "fine.xlsx", edit))])
     out = capsys.readouterr().out
     assert code == 1 and "stroke sampling" in out and "the true stroke" in out, out[-1500:]
+
+
+def test_one_broken_formula_is_marked_as_the_likely_cause(fourbar, tmp_path, capsys):
+    """xB + 1 on one sweep row: that cell and the Motion cells of its row (which read it)
+    differ; the summary counts each differing cell once and names xB's cell as the cause."""
+    import json
+
+    def edit(wb, meta):
+        cell = f"{meta['sweep']['columns']['xB']}{meta['sweep']['rows'][0] + 10}"
+        wb["Sweep"][cell] = wb["Sweep"][cell].value + "+1"
+        edit.cell = cell
+    path = _edited(fourbar, tmp_path / "broken.xlsx", edit)
+    code = cli.main(["verify", str(path)])
+    out = capsys.readouterr().out.strip().splitlines()
+    cause = f"Sweep!{edit.cell}"
+    marked = [line for line in out if "likely cause (reads no differing cell)" in line]
+    assert code == 1 and len(marked) == 1 and marked[0].strip().startswith(cause), marked
+    differing = {line.split(":")[0].strip() for line in out if line.startswith("  ")}
+    assert out[-1].startswith(f"DISAGREES: {len(differing)} cells differ, likely cause {cause};")
+    assert len(differing) > 1                     # the Motion cells of that row read it
+    assert cli.main(["verify", "--json", str(path)]) == 1
+    data = json.loads(capsys.readouterr().out)
+    assert data["likely_causes"] == [cause] and data["mismatches"] == len(differing)
 
 
 @pytest.mark.parametrize("value", ["1e308", "1e155", "1e30", "1e-9"])
@@ -179,9 +202,9 @@ def test_the_quick_return_ratio_follows_the_ram(sets):
 
     from conftest import built
 
-    from linkbook import engine, generic, verify
+    from linkbook import engine, generic, verifier
     b, values = built("quick-return", sets)
-    inputs = verify.inputs_of(b.workbook, b.meta)
+    inputs = verifier.inputs_of(b.workbook, b.meta)
     expected = generic.time_ratio(b.meta["description"], inputs, "s16")
     got = values[("Mechanism", b.meta["constants"]["time_ratio"]["cell"])]
     if math.isnan(expected):
@@ -196,7 +219,7 @@ def test_the_quick_return_ratio_follows_the_ram(sets):
 def test_the_bound_is_the_documented_one():
     """README: 1e-12·S for a length (times the rate for a velocity), 1e-9 for an angle; beyond
     its magnitude m a value may differ by 1e-12·|x|²/m; an angle itself never grows."""
-    from linkbook.verify import Check
+    from linkbook.verifier import Check
     S = 500.0
     length = Check("b", "x", S, 1.0, S)
     assert length.limit(100.0) == pytest.approx(5e-10)

@@ -11,7 +11,7 @@ import openpyxl
 import pytest
 
 from conftest import formula_cells, template
-from linkbook import build, engine, templates
+from linkbook import builder, engine, templates
 from linkbook.cli import main
 
 BUNDLED = sorted(p.stem for p in templates.bundled())
@@ -38,7 +38,7 @@ def _same(a, b) -> bool:
 @pytest.mark.parametrize("name", BUNDLED)
 def test_vector_engine_equals_excelmodel_on_every_cell(name, tmp_path):
     path = tmp_path / f"{name}.xlsx"
-    build.build_file(_small(name), path)
+    builder.build_file(_small(name), path)
     wb = openpyxl.load_workbook(path)
     fast = engine.evaluate(wb)
     slow = engine.evaluate_formulas_model(path)
@@ -55,7 +55,7 @@ def test_errors_come_through_cell_by_cell(tmp_path):
     """A non-Grashof four-bar: ExcelModel and the vector engine give #N/A on the same cells."""
     t = template("fourbar", ("a1=100", "a2=60", "a3=50", "a4=40"), 10)
     path = tmp_path / "ng.xlsx"
-    build.build_file(t, path)
+    builder.build_file(t, path)
     wb = openpyxl.load_workbook(path)
     fast, slow = engine.evaluate(wb), engine.evaluate_formulas_model(path)
     na = [c for c in formula_cells(wb) if engine.error_code(fast[c]) == "#N/A"]
@@ -199,10 +199,10 @@ def test_libreoffice_recalculates_every_bundled_book_like_the_reference(name, tm
     """The real application: a full recalculation in LibreOffice, every formula cell against the
     reference (1e-9 relative: LibreOffice stores 15 significant digits)."""
     from test_office import require_soffice
-    from linkbook.verify import verify
+    from linkbook.verifier import verify
     require_soffice()
     path = tmp_path / f"{name}.xlsx"
-    build.build_file(templates.load(name), path)
+    builder.build_file(templates.load(name), path)
     report = verify(path, "libreoffice")
     bad = [(c.name, m) for c in report.checks for m in c.mismatches[:2]]
     assert report.ok, bad[:5]

@@ -73,7 +73,7 @@ def test_cases_that_cannot_close_really_have_na_rows(name, sets, branch):
 
 @pytest.mark.parametrize("name", sorted(p.stem for p in (ROOT / "templates").glob("*.toml")))
 def test_build_values_equal_a_fresh_evaluation_of_the_saved_layout(name):
-    """build.make evaluates once, moves the degree windows and evaluates only the degree views
+    """builder.make evaluates once, moves the degree windows and evaluates only the degree views
     again (the rest taken as known): that must be exactly what a whole evaluation of the final
     workbook gives, i.e. no formula reads a degree view."""
     b, values = built(name)

@@ -180,7 +180,7 @@ def _verify_one(book: str, engine: str, quiet: bool) -> tuple[int, dict]:
     from . import __version__
     from .office import OfficeFailed, OfficeUnavailable
     from .safety import UnsafeFile
-    from .verify import TOLERANCE_RULE, UnusableFile, verify
+    from .verifier import TOLERANCE_RULE, UnusableFile, verify
     try:
         report = verify(Path(book), engine)
     except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:
@@ -192,7 +192,8 @@ def _verify_one(book: str, engine: str, quiet: bool) -> tuple[int, dict]:
         "book": report.path, "mechanism": report.mechanism, "engine": report.engine,
         "linkbook": __version__, "ok": report.ok, "status": report.status,
         "cells": report.cells, "formula_cells": report.formula_cells,
-        "mismatches": sum(len(c.mismatches) for c in report.checks),
+        "mismatches": report.differing,
+        "likely_causes": [f"{s}!{c}" for s, c in sorted(report.causes)],
         "unjudged": [f"{s}!{c}" for s, c in report.unjudged],
         "max_abs_diff": report.max_abs, "inputs": report.inputs,
         "tolerance": {**TOLERANCE_RULE, "S": report.size},
@@ -205,20 +206,27 @@ def _one_line(exc: Exception) -> str:
 
 
 def _print_report(report) -> None:
-    from .verify import cell_ranges
+    from .verifier import cell_order, cell_ranges
     print(f"{report.path}: {report.mechanism}, engine {report.engine}")
-    print(f"{'block':12} {'column':16} {'cells':>6} {'max |Δ|':>10} {'#N/A agree':>11}  verdict")
+    print(f"{'block':12} {'column':20} {'cells':>6} {'max |Δ|':>10} {'#N/A agree':>11}  verdict")
     for c in report.checks:
         verdict = "ok" if c.ok else f"{len(c.mismatches)} DIFFER"
-        print(f"{c.block:12} {c.name:16} {c.cells:6d} {c.max_abs:10.2e} "
+        print(f"{c.block:12} {c.name:20} {c.cells:6d} {c.max_abs:10.2e} "
               f"{f'{c.na_agree}/{c.na_expected}':>11}  {verdict}")
+    shown = set()
     for c in report.checks:
-        for m in c.mismatches[:5]:
-            print(f"  {m.sheet}!{m.cell}: expected {m.expected}, got {m.got}")
+        # the likely causes first, then a few of the cells downstream of them
+        ordered = sorted(c.mismatches, key=lambda m: (m.sheet, m.cell) not in report.causes)
+        for m in ordered[:5]:
+            cause = (m.sheet, m.cell) in report.causes
+            shown.add((m.sheet, m.cell))
+            print(f"  {m.sheet}!{m.cell}: expected {m.expected}, got {m.got}"
+                  + ("   <- likely cause (reads no differing cell)" if cause else ""))
     compared = f"{report.cells} of {report.formula_cells} formula cells compared"
     if report.disagrees:
-        differ = sum(len(c.mismatches) for c in report.checks)
-        print(f"DISAGREES: {differ} cells differ; {compared}, max |Δ| {report.max_abs:.2e}")
+        causes = cell_ranges(sorted(report.causes, key=cell_order))
+        print(f"DISAGREES: {report.differing} cells differ, likely cause {causes}; {compared}, "
+              f"max |Δ| {report.max_abs:.2e}")
     elif report.unjudged:
         print(f"CANNOT JUDGE {len(report.unjudged)} formula cells (the build record does not "
               f"say what they hold): {cell_ranges(report.unjudged)}; {compared}")
@@ -317,7 +325,7 @@ def _build(args) -> int:
                                       "template, -o, --set, --step or --branch with it")
         outdir = Path(args.outdir or "output")
         outdir.mkdir(parents=True, exist_ok=True)
-        from .build import build_file
+        from .builder import build_file
         for path in templates.bundled():
             t = templates.load(str(path))
             out = outdir / f"{t.name}.xlsx"
@@ -335,7 +343,7 @@ def _build(args) -> int:
         raise InputError("-o", f"must name an .xlsx file (got {str(out)!r})")
     if not out.parent.is_dir():
         raise InputError("-o", f"folder {str(out.parent)!r} does not exist")
-    from .build import build_file
+    from .builder import build_file
     build_file(t, out, args.values)
     print(f"wrote {out}")
     return 0

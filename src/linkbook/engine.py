@@ -1316,7 +1316,7 @@ class Engine:
             for i in range(len(g.members)):
                 self._evaluate_cell(g, i)
             return
-        for gid, i in self._cell_order(set(component)):
+        for gid, i in self.cell_order(set(component)):
             self._evaluate_cell(self.groups[gid], i)
 
     def _evaluate_vector(self, g: Group) -> bool:
@@ -1363,7 +1363,7 @@ class Engine:
             values[r["name"]] = (r, self.grid[sheet][r1:r2 + 1, c1:c2 + 1].copy())
         return Ranges(template.ranges, values)
 
-    def _cell_order(self, gids: set[int]) -> list[tuple[int, int]]:
+    def cell_order(self, gids: set[int]) -> list[tuple[int, int]]:
         """Members of mutually dependent groups in dependency order (iterative DFS)."""
         def deps(gid, i):
             found = []
@@ -1456,6 +1456,31 @@ def _same_cells(desc: RefDesc, template, rep: _Member, host_sheet: str, refs: Re
     sid = sid[1:-1].replace("''", "'") if sid.startswith("'") else sid
     sheet = refs.titles.get(sid.upper()) if sid else host_sheet
     return (sheet, int(r["r1"]), r["n1"], int(r["r2"]), r["n2"]) == desc.rect(rep.row, rep.col)
+
+
+def cells_read(wb: openpyxl.Workbook, cells) -> dict[tuple[str, str], list[tuple]]:
+    """For each (sheet, cell) holding a formula: the rectangles (sheet, top, left, bottom,
+    right) it reads directly, through references and defined names (the lexer's reading). A
+    reference the workbook cannot resolve is left out: this serves reports, not evaluation."""
+    refs = References.of(wb)
+    out = {}
+    for sheet, coordinate in cells:
+        cell = wb[sheet][coordinate]
+        try:
+            text = _formula_text(cell)
+        except UnsupportedFormulaError:
+            continue
+        rects = []
+        for m in _LEXER.finditer(text):
+            kind = m.lastgroup
+            if kind == "ident" and m["call"]:
+                continue
+            if kind in ("ref", "ident"):
+                with contextlib.suppress(UnsupportedFormulaError):
+                    rects.append(refs.ref(m[kind], sheet, cell.row, cell.column)
+                                 .rect(cell.row, cell.column))
+        out[(sheet, coordinate)] = rects
+    return out
 
 
 def _formula_text(cell) -> str:

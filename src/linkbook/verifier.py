@@ -103,6 +103,7 @@ class Report:
     unjudged: list[tuple[str, str]] = field(default_factory=list)   # formula cells not compared
     inputs: dict[str, float] = field(default_factory=dict)          # as read from the book
     size: float = 0.0                         # S, the mechanism's size
+    causes: set[tuple[str, str]] = field(default_factory=set)   # differing cells reading none
 
     @property
     def disagrees(self) -> bool:
@@ -122,6 +123,11 @@ class Report:
     def cells(self) -> int:
         """Formula cells compared with the reference (each counted once)."""
         return len(set().union(*(c.judged for c in self.checks)))
+
+    @property
+    def differing(self) -> int:
+        """Cells that differ from the reference (each counted once)."""
+        return len({(m.sheet, m.cell) for c in self.checks for m in c.mismatches})
 
     @property
     def max_abs(self) -> float:
@@ -763,9 +769,12 @@ def _check_stroke_sampling(solver, params: dict, grid: dict, adjust: list, value
 # ---------------------------------------------------------------- the command
 def verify(path: Path, engine: str = "vector") -> Report:
     """Every formula cell of the book at `path` compared with the independent reference.
-    Raises UnusableFile (or safety.UnsafeFile) with one line when the file cannot be verified."""
-    from .safety import load_workbook_safely
-    wb = load_workbook_safely(path)
+    Raises UnusableFile with one line when the file cannot be verified."""
+    from .safety import UnsafeFile, load_workbook_safely
+    try:
+        wb = load_workbook_safely(path)
+    except UnsafeFile as exc:
+        raise UnusableFile(str(exc)) from None
     meta = layout.read_meta(wb)
     if meta is None or meta.get("format") != layout.FORMAT_VERSION:
         raise UnusableFile(f"{path}: not a linkbook workbook (no build record sheet)")
@@ -796,8 +805,30 @@ def verify(path: Path, engine: str = "vector") -> Report:
     judged = set().union(*(c.judged for c in checks))
     params = inputs_of(wb, meta)
     return Report(str(path), meta["mechanism"], engine, checks, len(formulas),
-                  sorted(formulas - judged, key=_cell_order), params,
-                  mechanism_size(meta, params))
+                  sorted(formulas - judged, key=cell_order), params,
+                  mechanism_size(meta, params), likely_causes(wb, checks))
+
+
+def likely_causes(wb, checks: list[Check]) -> set[tuple[str, str]]:
+    """The differing cells that read no other differing cell: where each chain of
+    disagreement starts (a broken formula; the cells downstream differ because they read it)."""
+    from . import engine as engines
+    from openpyxl.utils.cell import coordinate_to_tuple
+    differ = {(m.sheet, m.cell) for c in checks for m in c.mismatches}
+    where: dict[str, set[tuple[int, int]]] = {}
+    for sheet, cell in differ:
+        where.setdefault(sheet, set()).add(coordinate_to_tuple(cell))
+
+    def reads_a_differing_cell(key, rects) -> bool:
+        me = coordinate_to_tuple(key[1])
+        for sheet, top, left, bottom, right in rects:
+            for row, col in where.get(sheet, ()):
+                if top <= row <= bottom and left <= col <= right and \
+                        (sheet, (row, col)) != (key[0], me):
+                    return True
+        return False
+    reads = engines.cells_read(wb, differ)
+    return {key for key in differ if not reads_a_differing_cell(key, reads.get(key, []))}
 
 
 def formula_cells(wb) -> set[tuple[str, str]]:
@@ -805,7 +836,7 @@ def formula_cells(wb) -> set[tuple[str, str]]:
             if c.data_type == "f"}
 
 
-def _cell_order(key: tuple[str, str]) -> tuple:
+def cell_order(key: tuple[str, str]) -> tuple:
     from openpyxl.utils.cell import coordinate_from_string, column_index_from_string
     col, row = coordinate_from_string(key[1])
     return key[0], column_index_from_string(col), row
