@@ -87,3 +87,17 @@ def _same(a, b) -> bool:
     if engine.is_error(a) or engine.is_error(b):
         return engine.is_error(a) and engine.is_error(b) and engine.error_code(a) == engine.error_code(b)
     return a == b or (a != a and b != b)
+
+
+def test_a_step_that_does_not_divide_the_turn_still_closes_it():
+    """--step 25 over 0…360°: 0, 25, …, 350 and then 360 (one shorter step), so the last row is
+    the first position again and the coupler curve is closed; every cell still verifies."""
+    b, values = built("fourbar", (), 25)
+    first, last = b.meta["sweep"]["rows"]
+    ws = b.workbook["Sweep"]
+    assert [ws[f"A{r}"].value for r in (first, last - 1, last)] == [0, 350, 360]
+    x, y = b.meta["sweep"]["columns"]["xC"], b.meta["sweep"]["columns"]["yC"]
+    for col in (x, y):
+        assert values[("Sweep", f"{col}{last}")] == pytest.approx(
+            values[("Sweep", f"{col}{first}")], abs=1e-9)
+    assert not [m for c in checks_of(b, values) for m in c.mismatches]

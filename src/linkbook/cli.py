@@ -55,7 +55,9 @@ def _parser() -> argparse.ArgumentParser:
                    metavar="KEY=VALUE", help="change a parameter, e.g. --set a2=40 (repeatable); "
                                              "a grid parameter takes a list: --set s1=20,50,100")
     b.add_argument("--step", type=str, metavar="STEP",
-                   help="sweep step: degrees for a crank, the length unit for a linear actuator")
+                   help="sweep step: degrees for a crank, the length unit for a linear actuator; a "
+                        "step that does not divide the range ends with one shorter step "
+                        "on the range's end, so a full turn always closes")
     b.add_argument("--branch", choices=("open", "crossed"),
                    help="assembly branch of the main loop")
     b.add_argument("--all", action="store_true", help="build every bundled template")

@@ -59,8 +59,13 @@ class Sweep:
     step: float
 
     def angles(self) -> list[float]:
+        """start, start + step, … and always stop itself: a step that does not divide the
+        range ends with one shorter step, so that a full turn closes (the coupler curve too)."""
         count = int(math.floor((self.stop - self.start) / self.step + 1e-9)) + 1
-        return [round(self.start + i * self.step, 10) for i in range(count)]
+        angles = [round(self.start + i * self.step, 10) for i in range(count)]
+        if angles[-1] < self.stop - 1e-9 * self.step:
+            angles.append(round(self.stop, 10))
+        return angles
 
 
 @dataclass(frozen=True)
@@ -376,7 +381,7 @@ def check_sweep(t: Template) -> None:
                                  f"(got {s.step:g})")
     if s.stop <= s.start:
         raise InputError("sweep", f"stop must be greater than start (got {s.start:g}..{s.stop:g})")
-    rows = (s.stop - s.start) / s.step + 1
+    rows = (s.stop - s.start) / s.step + 2
     if rows > EXCEL_MAX_ROWS - 10:
         raise InputError("step", f"{s.step:g} {unit} gives {rows:,.0f} rows; Excel allows "
                                  f"{EXCEL_MAX_ROWS:,} per sheet")
