@@ -21,13 +21,17 @@ __all__ = ["build", "verify", "InputError", "UnusableFile", "__version__"]
 
 
 def build(template: str | Path, output: str | Path | None = None, *, sets=(), step=None,
-          branch: str | None = None, values: bool = False) -> Path:
+          branch: str | None = None, unit: str | None = None, values: bool = False) -> Path:
     """Build one workbook: `template` a bundled name ("fourbar") or a .toml file; `sets` like
     the command line's --set ("a2=45"); `step` the sweep step; `branch` "open" or "crossed";
+    `unit` the length unit (mm, cm, m, in, ft; the template's lengths converted to it);
     `values` stores computed values too. Returns the path written (default: <name>.xlsx here).
     """
     from . import builder, templates
-    t = templates.with_overrides(templates.load(str(template)), list(sets), step, branch)
+    t = templates.load(str(template))
+    if unit is not None:
+        t = templates.with_unit(t, unit)
+    t = templates.with_overrides(t, list(sets), step, branch)
     path = Path(output) if output is not None else Path(f"{t.name}.xlsx")
     if path.suffix.lower() != ".xlsx":
         raise templates.InputError("output", f"must name an .xlsx file (got {str(path)!r})")

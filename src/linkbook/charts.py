@@ -71,6 +71,11 @@ def nice_step(span: float) -> float:
     return next(m * power for m in (1, 2, 2.5, 5, 10) if m * power >= raw)
 
 
+def decimals(step: float) -> int:
+    """The decimals a tick label of a 1-2-5 step needs (0.25 → 2, 50 → 0)."""
+    return next((d for d in range(16) if abs(round(step, d) - step) <= 1e-9 * step), 15)
+
+
 def _equal_axes(chart: ScatterChart, xs: list[float], ys: list[float], size_cm: float) -> None:
     """Same span on both axes, centred on the data, and a square plot area."""
     xs = [v for v in xs if isinstance(v, float) and math.isfinite(v)]
@@ -81,11 +86,15 @@ def _equal_axes(chart: ScatterChart, xs: list[float], ys: list[float], size_cm: 
     step = nice_step(span)
     cx, cy = (max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2
     half = math.ceil(span / 2 / step) * step
+    places = decimals(step)
     for axis, centre in ((chart.x_axis, cx), (chart.y_axis, cy)):
-        low = math.floor((centre - half) / step) * step
+        # whole multiples of the step, rounded to its decimals: no tick reads 2.8E-17
+        low = round(math.floor((centre - half) / step) * step, places)
         axis.scaling.min = low
-        axis.scaling.max = low + 2 * half + step
+        axis.scaling.max = round(low + 2 * half + step, places)
         axis.majorUnit = step
+        axis.numFmt = NumFmt(formatCode="0." + "0" * places if places else "0",
+                             sourceLinked=False)
     chart.width = chart.height = size_cm
     chart.plot_area.layout = Layout(ManualLayout(layoutTarget="inner", xMode="edge",
                                                  yMode="edge", x=0.16, y=0.11, w=0.72, h=0.72))

@@ -60,6 +60,10 @@ def _parser() -> argparse.ArgumentParser:
                         "on the range's end, so a full turn always closes")
     b.add_argument("--branch", choices=("open", "crossed"),
                    help="assembly branch of the main loop")
+    b.add_argument("--unit", choices=tuple(templates.LENGTH_UNITS),
+                   help="the book's length unit: the template's lengths are converted to it "
+                        "(--set and --step values are then in this unit); every header, label, "
+                        "axis title and validation message follows it")
     b.add_argument("--all", action="store_true", help="build every bundled template")
     b.add_argument("--outdir", metavar="DIR", default=None,
                    help="folder for --all (default: output)")
@@ -322,9 +326,10 @@ def _list(verbose: bool) -> int:
 
 def _build(args) -> int:
     if args.all:
-        if args.template or args.output or args.assignments or args.step or args.branch:
+        if args.template or args.output or args.assignments or args.step or args.branch \
+                or args.unit:
             raise InputError("--all", "builds the bundled templates as they are; give no "
-                                      "template, -o, --set, --step or --branch with it")
+                                      "template, -o, --set, --step, --branch or --unit with it")
         outdir = Path(args.outdir or "output")
         outdir.mkdir(parents=True, exist_ok=True)
         from .builder import build_file
@@ -338,8 +343,10 @@ def _build(args) -> int:
         raise InputError("build", "give a template name or .toml file, or --all")
     if args.outdir:
         raise InputError("--outdir", "goes with --all; use -o for one workbook")
-    t = templates.with_overrides(templates.load(args.template), args.assignments,
-                                 args.step, args.branch)
+    t = templates.load(args.template)
+    if args.unit:
+        t = templates.with_unit(t, args.unit)
+    t = templates.with_overrides(t, args.assignments, args.step, args.branch)
     out = Path(args.output or f"{t.name}.xlsx")
     if out.suffix.lower() != ".xlsx":
         raise InputError("-o", f"must name an .xlsx file (got {str(out)!r})")

@@ -244,7 +244,7 @@ def check_text(field: str, text: str) -> str:
 
 def from_data(name: str, data: dict, origin: str = "template") -> Template:
     mech = _mechanism(name, data, origin)
-    length_unit = _need(data, "length_unit", origin)
+    length_unit = check_length_unit(f"{origin}: length_unit", _need(data, "length_unit", origin))
     table = _need(data, "parameters", origin, dict)
     unknown = [s for s in table if s not in mech.parameters]
     if unknown:
@@ -260,6 +260,11 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
             raise InputError(field, f"must be a table with label, unit, value (got {entry!r})")
         label = _need(entry, "label", field)
         unit = _need(entry, "unit", field)
+        want = parameter_unit(mech, symbol, kind, length_unit)
+        if unit != want:
+            raise InputError(f"{field}.unit", f"must be {want} for a{'n' if kind[0] in 'ao' else ''} "
+                                              f"{kind} parameter in a book of {length_unit} "
+                                              f"(got {unit!r})")
         excel_name = entry.get("name", default_name(symbol))
         problem = (excel_name_problem(excel_name) if isinstance(excel_name, str)
                    else "must be text")
@@ -297,6 +302,88 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         stroke_step=stroke_step)
     check_sweep(template)
     return template
+
+
+# The length units a book may have, in metres: one per mechanism (the template's length_unit).
+LENGTH_UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
+
+
+def check_length_unit(field: str, unit: object) -> str:
+    if unit not in LENGTH_UNITS:
+        raise InputError(field, f"must be one of {', '.join(LENGTH_UNITS)} (got {unit!r})")
+    return unit
+
+
+def parameter_unit(mech: Mechanism, symbol: str, kind: str, length_unit: str) -> str:
+    """The one unit a parameter of this kind may have in a book of `length_unit`."""
+    if kind in (LENGTH_KIND, OFFSET_KIND):
+        return length_unit
+    if kind == ANGLE_KIND:
+        return "deg"
+    if kind == RATE_KIND:
+        return motion_default(mech, symbol, length_unit)["unit"]
+    return "-"
+
+
+# Keys of the mechanism language whose numbers are lengths (ground points too): a number
+# written there cannot follow --unit, which converts parameters.
+_LENGTH_KEYS = ("length", "p_length", "q_length", "local", "distances", "distance", "offset")
+_NUMBER = re.compile(r"(?<![\w.])(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+def _length_literals(description: dict) -> list[str]:
+    """Where the description writes a non-zero length as a number, not a parameter."""
+    found = []
+
+    def numbers(value) -> bool:
+        if isinstance(value, bool):
+            return False
+        if isinstance(value, (int, float)):
+            return value != 0
+        if isinstance(value, str):
+            return any(float(m) != 0 for m in _NUMBER.findall(value))
+        if isinstance(value, list):
+            return any(numbers(v) for v in value)
+        return False
+    for name, xy in (description.get("ground") or {}).items():
+        if numbers(xy):
+            found.append(f"ground.{name}")
+    for i, step in enumerate(description.get("steps") or []):
+        if isinstance(step, dict):
+            found += [f"steps[{i}].{k}" for k in _LENGTH_KEYS if numbers(step.get(k))]
+    return found
+
+
+def with_unit(t: "Template", unit: str) -> "Template":
+    """The same mechanism with lengths in `unit`: every length and offset parameter, a linear
+    actuator's sweep, position and rates, and length grid values converted."""
+    check_length_unit("--unit", unit)
+    if unit == t.length_unit:
+        return t
+    literal = _length_literals(t.mechanism.description or {})
+    if literal:
+        raise InputError("--unit", f"the template writes a length as a number at "
+                                   f"mechanism.{literal[0]}; give it a parameter to convert it")
+    factor = LENGTH_UNITS[t.length_unit] / LENGTH_UNITS[unit]
+    linear_rates = set(MOTION_SYMBOLS[LENGTH_KIND])
+    params = []
+    for p in t.parameters:
+        converts = p.kind in (LENGTH_KIND, OFFSET_KIND) or \
+            (p.kind == RATE_KIND and p.symbol in linear_rates)
+        params.append(replace(p, value=p.value * factor if converts else p.value,
+                              unit=parameter_unit(t.mechanism, p.symbol, p.kind, unit)))
+    sweep, position = t.sweep, t.position
+    if not t.mechanism.input_is_angle:
+        sweep = Sweep(sweep.start * factor, sweep.stop * factor, sweep.step * factor)
+        position *= factor
+    grid_values = t.grid_values
+    if t.mechanism.grid and t.mechanism.parameters[t.mechanism.grid[0]] in (LENGTH_KIND,
+                                                                               OFFSET_KIND):
+        grid_values = tuple(v * factor for v in grid_values)
+    out = replace(t, parameters=tuple(params), sweep=sweep, position=position,
+                  grid_values=grid_values, length_unit=unit)
+    check_sweep(out)
+    return out
 
 
 def motion_default(mech: Mechanism, symbol: str, length_unit: str) -> dict:

@@ -17,8 +17,8 @@ from openpyxl.workbook.defined_name import DefinedName
 from openpyxl.worksheet.datavalidation import DataValidation
 
 from . import __version__
-from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, RATE_KIND
-from .model import (ACCEL, ANG_ACCEL, ANG_SPEED, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
+from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS
+from .model import (ACCEL, ANG_ACCEL, ANG_SPEED, AREA, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
                     SPEED, Model, Resolver, header, render, unit_text)
 from .controls import control_record
 from .templates import Template
@@ -44,8 +44,16 @@ FORMATS = {LENGTH: "0.0000", RAD: "0.000000", DEG: "0.000", "-": "0.0000", SPEED
            ACCEL: "0.00", ANG_SPEED: "0.00000", ANG_ACCEL: "0.0000"}
 
 
-def number_format(unit: str) -> str:
-    return FORMATS.get(unit, "0.0000")
+# Decimals a unit adds to a length's format, so that a book in m shows what one in mm does.
+UNIT_DECIMALS = {"mm": 0, "cm": 1, "in": 1, "ft": 2, "m": 3}
+
+
+def number_format(unit: str, length_unit: str = "mm") -> str:
+    fmt = FORMATS.get(unit, "0.0000")
+    if unit.startswith(LENGTH):
+        more = UNIT_DECIMALS.get(length_unit, 0) * (2 if unit == AREA else 1)
+        fmt += "0" * more
+    return fmt
 
 
 @dataclass
@@ -192,7 +200,7 @@ def _inputs_block(wb, ws, t: Template, model: Model):
             c = ws[f"C{row}"]
             c.value = resolve.formula(q.key)
             c.fill = DERIVED_FILL
-            c.number_format = number_format(q.unit)
+            c.number_format = number_format(q.unit, t.length_unit)
             _text(ws, f"D{row}", unit_text(q.unit, t.length_unit))
             _text(ws, f"E{row}", name, NOTE)
             _define(wb, name, MECH, f"C{row}")
@@ -213,7 +221,7 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     ws["I7"] = t.position
     ws["I7"].fill = INPUT_FILL
     ws["I7"].border = BOX
-    ws["I7"].number_format = number_format(mech.input_unit)
+    ws["I7"].number_format = number_format(mech.input_unit, t.length_unit)
     _text(ws, "J7", unit_text(mech.input_unit, t.length_unit))
     if mech.input_is_angle:
         dv = DataValidation(type="decimal", operator="between", formula1="-3600",
@@ -240,9 +248,9 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
         ws[cell] = (_degree_formula(q, cells[q.key]) if key != q.key
                     else resolve.formula(key))
         unit = DEG if key != q.key else q.unit
-        ws[cell].number_format = number_format(unit)
+        ws[cell].number_format = number_format(unit, t.length_unit)
         _text(ws, f"J{r}", unit_text(unit, t.length_unit))
-    joints = _joints_table(ws, model, resolve)
+    joints = _joints_table(ws, t, model, resolve)
     return {"sheet": MECH, "input_cell": "I7", "input_name": input_name,
             "cells": {k: v for k, v in cells.items() if k != mech.input_column},
             "joints": joints["cells"], "drawing": joints["drawing"],
@@ -279,7 +287,7 @@ def _controls(ws, t: Template, inputs: dict) -> list[dict]:
     return [c for c in out if c is not None]
 
 
-def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
+def _joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
     """Joint coordinates, then each link as a run of rows the drawing chart reads."""
     _block_head(ws, "L", "Joints and links (drawing data)",
                 (("Link", 8), ("Joint", 8), ("x", 11), ("y", 11)))
@@ -290,7 +298,7 @@ def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
         _text(ws, f"M{row}", j.name)
         for col, expr in ((x_col, j.x), (y_col, j.y)):
             ws[f"{col}{row}"] = "=" + render(expr, resolve)
-            ws[f"{col}{row}"].number_format = number_format(LENGTH)
+            ws[f"{col}{row}"].number_format = number_format(LENGTH, t.length_unit)
         cells[j.name] = [f"{x_col}{row}", f"{y_col}{row}"]
         row += 1
     drawing = []
@@ -303,7 +311,7 @@ def _joints_table(ws, model: Model, resolve: Resolver) -> dict:
             ws[f"{x_col}{row}"] = f"={cells[name][0]}"
             ws[f"{y_col}{row}"] = f"={cells[name][1]}"
             for col in DRAWING_COLUMNS:
-                ws[f"{col}{row}"].number_format = number_format(LENGTH)
+                ws[f"{col}{row}"].number_format = number_format(LENGTH, t.length_unit)
             row += 1
         drawing.append({"joints": list(link), "rows": [first, row - 1]})
     return {"cells": cells, "drawing": drawing, "chart_row": row + 1}
@@ -381,7 +389,7 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
         else:
             formulas[key] = resolve.formula(key)
     ws.row_dimensions[3].height = 30
-    formats = {key: number_format(DEG if key.endswith("_deg") else q.unit)
+    formats = {key: number_format(DEG if key.endswith("_deg") else q.unit, t.length_unit)
                for key, q in columns if q is not None}
     for r, angle in enumerate(angles, start=first):
         ws.cell(r, 1, angle).number_format = "0.0##"
@@ -430,9 +438,9 @@ def _motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
     in_position = {k: f"{pos}!{v}" for k, v in position["cells"].items()}
     in_position[mech.input_column] = position["input_name"]
     at_current = Resolver(model, names, {**in_position, **own})
-    formats = {q.key: number_format(q.unit) for q in qs}
+    formats = {q.key: number_format(q.unit, t.length_unit) for q in qs}
     ws.cell(current, 1, f"={position['input_name']}").number_format = number_format(
-        mech.input_unit)
+        mech.input_unit, t.length_unit)
     for q in qs:
         c = ws[f"{letters[q.key]}{current}"]
         c.value = at_current.formula(q.key).replace(ROW, str(current))
@@ -442,7 +450,7 @@ def _motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
     r0, r1 = sweep["rows"]
     for r in range(r0, r1 + 1):
         row, row_text, sweep_text = r + MOTION_OFFSET, str(r + MOTION_OFFSET), str(r)
-        ws.cell(row, 1, f"={src}!A{r}").number_format = number_format(mech.input_unit)
+        ws.cell(row, 1, f"={src}!A{r}").number_format = number_format(mech.input_unit, t.length_unit)
         for key, text in texts.items():
             c = ws[f"{letters[key]}{row}"]
             c.value = text.replace(ROW, row_text).replace(SWEEP_ROW, sweep_text)
@@ -474,7 +482,7 @@ def _position_motion(ws, t: Template, model: Model, position: dict, motion: dict
         _text(ws, f"H{row}", q.symbol)
         c = ws[f"I{row}"]
         c.value = f"={src}!{motion['columns'][key]}{motion['current_row']}"
-        c.number_format = number_format(q.unit)
+        c.number_format = number_format(q.unit, t.length_unit)
         _text(ws, f"J{row}", unit_text(q.unit, t.length_unit))
         cells[key] = f"I{row}"
         row += 1
@@ -535,7 +543,7 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         c = ws[f"C{row}"]
         c.value = formula
         c.fill = DERIVED_FILL
-        c.number_format = number_format(unit) if unit else "General"
+        c.number_format = number_format(unit, t.length_unit) if unit else "General"
         c.alignment = Alignment(horizontal="right")
         _text(ws, f"D{row}", unit_text(unit, t.length_unit) if unit else "")
         cells[key] = {"cell": f"C{row}", "kind": kind, "unit": unit}
@@ -646,7 +654,7 @@ def _fill_grid(ws, t: Template, model: Model, names: dict, param_row: int, rows:
         for letter in cols:
             c = ws[f"{letter}{i}"]
             c.value = text.replace(COL, letter).replace(ROW, str(i))
-            c.number_format = number_format(LENGTH)
+            c.number_format = number_format(LENGTH, t.length_unit)
     ws.freeze_panes = ws.cell(rows.start, 2)
 
 
@@ -713,7 +721,7 @@ def _stroke_row(ws, t: Template, grid: dict, stroke: dict) -> int:
         rng = f"{src}{theirs}{first}:{theirs}{last}"
         c = ws[f"{mine}{row}"]
         c.value = f"=MAX({rng})-MIN({rng})"
-        c.number_format = number_format(LENGTH)
+        c.number_format = number_format(LENGTH, t.length_unit)
         c.font = BOLD
         c.fill = DERIVED_FILL
     source = "the grid above" if stroke is grid else f"the {t.stroke_step:g}° sweep on sheet {STROKE}"

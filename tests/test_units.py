@@ -1,0 +1,90 @@
+"""One length unit per book (issue 16): from a known list, every parameter agreeing with it,
+--unit converting a template, and every header, label and axis title following it."""
+from __future__ import annotations
+
+import re
+import zipfile
+
+import openpyxl
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from conftest import ROOT, checks_of
+
+from linkbook import builder, cli, templates
+
+BUNDLED = [p.stem for p in templates.bundled()]
+
+
+def _xml_text(path) -> str:
+    with zipfile.ZipFile(path) as z:
+        return " ".join(z.read(n).decode("utf-8") for n in z.namelist() if n.endswith(".xml"))
+
+
+@pytest.fixture(scope="module")
+def metre_book(tmp_path_factory):
+    path = tmp_path_factory.mktemp("units") / "m.xlsx"
+    assert cli.main(["build", "fourbar", "--unit", "m", "-o", str(path)]) == 0
+    return path
+
+
+def test_the_metre_four_bar_says_m_everywhere(metre_book, capsys):
+    text = _xml_text(metre_book)
+    assert not re.search(r"\bmm\b", text)
+    assert "[m]" in text and "x [m]" in text and "y [m]" in text
+    wb = openpyxl.load_workbook(metre_book)
+    cell = wb.defined_names["a_2"].attr_text.split("!")[1].replace("$", "")
+    assert wb["Mechanism"][cell].value == pytest.approx(0.035)   # 35 mm
+    assert cli.main(["verify", str(metre_book)]) == 0
+    capsys.readouterr()
+
+
+def test_tick_labels_of_a_metre_drawing_are_round_numbers(metre_book):
+    text = _xml_text(metre_book)
+    for value in re.findall(r'<c:(?:min|max) val="([^"]+)"', text):
+        assert "E" not in value.upper() and len(value) <= 8, value
+    assert re.search(r'formatCode="0\.0+"', text)
+
+
+def _fourbar_text(**changes) -> str:
+    text = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")
+    for old, new in changes.items():
+        assert old in text
+        text = text.replace(old, new, 1)
+    return text
+
+
+@pytest.mark.parametrize("change, words", [
+    ({'a2 = { label = "crank |A0A|", unit = "mm"': 'a2 = { label = "crank |A0A|", unit = "m"'},
+     ["parameters.a2.unit", "must be mm", "'m'"]),
+    ({'length_unit = "mm"': 'length_unit = "inch"'}, ["length_unit", "mm, cm, m, in, ft"]),
+])
+def test_a_unit_that_does_not_agree_is_refused(tmp_path, capsys, change, words):
+    path = tmp_path / "mine.toml"
+    path.write_text(_fourbar_text(**change), encoding="utf-8")
+    assert cli.main(["build", str(path), "-o", str(tmp_path / "x.xlsx")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and all(w in err for w in words), err
+    assert not (tmp_path / "x.xlsx").exists()
+
+
+def test_a_length_written_as_a_number_cannot_be_converted(tmp_path, capsys):
+    path = tmp_path / "mine.toml"
+    path.write_text(_fourbar_text(**{'B0 = ["a1", 0]': 'B0 = [80, 0]'}), encoding="utf-8")
+    assert cli.main(["build", str(path), "--unit", "cm", "-o", str(tmp_path / "x.xlsx")]) == 2
+    assert "mechanism.ground.B0" in capsys.readouterr().err
+
+
+@settings(max_examples=20, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(name=st.sampled_from(BUNDLED), unit=st.sampled_from(list(templates.LENGTH_UNITS)))
+def test_every_template_in_every_unit_verifies(name, unit):
+    """The same mechanism in any unit: lengths converted, every cell against the reference."""
+    t = templates.with_unit(templates.load(name), unit)
+    t = templates.with_overrides(t, step=30 if t.mechanism.input_is_angle else None)
+    b, values = builder.make(t)
+    bad = [(c.block, c.name, m) for c in checks_of(b, values) for m in c.mismatches[:2]]
+    assert not bad, (name, unit, bad[:3])
+    assert b.meta["length_unit"] == unit
+    for p in t.parameters:
+        assert p.unit == templates.parameter_unit(t.mechanism, p.symbol, p.kind, unit)
