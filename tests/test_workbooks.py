@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from conftest import ROOT, built, checks_of, formula_cells
-from linkbook import engine
+from linkbook import engine, templates
 
 CASES = [
     # (template, --set, --branch)
@@ -101,3 +101,22 @@ def test_a_step_that_does_not_divide_the_turn_still_closes_it():
         assert values[("Sweep", f"{col}{last}")] == pytest.approx(
             values[("Sweep", f"{col}{first}")], abs=1e-9)
     assert not [m for c in checks_of(b, values) for m in c.mismatches]
+
+
+@pytest.mark.parametrize("name, legend", [
+    ("fourbar", ["link 1: ground", "link 2: A0A", "link 3: ABC", "link 4: BB0"]),
+    ("watt-sixbar", ["link 1: ground", "link 2: A0A", "link 3: AB", "link 4: B0BC",
+                     "link 5: CD", "link 6: D0D"]),
+])
+def test_the_drawing_numbers_links_as_the_textbook_does(name, legend):
+    """Ground = link 1, drawn through the fixed pivots (grey, triangles), crank = link 2, …"""
+    b, values = built(name)
+    chart = b.workbook["Mechanism"]._charts[0]
+    titles = [s.tx.strRef.f if s.tx.strRef else s.tx.v for s in chart.series]
+    assert titles[:len(legend)] == legend
+    ground = chart.series[0]
+    assert ground.marker.symbol == "triangle"
+    record = b.meta["position"]["drawing"][0]
+    assert record["ground"] and set(record["joints"]) == set(
+        templates.load(name).mechanism.description["ground"]) & set(record["joints"])
+    assert len(record["joints"]) >= 2

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from . import engine
 from . import workbook as layout
-from .charts import LINK_COLOURS, PATH_COLOUR, nice_step
+from .charts import PATH_COLOUR, drawing_colours, link_label, nice_step
 
 DEFAULT_FPS = 20
 DEFAULT_SIZE = 600
@@ -47,6 +47,7 @@ class Animation:
     traced: str | None
     frames: list[Frame]
     whole_turn: bool = True       # else the GIF plays forward, then back
+    link_colours: list[str] = field(default_factory=list)   # hex, one per link (the chart's)
 
 
     @property
@@ -89,7 +90,8 @@ def _frames(path: Path, wb, meta: dict, step: float | None) -> Animation:
     whole_turn = unit == "deg" and abs(inputs[-1] + (inputs[1] - inputs[0]) - inputs[0]
                                        - 360.0) < 1e-9
     return Animation(meta.get("title", path.stem), symbol, unit, meta.get("length_unit", ""),
-                     _link_names(pos), pos.get("traced"), frames, whole_turn=whole_turn)
+                     _link_names(pos), pos.get("traced"), frames, whole_turn=whole_turn,
+                     link_colours=drawing_colours(pos["drawing"]))
 
 
 def _sweep_column(wb, sweep: dict) -> list[float]:
@@ -145,12 +147,7 @@ def _number(v) -> bool:
 
 
 def _link_names(pos: dict) -> list[str]:
-    names = []
-    for i, link in enumerate(pos["drawing"], start=1):
-        joints = link["joints"]
-        body = joints[:-1] if len(joints) > 2 and joints[0] == joints[-1] else joints
-        names.append(f"link {i}: {''.join(body)}")
-    return names
+    return [link_label(link, i) for i, link in enumerate(pos["drawing"], start=1)]
 
 
 def _input_label(wb, sheet: str, cell: str, meta: dict) -> tuple[str, str]:
@@ -222,7 +219,7 @@ def render(anim: Animation, size: int = DEFAULT_SIZE, progress=None) -> list:
                     d.line(piece, fill=PATH_COLOUR_RGB, width=max(1, size // 300))
         width = max(2, size // 120)
         for k, link in enumerate(frame.links):
-            colour = _rgb(LINK_COLOURS[k % len(LINK_COLOURS)])
+            colour = _rgb(anim.link_colours[k])
             pts = [view(x, y) for x, y in link]
             d.line(pts, fill=colour, width=width, joint="curve")
             r = width * 1.3
@@ -311,8 +308,7 @@ def _background(Image, ImageDraw, anim: Animation, view: _View, size: int, font,
     d.text(((left + right) / 2, bottom + 6 + small.size), f"x [{unit}]", fill=(0, 0, 0),
            font=small, anchor="mt")
     d.text((4, (top + bottom) / 2), f"y [{unit}]", fill=(0, 0, 0), font=small, anchor="lm")
-    entries = [(name, _rgb(LINK_COLOURS[k % len(LINK_COLOURS)]))
-               for k, name in enumerate(anim.link_names)]
+    entries = [(name, _rgb(colour)) for name, colour in zip(anim.link_names, anim.link_colours)]
     if anim.traced:
         entries.append((f"path of {anim.traced}", PATH_COLOUR_RGB))
     row_h = legend_h / max(1, (len(entries) + 2) // 3)

@@ -25,6 +25,28 @@ DRAWING_CM = 15.0
 # draws each link as the workbook does: link 1, 2, ... then the traced point's path.
 LINK_COLOURS = ("4F81BD", "C0504D", "9BBB59", "F79646", "4BACC6", "1F497D", "948A54")
 PATH_COLOUR = "8064A2"
+GROUND_COLOUR = "7F7F7F"
+
+
+def drawing_colours(drawing: list[dict]) -> list[str]:
+    """A colour per drawn link: grey for the ground, the palette in turn for moving links."""
+    colours, k = [], 0
+    for link in drawing:
+        if link.get("ground"):
+            colours.append(GROUND_COLOUR)
+        else:
+            colours.append(LINK_COLOURS[k % len(LINK_COLOURS)])
+            k += 1
+    return colours
+
+
+def link_label(link: dict, i: int) -> str:
+    """The legend's name of a drawn link (books built before labels: numbered from 1)."""
+    if "label" in link:
+        return link["label"]
+    joints = link["joints"]
+    body = joints[:-1] if len(joints) > 2 and joints[0] == joints[-1] else joints
+    return f"link {i}: {''.join(body)}"
 
 
 def _series(ws, x_col: str, y_col: str, rows: tuple[int, int], title: str,
@@ -126,12 +148,14 @@ def _drawing(wb, t, model: Model, meta: dict, values: dict) -> None:
     rows = tuple(sweep["rows"])
     chart = _chart(f"{t.title} at the current {t.mechanism.input_symbol}",
                    f"x [{t.length_unit}]", f"y [{t.length_unit}]")
+    colours = drawing_colours(pos["drawing"])
     for i, link in enumerate(pos["drawing"], start=1):
-        names = "".join(link["joints"][:-1] if link["joints"][0] == link["joints"][-1]
-                        else link["joints"])
-        chart.series.append(_series(ws, *DRAWING_COLUMNS, tuple(link["rows"]),
-                                    f"link {i}: {names}", markers=True, width=38000,
-                                    colour=LINK_COLOURS[(i - 1) % len(LINK_COLOURS)]))
+        series = _series(ws, *DRAWING_COLUMNS, tuple(link["rows"]), link_label(link, i),
+                         markers=True, width=38000, colour=colours[i - 1])
+        if link.get("ground"):       # fixed pivots: triangles on a thinner grey line
+            series.marker.symbol, series.marker.size = "triangle", 10
+            series.graphicalProperties.line.width = 19050
+        chart.series.append(series)
     if model.path:
         x_key, y_key = model.path
         chart.series.append(_series(wb[SWEEP], sweep["columns"][x_key], sweep["columns"][y_key],

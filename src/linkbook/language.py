@@ -864,6 +864,7 @@ class Compiler:
             m.links.append(tuple(link))
         used = list(dict.fromkeys(n for link in m.links for n in link))
         m.joints = [Joint(n, *(p.text for p in self.points[n])) for n in used]
+        m.ground = tuple(n for n in used if n in self.ground)
         if "trace" in d:
             t = d["trace"]
             if not isinstance(t, str) or t not in self.points or t in self.ground:

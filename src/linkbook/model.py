@@ -81,6 +81,7 @@ class Model:
     quantities: list[Quantity] = field(default_factory=list)
     joints: list[Joint] = field(default_factory=list)
     links: list[tuple[str, ...]] = field(default_factory=list)   # polylines through joint names
+    ground: tuple[str, ...] = ()   # fixed pivots the links use: the ground link (link 1)
     charts: list[Chart] = field(default_factory=list)
     path: tuple[str, str] | None = None    # (x key, y key) of a traced point drawn on the mechanism
     closes: tuple[str, ...] = ()   # quantities that are all numbers exactly where every loop closes

@@ -303,7 +303,11 @@ def _joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
         row += 1
     drawing = []
     row += 1
-    for i, link in enumerate(model.links, start=1):
+    # the textbook's numbering: the ground is link 1 (drawn through the fixed pivots when there
+    # are two or more), the crank link 2, and so on
+    links = [(1, model.ground, True)] if len(model.ground) > 1 else []
+    links += [(i, link, False) for i, link in enumerate(model.links, start=2)]
+    for i, link, ground in links:
         first = row
         for name in link:
             _text(ws, f"L{row}", f"link {i}")
@@ -313,7 +317,9 @@ def _joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
             for col in DRAWING_COLUMNS:
                 ws[f"{col}{row}"].number_format = number_format(LENGTH, t.length_unit)
             row += 1
-        drawing.append({"joints": list(link), "rows": [first, row - 1]})
+        body = link[:-1] if len(link) > 2 and link[0] == link[-1] else link
+        drawing.append({"joints": list(link), "rows": [first, row - 1], "ground": ground,
+                        "label": f"link {i}: " + ("ground" if ground else "".join(body))})
     return {"cells": cells, "drawing": drawing, "chart_row": row + 1}
 
 
