@@ -91,8 +91,9 @@ def test_an_edited_book_animates_as_edited(books, tmp_path):
             assert x == pytest.approx(points[name][0][k], abs=1e-9 * 200)
             assert y == pytest.approx(points[name][1][k], abs=1e-9 * 200)
         assert math.dist(frame.points["A0"], frame.points["A"]) == pytest.approx(25.0)
-        # the links are drawn through the joints they name
-        assert frame.links[0] == [frame.points["A0"], frame.points["A"]]
+        # the links are drawn through the joints they name (link 1, the ground, comes first)
+        assert frame.links[0] == [frame.points["A0"], frame.points["B0"]]
+        assert frame.links[1] == [frame.points["A0"], frame.points["A"]]
 
 
 def test_rows_that_cannot_close_are_left_out(books):
