@@ -116,6 +116,55 @@ def _text(ws, cell: str, value: str, font: Font | None = None) -> None:
         c.font = font
 
 
+LINE_HEIGHT = 15.0      # points per line of 11-pt text
+_NARROW, _WIDE = set("ijlI.,;:!|'()[] ft1"), set("mwMW@%")
+
+
+# A column's width counts digits of Calibri 11 (7 px each, plus 5 px); LibreOffice without
+# Calibri draws with DejaVu Sans, whose digit is 9.55 px: the wider of the two decides.
+WIDER_FONT = 9.55 / 7.0
+
+
+def text_width(text: str, bold: bool = False) -> float:
+    """The column width `text` needs on one line: its characters in digit widths (a wide
+    letter 1.5, a narrow one 0.6, a capital or a symbol 1.2; bold 10 % more), in DejaVu Sans,
+    plus the cell's padding."""
+    def one(ch: str) -> float:
+        if ch in _WIDE:
+            return 1.5
+        if ch in _NARROW:
+            return 0.6
+        return 1.0 if ch.islower() or ch.isdigit() else 1.2
+    return sum(one(ch) for ch in text) * (1.1 if bold else 1.0) * WIDER_FONT + 1.0
+
+
+def label_lines(text: str, width: float) -> list[str]:
+    """`text` broken between words as a cell `width` wide shows it (no word split)."""
+    lines: list[str] = []
+    for word in text.split():
+        if lines and text_width(f"{lines[-1]} {word}") <= width:
+            lines[-1] += f" {word}"
+        else:
+            lines.append(word)
+    return lines or [""]
+
+
+def _fit_labels(ws, row: int, letters, heads: int | None = None) -> None:
+    """Widen each column of a row of wrapped labels so that its longest word (and the bold
+    header under it, in row `heads`) fits whole, and make the row tall enough for every line."""
+    lines = 1
+    for letter in letters:
+        dim = ws.column_dimensions[letter]
+        width = dim.width or 12
+        needs = [text_width(w) for w in str(ws[f"{letter}{row}"].value or "").split()]
+        if heads is not None and isinstance(ws[f"{letter}{heads}"].value, str):
+            needs.append(text_width(ws[f"{letter}{heads}"].value, bold=True))   # one line
+        width = max([width] + needs)
+        dim.width = round(width, 1)
+        lines = max(lines, len(label_lines(str(ws[f"{letter}{row}"].value or ""), width)))
+    ws.row_dimensions[row].height = LINE_HEIGHT * lines
+
+
 def _head(ws, row: int, col: int, value: str) -> None:
     c = ws.cell(row, col)
     c.value = value
@@ -383,6 +432,7 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
         ws.column_dimensions[letters[key]].width = 12
         if q is None:
             _text(ws, f"{letters[key]}3", f"input {mech.input_word}", NOTE)
+            ws[f"{letters[key]}3"].alignment = Alignment(wrap_text=True, vertical="top")
             _head(ws, head_row, i, header(mech.input_symbol, mech.input_unit, t.length_unit))
             continue
         degree_column = key.endswith("_deg") and key != q.key
@@ -394,7 +444,6 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
             formulas[key] = _degree_formula(q, f"{letters[q.key]}{ROW}")
         else:
             formulas[key] = resolve.formula(key)
-    ws.row_dimensions[3].height = 30
     formats = {key: number_format(DEG if key.endswith("_deg") else q.unit, t.length_unit)
                for key, q in columns if q is not None}
     for r, angle in enumerate(angles, start=first):
@@ -409,6 +458,7 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
         letters.update(_assembly_columns(ws, letters, model.closes, first, last, head_row,
                                          unit_text(mech.input_unit, t.length_unit),
                                          mech.input_word))
+    _fit_labels(ws, 3, list(letters.values()), heads=head_row)
     ws.freeze_panes = ws.cell(first, 2)
     return {"sheet": SWEEP, "rows": [first, last], "columns": letters}
 
@@ -435,7 +485,7 @@ def _motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
         _text(ws, f"{letter}3", q.label, NOTE)
         ws[f"{letter}3"].alignment = Alignment(wrap_text=True, vertical="top")
         _head(ws, head_row, i, header(q.symbol, q.unit, t.length_unit))
-    ws.row_dimensions[3].height = 42
+    _fit_labels(ws, 3, ["A"] + [letters[q.key] for q in qs], heads=head_row)
     own = {k: f"{v}{ROW}" for k, v in letters.items()}
     src = quote_sheetname(SWEEP)
     in_sweep = {k: f"{src}!{v}{SWEEP_ROW}" for k, v in sweep["columns"].items()}
