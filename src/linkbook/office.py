@@ -223,13 +223,27 @@ def apply_print_setup(wb, fit_to_width: tuple[str, ...] = ()) -> None:
         ws.oddFooter.center.size = 8
 
 
+TITLE_ROWS = 2      # a sheet's title (A1) and note (A2): printed once, as text that overflows
+
+
 def _repeat_frozen_titles(ws) -> None:
-    """The rows and columns frozen on screen are the headings: repeat them on every page."""
+    """The rows and columns frozen on screen are the headings: repeat them on every page,
+    except the title and note rows, whose text overflows across the first page's columns and
+    would be cut at the edge of the repeated column A; every page's header names the sheet's
+    title instead, whole."""
+    if isinstance(ws["A1"].value, str):
+        ws.oddHeader.center.text = ws["A1"].value.replace("&", "&&")
+        ws.oddHeader.center.size = 8
+        ws.HeaderFooter.differentFirst = True      # page 1 shows A1 itself
+        ws.firstFooter.center.text = "&A, page &P of &N"
+        ws.firstFooter.center.size = 8
     if not ws.freeze_panes:
         return
     from openpyxl.utils.cell import coordinate_from_string, column_index_from_string
     letter, row = coordinate_from_string(ws.freeze_panes)
-    if row > 1:
+    if row > TITLE_ROWS + 1:
+        ws.print_title_rows = f"{TITLE_ROWS + 1}:{row - 1}"
+    elif row > 1:
         ws.print_title_rows = f"1:{row - 1}"
     if column_index_from_string(letter) > 1:
         ws.print_title_cols = f"A:{_letter(column_index_from_string(letter) - 1)}"
