@@ -179,3 +179,10 @@ def test_not_a_book(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("linkbook: error:") == 3 and "Traceback" not in err
     assert not zipfile.is_zipfile(junk)
+
+
+def test_a_sweep_with_a_shorter_last_step_still_loops(tmp_path):
+    path = tmp_path / "s25.xlsx"
+    builder.build_file(template("fourbar", step=25), path)
+    anim = frames_of(path)
+    assert anim.whole_turn and [f.value for f in anim.frames][-2:] == [325.0, 350.0]

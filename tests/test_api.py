@@ -38,3 +38,14 @@ def test_bad_input_raises_one_line_errors(tmp_path):
     (tmp_path / "not.xlsx").write_bytes(b"no zip")
     with pytest.raises(linkbook.UnusableFile):
         linkbook.verify(tmp_path / "not.xlsx")
+
+
+def test_aggregate_is_known_even_when_formulas_made_its_table_first(tmp_path):
+    """formulas' get_functions() copies its table once; AGGREGATE must be in that copy too."""
+    import subprocess
+    import sys
+    code = ("from formulas.functions import get_functions; get_functions()\n"
+            "import linkbook\n"
+            f"p = linkbook.build('fourbar', {str(tmp_path / 'f.xlsx')!r}, step=30)\n"
+            "raise SystemExit(linkbook.verify(p).status)")
+    assert subprocess.run([sys.executable, "-c", code]).returncode == 0

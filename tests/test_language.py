@@ -138,6 +138,10 @@ BAD = [
     ("a time ratio of an unknown column", _add_step({"type": "expression", "key": "Q",
                                                      "formula": "1", "time_ratio_of": "s99"}),
      ["(expression Q).time_ratio_of", "must be the key of an earlier column"]),
+    ("a time ratio that changes with the input", _add_step({"type": "expression", "key": "Q",
+                                                            "formula": "xB/a1",
+                                                            "time_ratio_of": "xB"}),
+     ["(expression Q).time_ratio_of", "one number per book"]),
 ]
 
 

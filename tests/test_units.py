@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import tomllib
 import zipfile
 
 import openpyxl
@@ -86,5 +87,13 @@ def test_every_template_in_every_unit_verifies(name, unit):
     bad = [(c.block, c.name, m) for c in checks_of(b, values) for m in c.mismatches[:2]]
     assert not bad, (name, unit, bad[:3])
     assert b.meta["length_unit"] == unit
-    for p in t.parameters:
-        assert p.unit == templates.parameter_unit(t.mechanism, p.symbol, p.kind, unit)
+
+
+def test_a_length_expression_with_a_number_cannot_be_converted():
+    data = tomllib.loads(_fourbar_text())
+    data["mechanism"]["steps"].append({"type": "expression", "key": "reach", "unit": "length",
+                                       "formula": "a2+10"})
+    t = templates.from_data("mine", data)
+    with pytest.raises(templates.InputError) as caught:
+        templates.with_unit(t, "m")
+    assert "steps[" in str(caught.value) and ".formula" in str(caught.value)

@@ -283,3 +283,26 @@ def test_json_says_what_was_judged_and_how(fourbar, capsys):
     assert report["cells"] == report["formula_cells"] > 3000
     assert report["inputs"]["a2"] == 35.0 and report["tolerance"]["S"] == pytest.approx(434.0)
     assert "1e-12·S" in report["tolerance"]["length"]
+
+
+def test_a_dead_centre_just_inside_the_swing_is_seen(tmp_path, capsys):
+    """a5 puts the ram dyad's dead centre a hair inside the rocker's swing: the ram reverses
+    four times, two of them closer together than the reference's 0.1° sampling. The book's
+    #N/A is right, and verify, looking closer where the ram nearly stops, agrees."""
+    path = tmp_path / "qr.xlsx"
+    assert cli.main(["build", "quick-return", "--set", "a5=58.25752367", "-o", str(path)]) == 0
+    assert cli.main(["verify", str(path)]) == 0, capsys.readouterr().out[-800:]
+    capsys.readouterr()
+
+
+def test_rates_near_a_toggle_are_judged_by_their_conditioning(tmp_path, capsys):
+    """The toggle press with |B0C| = |CD| and the ram line through B0 (found by the property
+    test): the ram sits near its dead centre; its velocity (about 1e-7 mm/s) is as uncertain
+    as 1/sine² of the loop says, in any evaluation."""
+    path = tmp_path / "toggle.xlsx"
+    assert cli.main(["build", "toggle-press", "--set", "a2=30", "--set", "a3=450",
+                     "--set", "a4=290.625", "--set", "a5=290.625", "--set", "x0=150",
+                     "--set", "y0=120", "--set", "branch=-1", "--step", "15",
+                     "-o", str(path)]) == 0
+    assert cli.main(["verify", str(path)]) == 0, capsys.readouterr().out[-800:]
+    capsys.readouterr()

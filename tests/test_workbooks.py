@@ -49,7 +49,7 @@ def test_every_formula_cell_matches_the_reference(name, sets, branch):
     assert sum(c.cells for c in checks) == len(formula_cells(b.workbook))
     # 1e-9 mm or rad; a velocity's in per second of the input's speed scale (|ω|), an
     # acceleration's per second² (ω² + |α|); a time ratio is measured on the reference's
-    # motion (its reversals located to 1e-7°), and judged relative to 1e-6
+    # motion (its reversals located to 1e-6°), and judged relative to 1e-6
     assert max(c.max_abs / c.rate for c in checks if not c.block.startswith("reversals")) <= 1e-9
 
 

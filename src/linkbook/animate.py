@@ -75,8 +75,8 @@ def _frames(path: Path, wb, meta: dict, step: float | None) -> Animation:
     sheet, cell = pos["sheet"], pos["input_cell"]
     if sheet not in wb.sheetnames:
         raise AnimationError(f"{path}: the sheet {sheet!r} is missing")
-    inputs = _input_values(_sweep_column(wb, sweep), step,
-                           _input_label(wb, sheet, cell, meta)[1] == "deg")
+    column = _sweep_column(wb, sweep)
+    inputs = _input_values(column, step, _input_label(wb, sheet, cell, meta)[1] == "deg")
     x_col, y_col = layout.DRAWING_COLUMNS
     read = [(sheet, f"{col}{r}") for link in pos["drawing"] for r in range(link["rows"][0],
                                                                         link["rows"][1] + 1)
@@ -87,8 +87,11 @@ def _frames(path: Path, wb, meta: dict, step: float | None) -> Animation:
     except engine.EngineError as exc:
         raise AnimationError(f"{path}: {exc}") from None
     symbol, unit = _input_label(wb, sheet, cell, meta)
-    whole_turn = unit == "deg" and abs(inputs[-1] + (inputs[1] - inputs[0]) - inputs[0]
-                                       - 360.0) < 1e-9
+    # a whole turn loops: by --step, or the sweep's own rows over 360° (its last step may be
+    # shorter, when the step does not divide the turn)
+    whole_turn = unit == "deg" and (
+        abs(inputs[-1] + (inputs[1] - inputs[0]) - inputs[0] - 360.0) < 1e-9
+        or (step is None and abs(column[-1] - column[0] - 360.0) < 1e-9))
     return Animation(meta.get("title", path.stem), symbol, unit, meta.get("length_unit", ""),
                      _link_names(pos), pos.get("traced"), frames, whole_turn=whole_turn,
                      link_colours=drawing_colours(pos["drawing"]))

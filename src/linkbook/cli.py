@@ -219,13 +219,11 @@ def _print_report(report) -> None:
         verdict = "ok" if c.ok else f"{len(c.mismatches)} DIFFER"
         print(f"{c.block:12} {c.name:20} {c.cells:6d} {c.max_abs:10.2e} "
               f"{f'{c.na_agree}/{c.na_expected}':>11}  {verdict}")
-    shown = set()
     for c in report.checks:
         # the likely causes first, then a few of the cells downstream of them
         ordered = sorted(c.mismatches, key=lambda m: (m.sheet, m.cell) not in report.causes)
         for m in ordered[:5]:
             cause = (m.sheet, m.cell) in report.causes
-            shown.add((m.sheet, m.cell))
             print(f"  {m.sheet}!{m.cell}: expected {m.expected}, got {m.got}"
                   + ("   <- likely cause (reads no differing cell)" if cause else ""))
     compared = f"{report.cells} of {report.formula_cells} formula cells compared"

@@ -62,7 +62,8 @@ import openpyxl
 import schedula as sh
 from formulas import Parser
 from formulas.cell import CELL
-from formulas.functions import FUNCTIONS, Array, flatten, replace_empty, wrap_func
+from formulas.functions import (FUNCTIONS, Array, flatten, get_functions, replace_empty,
+                                wrap_func)
 from formulas.ranges import Ranges
 from formulas.tokens.function import Function
 from formulas.tokens.operand import Error, Range, XlError
@@ -126,7 +127,16 @@ def _aggregate(function_num, options, ref, *k):
     return numbers[-1 - i] if num == 14 else numbers[i]
 
 
-FUNCTIONS["AGGREGATE"] = FUNCTIONS["_XLFN.AGGREGATE"] = wrap_func(_aggregate)
+def _register(names, func) -> None:
+    """Add a function to `formulas`: to the table its get_functions() copies on first use, and
+    to that copy if someone has already made it (without making it: that imports scipy)."""
+    for name in names:
+        FUNCTIONS[name] = func
+        if get_functions.cache_info().currsize:
+            get_functions()[name] = func
+
+
+_register(("AGGREGATE", "_XLFN.AGGREGATE"), wrap_func(_aggregate))
 
 _PARSER = Parser()
 # Compiled functions by (sheet, skeleton, pattern of equal references, mode): see _compiled.

@@ -1297,9 +1297,10 @@ def _t_solve(jac: list[list[np.ndarray]], rhs: list[np.ndarray]) -> tuple[list, 
 
 
 def _implicit(residuals, z0: list[np.ndarray], knowns: dict, still: dict
-              ) -> tuple[list[_T], np.ndarray]:
+              ) -> tuple[list[_T], np.ndarray, np.ndarray]:
     """The unknowns z(t) with residuals(z, knowns) = 0, z(0) = z0 (see the section's comment),
-    and the rows at a dead centre."""
+    the rows at a dead centre, and per row how far from one (a 2×2 system's sine between its
+    gradients; 1 for one unknown, whose step measures its own)."""
     k = len(z0)
     jac = [[None] * k for _ in range(k)]
     for j in range(k):
@@ -1310,7 +1311,12 @@ def _implicit(residuals, z0: list[np.ndarray], knowns: dict, still: dict
     z1, dead = _t_solve(jac, [-np.asarray(r.b, dtype=float) for r in first])
     second = residuals([_T(z, d) for z, d in zip(z0, z1)], knowns)
     z2, _ = _t_solve(jac, [-np.asarray(r.c, dtype=float) for r in second])
-    return [_T(z, d, dd) for z, d, dd in zip(z0, z1, z2)], dead
+    sine = np.ones_like(z0[0], dtype=float)
+    if k == 2:      # the sine of the angle between the two constraint gradients
+        (a, b), (c, d) = jac
+        with np.errstate(divide="ignore", invalid="ignore"):
+            sine = np.abs(a * d - b * c) / (np.hypot(a, b) * np.hypot(c, d))
+    return [_T(z, d, dd) for z, d, dd in zip(z0, z1, z2)], dead, sine
 
 
 class _Motion:
@@ -1327,6 +1333,13 @@ class _Motion:
         self.input = _T(np.asarray(values, dtype=float), speed, accel)
         self.out: dict[str, np.ndarray] = {}
         self.dead = np.zeros(n, dtype=bool)     # rows at a dead centre of some loop
+        # per row, the smallest sine between a loop's two constraint gradients (1 far from any
+        # dead centre): rounding in any evaluation of the rates grows like 1/sine²
+        self.sine = np.ones(n)
+
+    def note_sine(self, sine) -> None:
+        sine = np.broadcast_to(np.asarray(sine, dtype=float), self.sine.shape)
+        self.sine = np.fmin(self.sine, np.where(np.isfinite(sine), sine, 1.0))
 
     def run(self) -> dict:
         for k, step in enumerate(self.s.steps):
@@ -1340,6 +1353,7 @@ class _Motion:
         out = {k: np.broadcast_to(np.asarray(v, dtype=float), (self.s.n,)).copy()
                for k, v in self.out.items()}
         out["dead_centre"] = self.dead
+        out["sine"] = self.sine
         return out
 
     # -- helpers
@@ -1393,8 +1407,9 @@ class _Motion:
             return [(z[0] - ax) * (z[0] - ax) + (z[1] - ay) * (z[1] - ay) - ra_ * ra_,
                     (z[0] - bx) * (z[0] - bx) + (z[1] - by) * (z[1] - by) - rb_ * rb_]
 
-        (x, y), dead = _implicit(residuals, [x0, y0], self.points, self.still())
+        (x, y), dead, sine = _implicit(residuals, [x0, y0], self.points, self.still())
         self.dead |= dead & np.isfinite(x0) & np.isfinite(y0)
+        self.note_sine(sine)
         return x, y
 
     def step_dyad(self, step: Mapping) -> None:
@@ -1430,11 +1445,13 @@ class _Motion:
             rx, ry = tx + z[0] * dx - px, ty + z[0] * dy - py
             return [rx * rx + ry * ry - length * length]
 
-        (pos,), _ = _implicit(residuals, [s0], self.points, self.still())
+        (pos,), _, _ = _implicit(residuals, [s0], self.points, self.still())
         (dx, dy), (tx, ty) = line(self.points), self.points[t]
         self.place(n, tx + pos * dx, ty + pos * dy)
         (px, py), (rx, ry) = self.points[p], self.points[n]
         self.out[f"det_{n}"] = dx.a * (px.a - rx.a) + dy.a * (py.a - ry.a)   # d·(P − R)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.note_sine(np.abs(self.out[f"det_{n}"]) / np.hypot(px.a - rx.a, py.a - ry.a))
         self.put_rates(self.key(step, "s", f"s_{n}"), pos, False)
         self.put_rates(self.key(step, "theta", f"theta_{n}"), self.angle(n, p), True)
         if along:
@@ -1450,7 +1467,7 @@ class _Motion:
             (px, py), (qx, qy) = pts[p], pts[q]
             return [(px - qx) * _t_cos(z[0]) + (py - qy) * _t_sin(z[0]) - offset]
 
-        (theta,), _ = _implicit(residuals, [th0], self.points, self.still())
+        (theta,), _, _ = _implicit(residuals, [th0], self.points, self.still())
         qx, qy = self.points[q]
         self.place(n, qx + offset * _t_cos(theta), qy + offset * _t_sin(theta))
         (px, py) = self.points[p]
@@ -1498,8 +1515,9 @@ class _Motion:
             return [ex + z[0] * _t_cos(u) - tx - z[1] * dc,
                     ey + z[0] * _t_sin(u) - ty - z[1] * ds]
 
-        (s_slot, pos), dead = _implicit(residuals, z0, self.points, self.still())
+        (s_slot, pos), dead, sine = _implicit(residuals, z0, self.points, self.still())
         self.dead |= dead & np.isfinite(z0[0]) & np.isfinite(z0[1])
+        self.note_sine(sine)
         tx, ty = self.points[t]
         self.place(n, tx + pos * dc, ty + pos * ds)
         u = self.angle(a, b).a + slot_angle
@@ -1559,6 +1577,30 @@ def positions_only(params: Mapping[str, float]) -> dict:
     return {k: v for k, v in params.items() if k not in rates}
 
 
+def _sign_changes(values: np.ndarray, closed: bool) -> int:
+    steps = np.diff(np.append(values, values[0]) if closed else values)
+    steps = steps[steps != 0.0]
+    if closed:
+        return int(np.count_nonzero(np.sign(steps) != np.sign(np.roll(steps, 1))))
+    return int(np.count_nonzero(np.sign(steps[1:]) != np.sign(steps[:-1])))
+
+
+def _reversals(description, params, key: str, angles: np.ndarray, values: np.ndarray) -> int:
+    """How often the output turns back over the sampled turn, looking 100 times closer
+    wherever it nearly stops (a local minimum of its step): a pair of reversals narrower than
+    the sampling (a dead centre just inside the swing) hides there."""
+    steps = np.abs(np.diff(np.append(values, values[0])))
+    slow = np.nonzero((steps <= np.roll(steps, 1)) & (steps <= np.roll(steps, -1)))[0]
+    if len(slow) > 50:          # an output that barely moves: no quick-return ratio
+        return -1
+    count, step = 0, float(angles[1] - angles[0])
+    for i in slow:
+        near = np.linspace(angles[i] - step, angles[i] + 2 * step, 301)
+        count += _sign_changes(np.asarray(solve(description, params, near)[key], dtype=float),
+                               closed=False)
+    return count
+
+
 def time_ratio(description: Mapping, params: Mapping[str, float], key: str) -> float:
     """A quick-return ratio measured on the motion, not from any formula: column `key` (an
     output that moves forward and back once per turn of the input) over a turn sampled every
@@ -1570,9 +1612,7 @@ def time_ratio(description: Mapping, params: Mapping[str, float], key: str) -> f
     values = np.asarray(solve(description, params, angles)[key], dtype=float)
     if not np.isfinite(values).all():
         return math.nan
-    steps = np.diff(np.append(values, values[0]))
-    steps = steps[steps != 0.0]
-    if np.count_nonzero(np.sign(steps) != np.sign(np.roll(steps, 1))) != 2:
+    if _reversals(description, params, key, angles, values) != 2:
         return math.nan
     top, _ = refined_extreme(description, params, key, angles, values, np.argmax, rounds=5)
     low, _ = refined_extreme(description, params, key, angles, values, np.argmin, rounds=5)

@@ -787,8 +787,12 @@ class Compiler:
         formula = f"IFERROR({body.text},NA())"
         sym = Sym(k, _text(f"{field}.symbol", s.get("symbol", k)),
                   _text(f"{field}.label", s.get("label", k)), shown=shown)
-        self.model.add(Quantity(k, sym.symbol, UNITS[unit], formula, self.role(formula, sym),
-                                sym.label))
+        role = self.role(formula, sym)
+        if "time_ratio_of" in s and role != CONSTANT:
+            raise DescriptionError(f"{field}.time_ratio_of", "a time ratio is one number per "
+                                                             "book: the formula must be shown and "
+                                                             "depend on the parameters alone")
+        self.model.add(Quantity(k, sym.symbol, UNITS[unit], formula, role, sym.label))
 
     def role(self, formula: str, sym: Sym) -> str:
         """CONSTANT when a quantity depends on the parameters alone (one named cell)."""

@@ -224,6 +224,7 @@ def apply_print_setup(wb, fit_to_width: tuple[str, ...] = ()) -> None:
 
 
 TITLE_ROWS = 2      # a sheet's title (A1) and note (A2): printed once, as text that overflows
+HEADER_CHARS = 200  # Excel allows 255 characters in a page header, codes included
 
 
 def _repeat_frozen_titles(ws) -> None:
@@ -232,7 +233,9 @@ def _repeat_frozen_titles(ws) -> None:
     would be cut at the edge of the repeated column A; every page's header names the sheet's
     title instead, whole."""
     if isinstance(ws["A1"].value, str):
-        ws.oddHeader.center.text = ws["A1"].value.replace("&", "&&")
+        title = ws["A1"].value
+        title = title if len(title) <= HEADER_CHARS else title[:HEADER_CHARS - 1] + "…"
+        ws.oddHeader.center.text = title.replace("&", "&&")
         ws.oddHeader.center.size = 8
         ws.HeaderFooter.differentFirst = True      # page 1 shows A1 itself
         ws.firstFooter.center.text = "&A, page &P of &N"

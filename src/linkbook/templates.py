@@ -351,6 +351,9 @@ def _length_literals(description: dict) -> list[str]:
     for i, step in enumerate(description.get("steps") or []):
         if isinstance(step, dict):
             found += [f"steps[{i}].{k}" for k in _LENGTH_KEYS if numbers(step.get(k))]
+            if step.get("type") == "expression" and step.get("unit") == "length" \
+                    and numbers(step.get("formula")):
+                found.append(f"steps[{i}].formula")
     return found
 
 

@@ -29,7 +29,9 @@ TOLERANCE_RULE = {
               "velocity or an acceleration)",
     "angle": "1e-9 (times the input's rate for an angular velocity or acceleration)",
     "singular": "a length or a rate beyond its magnitude m may differ by 1e-12·|x|²/m; near a "
-                "limit position a further 1e-12·|∂x/∂θ|, at an isolated one 1e-6",
+                "limit position a further 1e-12·|∂x/∂θ|, at an isolated one 1e-6; a rate near a "
+                "dead centre its base bound / sine² (sine: between a loop's constraint "
+                "gradients)",
     "libreoffice": "1e-9·max(|x|, the unit's bound): it keeps 15 digits",
 }
 
@@ -201,11 +203,14 @@ EDGE_SLOPE = 1e6             # at an isolated limit position: ROUNDING·EDGE_SLO
 
 def compare(check: Check, sheet: str, cells: list[str], got: list, expected, unit: str,
             is_error, error_code, tol: float = ABS_TOL, relative: bool = False,
-            slope=None, dead=None) -> None:
+            slope=None, dead=None, sine=None) -> None:
     """`slope(i)`: |∂x/∂θ| of cell i from the reference, asked only for a cell that misses the
     strict bound. Near a limit position (an ACOS argument close to ±1, the pump's cos θ14 close
     to 0) every evaluation loses digits in proportion to it, so such a cell may differ by
-    ROUNDING·|∂x/∂θ| more: the forward-error bound, not a looser test of healthy cells."""
+    ROUNDING·|∂x/∂θ| more: the forward-error bound, not a looser test of healthy cells.
+    `sine` (rates): per row, the reference's smallest sine between a loop's two constraint
+    gradients; near a dead centre the rounding of any evaluation of a rate grows like 1/sine²,
+    and so may a cell that misses the strict bound: base bound / sine²."""
     period = ANGLE_UNITS.get(unit)
     for i, (cell, value, exp) in enumerate(zip(cells, got,
                                                np.broadcast_to(expected, (len(cells),)))):
@@ -240,6 +245,8 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
         limit = check.limit(exp, tol, relative, grows=not period)
         if diff > limit and slope is not None:
             limit += ROUNDING * slope(i)
+        if diff > limit and sine is not None and sine[i] < 1.0:
+            limit = max(limit, check.limit(0.0, tol, relative) / max(float(sine[i]), 1e-150) ** 2)
         if diff > limit:
             check.mismatches.append(Mismatch(sheet, cell, exp, float(value)))
 
@@ -298,10 +305,11 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     size = mechanism_size(meta, params)
     checks: list[Check] = []
 
-    def run(block, name, sheet, cells, expected, unit, slope=None, rate=1.0, dead=None):
+    def run(block, name, sheet, cells, expected, unit, slope=None, rate=1.0, dead=None,
+            sine=None):
         c = Check(block, name, size, rate, unit_scale(unit, size))
         compare(c, sheet, cells, [values.get((sheet, x)) for x in cells], expected, unit,
-                is_error, error_code, tol, relative, slope, dead)
+                is_error, error_code, tol, relative, slope, dead, sine)
         checks.append(c)
 
     # The sweep table, column by column.
@@ -515,14 +523,14 @@ def _check_motion(meta, model, solver, params, angles, ref, one, angle, scale, s
         rate = {ACCEL: rate2, ANG_ACCEL: rate2, AREA: 1.0, LENGTH: 1.0, RATIO: 1.0}.get(unit,
                                                                                     rate1)
         run(sheet, key, sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)], _expected(ref, key),
-            unit, slope(angles, key, unit), rate, ref.get("dead_centre"))
+            unit, slope(angles, key, unit), rate, ref.get("dead_centre"), ref.get("sine"))
         run("motion now", key, sheet, [f"{letter}{now}"], _expected(one, key), unit,
-            slope(np.array([angle]), key, unit), rate, one.get("dead_centre"))
+            slope(np.array([angle]), key, unit), rate, one.get("dead_centre"), one.get("sine"))
     for key, cell in meta["position"].get("motion_cells", {}).items():
         unit = model.get(key).unit
         rate = rate2 if unit in (ACCEL, ANG_ACCEL) else rate1
         run("position", key, layout.MECH, [cell], _expected(one, key), unit,
-            slope(np.array([angle]), key, unit), rate, one.get("dead_centre"))
+            slope(np.array([angle]), key, unit), rate, one.get("dead_centre"), one.get("sine"))
 
 
 ASSEMBLY_COLUMNS = ("closes", "gap_from", "gap_to")
@@ -740,8 +748,10 @@ def _check_stroke_sampling(solver, params: dict, grid: dict, adjust: list, value
     reference's extremes, refined to 1e-6°) by what a sample h/2 from each extreme loses, and
     never exceed it. A sweep sampled more coarsely than the template asks misses by more."""
     key = solver.mechanism.grid[1]
-    h = float(grid.get("stroke_step", 1.0))
     c = Check(grid["sheet"], "stroke sampling", size, scale=size)
+    if "stroke_step" not in grid:       # a book built before the record kept it
+        return c
+    h = float(grid["stroke_step"])
     angles = np.arange(0.0, 360.0, generic.EXTREME_STEP)
     for letter, v in zip(grid["columns"], adjust):
         cell = f"{letter}{grid['stroke_row']}"
@@ -820,12 +830,16 @@ def likely_causes(wb, checks: list[Check]) -> set[tuple[str, str]]:
         where.setdefault(sheet, set()).add(coordinate_to_tuple(cell))
 
     def reads_a_differing_cell(key, rects) -> bool:
-        me = coordinate_to_tuple(key[1])
+        me = (key[0], coordinate_to_tuple(key[1]))
         for sheet, top, left, bottom, right in rects:
-            for row, col in where.get(sheet, ()):
-                if top <= row <= bottom and left <= col <= right and \
-                        (sheet, (row, col)) != (key[0], me):
-                    return True
+            cells = where.get(sheet, set())
+            if (bottom - top + 1) * (right - left + 1) <= len(cells):   # walk the smaller side
+                hits = ((r, c) for r in range(top, bottom + 1) for c in range(left, right + 1)
+                        if (r, c) in cells)
+            else:
+                hits = ((r, c) for r, c in cells if top <= r <= bottom and left <= c <= right)
+            if any((sheet, rc) != me for rc in hits):
+                return True
         return False
     reads = engines.cells_read(wb, differ)
     return {key for key in differ if not reads_a_differing_cell(key, reads.get(key, []))}
