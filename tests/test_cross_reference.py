@@ -29,12 +29,23 @@ def template(name: str) -> templates.Template:
     return templates.load(name)
 
 
-def _same(name: str, key: str, old, new, size: float) -> None:
+# The old solver finds a double root (a limit position reached exactly by the data, where the
+# generic one polishes to round-off) only to about √ε of the size: found by the property test
+# at a1 = 45, a2 = 10, a3 = 50 (the slider-crank's limit at θ = 210°).
+DOUBLE_ROOT_SINE = 1e-6
+
+
+def _same(name: str, key: str, old, new, size: float, sine=None) -> None:
     old, new = np.atleast_1d(np.asarray(old, dtype=float)), np.atleast_1d(np.asarray(new, float))
     np.testing.assert_array_equal(np.isnan(old), np.isnan(new), err_msg=f"{name} {key} NaN rows")
     both = ~np.isnan(old)
+    sine = None if sine is None else np.asarray(sine, dtype=float)
+    at_double_root = (sine < DOUBLE_ROOT_SINE)[both] \
+        if sine is not None and sine.shape == both.shape else None
     old, new = old[both], new[both]
     diff = np.abs(old - new)
+    if at_double_root is not None:
+        diff = np.where(at_double_root, np.maximum(diff - 2e-8 * size, 0.0), diff)
     if key.startswith(("theta", "phi", "psi", "mu", "eta", "xi", "gamma", "delta", "beta")) \
             and key not in ("psi",) or key == "psi" and name == "tk-fourbar":
         diff = np.abs((old - new + math.pi) % (2 * math.pi) - math.pi)   # angles: modulo 2π
@@ -63,6 +74,6 @@ def test_generic_and_legacy_reference_agree(name):
                 # The rocker turns all round (a Whitworth): outside the template's textbook
                 # formula, which declines (#N/A) where the old solver counts ram reversals.
                 continue
-            _same(name, key, old[key], new[key], size)
+            _same(name, key, old[key], new[key], size, new.get("sine"))
 
     check()
