@@ -1577,11 +1577,10 @@ def positions_only(params: Mapping[str, float]) -> dict:
     return {k: v for k, v in params.items() if k not in rates}
 
 
-def _sign_changes(values: np.ndarray, closed: bool) -> int:
-    steps = np.diff(np.append(values, values[0]) if closed else values)
+def _sign_changes(values: np.ndarray) -> int:
+    """How often a sampled run of values turns back (flat steps skipped)."""
+    steps = np.diff(values)
     steps = steps[steps != 0.0]
-    if closed:
-        return int(np.count_nonzero(np.sign(steps) != np.sign(np.roll(steps, 1))))
     return int(np.count_nonzero(np.sign(steps[1:]) != np.sign(steps[:-1])))
 
 
@@ -1596,8 +1595,7 @@ def _reversals(description, params, key: str, angles: np.ndarray, values: np.nda
     count, step = 0, float(angles[1] - angles[0])
     for i in slow:
         near = np.linspace(angles[i] - step, angles[i] + 2 * step, 301)
-        count += _sign_changes(np.asarray(solve(description, params, near)[key], dtype=float),
-                               closed=False)
+        count += _sign_changes(np.asarray(solve(description, params, near)[key], dtype=float))
     return count
 
 
