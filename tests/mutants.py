@@ -75,6 +75,16 @@ MUTANTS = [
            [("pump", ["--step", "5"])]),
     Mutant("window: a degree view without its 360° window", "src/linkbook/workbook.py",
            'return f"=MOD(DEGREES({ref}){shift},360){back}"', 'return f"=DEGREES({ref})"'),
+    Mutant("frame: the drawing's centre y from x max", "src/linkbook/frames.py",
+           "\"cy\": f\"=({ref['ymin']}+{ref['ymax']})/2\"",
+           "\"cy\": f\"=({ref['ymin']}+{ref['xmax']})/2\""),
+    Mutant("frame: the margin left out of the grid square", "src/linkbook/frames.py",
+           '            f"*{MARGIN}/{2 * HALF}",', '            f"/{2 * HALF}",'),
+    Mutant("frame: y mapped from the x centre", "src/linkbook/frames.py",
+           'centre = ref["cx"] if axis == "x" else ref["cy"]', 'centre = ref["cx"]'),
+    Mutant("frame: the grid square's legend one decimal short", "src/linkbook/frames.py",
+           'decimals = f"MAX(0,-INT(ROUND(LOG10({text}),6)))"',
+           'decimals = f"MAX(0,-INT(ROUND(LOG10({text}),6))-1)"'),
 ]
 
 

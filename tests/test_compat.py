@@ -16,10 +16,10 @@ from linkbook.language import FUNCTIONS as EXPRESSION_FUNCTIONS
 # a function outside this list fails the test until someone checks its version and adds it).
 EXCEL_2007 = {
     "ABS", "ACOS", "AND", "ASIN", "ATAN", "ATAN2", "AVERAGE", "CHOOSE", "COS", "COUNT",
-    "COUNTA", "COUNTIF", "DEGREES", "EXP", "IF", "IFERROR", "INDEX", "INT", "ISERROR", "ISNA",
-    "ISNUMBER", "LARGE", "LN", "LOG", "MATCH", "MAX", "MIN", "MOD", "NA", "NOT", "OR", "PI",
-    "POWER", "RADIANS", "ROUND", "ROWS", "SIGN", "SIN", "SMALL", "SQRT", "SUM", "SUMPRODUCT",
-    "TAN",
+    "COUNTA", "COUNTIF", "DEGREES", "EXP", "FIXED", "IF", "IFERROR", "INDEX", "INT", "ISERROR",
+    "ISNA", "ISNUMBER", "LARGE", "LN", "LOG", "LOG10", "MATCH", "MAX", "MIN", "MOD", "NA", "NOT",
+    "OR", "PI", "POWER", "RADIANS", "ROUND", "ROWS", "SIGN", "SIN", "SMALL", "SQRT", "SUM",
+    "SUMPRODUCT", "TAN",
 }
 EXCEL_2010 = {"AGGREGATE"}          # new in Excel 2010: written as _xlfn.AGGREGATE
 

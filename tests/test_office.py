@@ -67,7 +67,7 @@ def _book_with_charts(name: str, tmp: Path, sets=()) -> Path:
     t = _template(name, sets)
     _, _, values = _built_and_values(name, sets, tmp)
     b = workbook.build(t)
-    charts.add_charts(b, t, b.model, values)
+    charts.add_charts(b, t, b.model)
     office.apply_print_setup(b.workbook)
     path = tmp / f"{name}-charts.xlsx"
     b.workbook.save(path)
@@ -287,7 +287,7 @@ def test_print_setup_keeps_charts_whole():
     """Mechanism: the drawing starts a page of its own; every visible sheet has a scale."""
     t = _template("fourbar")
     b = workbook.build(t)
-    charts.add_charts(b, t, b.model, {})
+    charts.add_charts(b, t, b.model)
     office.apply_print_setup(b.workbook)
     mech = b.workbook[workbook.MECH]
     chart_col = openpyxl.utils.column_index_from_string(

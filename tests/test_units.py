@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from conftest import ROOT, checks_of
 
-from linkbook import builder, cli, templates
+from linkbook import builder, cli, engine, templates, workbook
 
 BUNDLED = [p.stem for p in templates.bundled()]
 
@@ -40,11 +40,18 @@ def test_the_metre_four_bar_says_m_everywhere(metre_book, capsys):
     capsys.readouterr()
 
 
-def test_tick_labels_of_a_metre_drawing_are_round_numbers(metre_book):
+def test_a_metre_drawing_names_its_grid_square_in_metres(metre_book):
+    """The drawing's frame has no tick numbers (they would count squares); the scale bar's
+    legend, a live cell, says how big a square is, in a round number of metres."""
     text = _xml_text(metre_book)
     for value in re.findall(r'<c:(?:min|max) val="([^"]+)"', text):
         assert "E" not in value.upper() and len(value) <= 8, value
-    assert re.search(r'formatCode="0\.0+"', text)
+    wb = openpyxl.load_workbook(metre_book)
+    meta = workbook.read_meta(wb)
+    values = engine.evaluate(wb)
+    for frame in meta["frames"]["frames"]:
+        label = values[("Drawing data", frame["cells"]["label"])]
+        assert re.fullmatch(r"grid square 0\.0*[125] m", label), label
 
 
 def _fourbar_text(**changes) -> str:

@@ -23,7 +23,7 @@ def make(t: Template) -> tuple[workbook.Built, dict]:
     if changed:
         known = {cell: v for cell, v in values.items() if cell not in changed}
         values = engine.evaluate(built.workbook, known=known)
-    charts.add_charts(built, t, built.model, values)
+    charts.add_charts(built, t, built.model)
     _print_setup(built.workbook)
     return built, values
 

@@ -1,8 +1,9 @@
 """XY scatter charts: the mechanism drawing, the sweep charts and the pump family.
 
-Geometry is drawn with equal scales: both axes get the same span, fixed from the evaluated
-workbook (every joint over the whole sweep plus a margin), and a square plot area. Excel and
-LibreOffice would otherwise pick each axis range on its own and distort the mechanism.
+Geometry is drawn to scale and live: such a chart has fixed axes, the same on x and y, in a square
+plot area, and draws coordinates that formulas map into that frame from the live extents
+(frames.py). Excel and LibreOffice would otherwise pick each axis range on its own and distort
+the mechanism, and axis limits fixed at build time would lose it after an edit.
 """
 from __future__ import annotations
 
@@ -10,14 +11,17 @@ import math
 
 from openpyxl.chart import Reference, ScatterChart, Series
 from openpyxl.chart.axis import ChartLines
-from openpyxl.chart.data_source import NumFmt
+from openpyxl.chart.data_source import NumFmt, StrRef
+from openpyxl.chart.series import SeriesLabel
+from openpyxl.drawing.line import LineProperties
 from openpyxl.chart.layout import Layout, ManualLayout
 from openpyxl.chart.shapes import GraphicalProperties
-from openpyxl.utils import column_index_from_string, get_column_letter
+from openpyxl.utils import column_index_from_string, get_column_letter, quote_sheetname
 
+from . import frames
 from .model import ANG_ACCEL, ANG_SPEED, LENGTH, Model, header, unit_text
 from .templates import Template
-from .workbook import CHARTS, DRAWING_COLUMNS, GRID, MECH, MOTION_SHEET, SWEEP, Built
+from .workbook import CHARTS, GRID, MECH, MOTION_SHEET, SWEEP, Built
 
 LINE_EMU = 22000          # 1.7 pt
 DRAWING_CM = 15.0
@@ -26,6 +30,9 @@ DRAWING_CM = 15.0
 LINK_COLOURS = ("4F81BD", "C0504D", "9BBB59", "F79646", "4BACC6", "1F497D", "948A54")
 PATH_COLOUR = "8064A2"
 GROUND_COLOUR = "7F7F7F"
+SWEEP_CHART_CM = 18         # the width of the Charts sheet's charts
+SIDE, WIDTH_RATIO = 0.75, 1.45    # a framed chart: square plot area, legend on the right
+GRID_COLOUR = "9DC3E6"     # the frame's gridlines, one per grid square: light blue paper
 
 
 def drawing_colours(drawing: list[dict]) -> list[str]:
@@ -98,28 +105,45 @@ def decimals(step: float) -> int:
     return next((d for d in range(16) if abs(round(step, d) - step) <= 1e-9 * step), 15)
 
 
-def _equal_axes(chart: ScatterChart, xs: list[float], ys: list[float], size_cm: float) -> None:
-    """Same span on both axes, centred on the data, and a square plot area."""
-    xs = [v for v in xs if isinstance(v, float) and math.isfinite(v)]
-    ys = [v for v in ys if isinstance(v, float) and math.isfinite(v)]
-    if not xs or not ys:
-        return
-    span = max(max(xs) - min(xs), max(ys) - min(ys), 1e-9) * 1.12
-    step = nice_step(span)
-    cx, cy = (max(xs) + min(xs)) / 2, (max(ys) + min(ys)) / 2
-    half = math.ceil(span / 2 / step) * step
-    places = decimals(step)
-    for axis, centre in ((chart.x_axis, cx), (chart.y_axis, cy)):
-        # whole multiples of the step, rounded to its decimals: no tick reads 2.8E-17
-        low = round(math.floor((centre - half) / step) * step, places)
-        axis.scaling.min = low
-        axis.scaling.max = round(low + 2 * half + step, places)
-        axis.majorUnit = step
-        axis.numFmt = NumFmt(formatCode="0." + "0" * places if places else "0",
-                             sourceLinked=False)
-    chart.width = chart.height = size_cm
-    chart.plot_area.layout = Layout(ManualLayout(layoutTarget="inner", xMode="edge",
-                                                 yMode="edge", x=0.16, y=0.11, w=0.72, h=0.72))
+def _frame_axes(chart: ScatterChart, size_cm: float) -> None:
+    """A live frame's fixed axes (frames.py): -HALF … HALF grid squares on both, a gridline
+    per square, no tick labels (they would count squares, not lengths: the scale bar's legend
+    gives the square's size), in a square plot area of a square chart."""
+    for axis in (chart.x_axis, chart.y_axis):
+        axis.scaling.min, axis.scaling.max = -frames.HALF, frames.HALF
+        axis.majorUnit = 1
+        axis.numFmt = NumFmt(formatCode=";;;", sourceLinked=False)   # no tick labels
+        axis.majorTickMark = "none"
+        axis.crosses = "min"          # the axis lines on the frame's edges, not through 0
+        axis.spPr = GraphicalProperties(ln=LineProperties(solidFill=GRID_COLOUR, w=6350))
+        axis.majorGridlines = ChartLines()
+        axis.majorGridlines.spPr = GraphicalProperties(ln=LineProperties(solidFill=GRID_COLOUR,
+                                                                          w=6350))
+    # The inner plot area is a square, SIDE of the chart's height, with the title above it and
+    # the legend to its right (a column of links fits there at any count). openpyxl writes
+    # chart.layout as the plot area's layout; Excel and LibreOffice both honour it.
+    chart.height, chart.width = size_cm, size_cm * WIDTH_RATIO
+    left, top = 0.06, 0.15
+    chart.layout = Layout(ManualLayout(layoutTarget="inner", xMode="edge", yMode="edge",
+                                       x=left, y=top, w=SIDE / WIDTH_RATIO, h=SIDE))
+    chart.legend.position = "r"
+
+
+def _scale_bar(ws, frame: dict) -> Series:
+    """One grid square drawn as a thick black bar; its legend entry (a live cell) names the
+    square's size."""
+    bar = frame["bar"]
+    s = _series(ws, *bar["columns"], tuple(bar["rows"]), "scale", width=50800, colour="000000")
+    label = frame["cells"]["label"]
+    column = label.rstrip("0123456789")
+    s.tx = SeriesLabel(strRef=StrRef(f"{quote_sheetname(ws.title)}!${column}${label[len(column):]}"))
+    return s
+
+
+def _mapped(ws, series: dict, rows: tuple[int, int], title: str, **style) -> Series:
+    """A series drawn from a frame's mapped columns (`rows`: the source rows it reads)."""
+    first = series["mapped_rows"][0] + rows[0] - series["rows"][0]
+    return _series(ws, *series["columns"], (first, first + rows[1] - rows[0]), title, **style)
 
 
 def _angle_axis(chart: ScatterChart, t: Template) -> None:
@@ -128,75 +152,73 @@ def _angle_axis(chart: ScatterChart, t: Template) -> None:
     chart.x_axis.majorUnit = 30 if t.sweep.stop - t.sweep.start >= 180 else None
 
 
-def _column(values: dict, sheet: str, letter: str, rows: tuple[int, int]) -> list:
-    return [values.get((sheet, f"{letter}{r}")) for r in range(rows[0], rows[1] + 1)]
-
-
-def add_charts(built: Built, t: Template, model: Model, values: dict) -> None:
+def add_charts(built: Built, t: Template, model: Model) -> None:
     wb, meta = built.workbook, built.meta
-    _drawing(wb, t, model, meta, values)
-    row = _sweep_charts(wb, t, model, meta, values)
+    _drawing(wb, t, model, meta)
+    row = _sweep_charts(wb, t, model, meta)
     if "motion" in meta:
         _motion_charts(wb, t, model, meta, row)
     if "grid" in meta:
         _family_chart(wb, t, model, meta)
 
 
-def _drawing(wb, t, model: Model, meta: dict, values: dict) -> None:
+def _drawing(wb, t, model: Model, meta: dict) -> None:
     ws = wb[MECH]
-    pos, sweep = meta["position"], meta["sweep"]
-    rows = tuple(sweep["rows"])
+    pos = meta["position"]
+    frame = meta["frames"]["frames"][0]
+    ws_frame = wb[frames.SHEET]
     chart = _chart(f"{t.title} at the current {t.mechanism.input_symbol}",
                    f"x [{t.length_unit}]", f"y [{t.length_unit}]")
+    links, *path = frame["series"]
     colours = drawing_colours(pos["drawing"])
     for i, link in enumerate(pos["drawing"], start=1):
-        series = _series(ws, *DRAWING_COLUMNS, tuple(link["rows"]), link_label(link, i),
+        series = _mapped(ws_frame, links, tuple(link["rows"]), link_label(link, i),
                          markers=True, width=38000, colour=colours[i - 1])
         if link.get("ground"):       # fixed pivots: triangles on a thinner grey line
             series.marker.symbol, series.marker.size = "triangle", 10
             series.graphicalProperties.line.width = 19050
         chart.series.append(series)
-    if model.path:
-        x_key, y_key = model.path
-        chart.series.append(_series(wb[SWEEP], sweep["columns"][x_key], sweep["columns"][y_key],
-                                    rows, f"path of {y_key[1:]}", width=12700,
+    for p in path:
+        chart.series.append(_mapped(ws_frame, p, tuple(p["rows"]), p["title"], width=12700,
                                     colour=PATH_COLOUR))
-    xs, ys = [], []
-    for joint in model.joints:
-        for key, out in ((joint.x, xs), (joint.y, ys)):
-            column = key.strip("{}")
-            if key == f"{{{column}}}" and column in sweep["columns"]:
-                out += _column(values, SWEEP, sweep["columns"][column], rows)
-            else:
-                cell = pos["joints"][joint.name][0 if out is xs else 1]
-                out.append(values.get((MECH, cell)))
-    _equal_axes(chart, xs, ys, DRAWING_CM)
+    chart.series.append(_scale_bar(ws_frame, frame))
+    _frame_axes(chart, DRAWING_CM)
     ws.add_chart(chart, pos["chart_anchor"])   # under the joints table it draws
 
 
-def _sweep_charts(wb, t, model: Model, meta: dict, values: dict) -> None:
+def _sweep_charts(wb, t, model: Model, meta: dict) -> int:
     ws_data, ws = wb[SWEEP], wb[CHARTS]
     sweep = meta["sweep"]
     rows = tuple(sweep["rows"])
     letters = sweep["columns"]
     ws["A1"] = f"{t.title}: charts (data on sheet {SWEEP})"
     anchor_row = 3
-    for spec in model.charts:
+    for i, spec in enumerate(model.charts):
         chart = _chart(spec.title, _axis_title(spec.x_title, model, spec.x, t),
                        _axis_title(spec.y_title, model, spec.ys[0], t))
-        for key in spec.ys:
-            chart.series.append(_series(ws_data, letters[spec.x], letters[key], rows,
-                                        _series_title(model, key)))
+        if not spec.equal_axes:
+            for key in spec.ys:
+                chart.series.append(_series(ws_data, letters[spec.x], letters[key], rows,
+                                            _series_title(model, key)))
         if spec.equal_axes:
-            _equal_axes(chart, _column(values, SWEEP, letters[spec.x], rows),
-                        _column(values, SWEEP, letters[spec.ys[0]], rows), 14)
+            _framed(wb, chart, meta, i)
         else:
-            chart.width, chart.height = 18, 10
+            chart.width, chart.height = SWEEP_CHART_CM, 10
             if spec.x.endswith("_deg"):
                 _angle_axis(chart, t)
         ws.add_chart(chart, f"A{anchor_row}")
-        anchor_row += 30 if spec.equal_axes else 21
+        anchor_row += 26 if spec.equal_axes else 21
     return anchor_row
+
+
+def _framed(wb, chart: ScatterChart, meta: dict, index: int) -> None:
+    """An equal-scale chart of sweep columns: its series from its live frame."""
+    frame = next(f for f in meta["frames"]["frames"] if f.get("chart") == index)
+    ws = wb[frames.SHEET]
+    for s in frame["series"]:
+        chart.series.append(_mapped(ws, s, tuple(s["rows"]), s["title"]))
+    chart.series.append(_scale_bar(ws, frame))
+    _frame_axes(chart, SWEEP_CHART_CM / WIDTH_RATIO)   # as wide as the other sweep charts
 
 
 def _motion_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:

@@ -320,13 +320,14 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     # the slope of a cell is taken per radian of a crank, per `size` of an actuator's stroke
     scale = math.degrees(1.0) if mech.input_is_angle else size
     ref = solver.solve(params, angles)
+    slopes = {}
     for key, letter in sweep["columns"].items():
         if key == mech.input_column or key in ASSEMBLY_COLUMNS:
             continue
         cells = [f"{letter}{r}" for r in range(rows[0], rows[1] + 1)]
         unit = column_unit(model, key)
-        run(layout.SWEEP, key, sweep["sheet"], cells, _expected(ref, key), unit,
-            _slope(solver, params, angles, key, unit, scale=scale))
+        slopes[key] = _slope(solver, params, angles, key, unit, scale=scale)
+        run(layout.SWEEP, key, sweep["sheet"], cells, _expected(ref, key), unit, slopes[key])
 
     # The current position, the joints and the drawing rows.
     pos = meta["position"]
@@ -351,6 +352,9 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
     run("joints", "drawing rows", pos["sheet"], drawing_cells, np.array(drawing_expected),
         "length")
     checks.append(_check_links(pos, solver.description, ref, size))
+    if "frames" in meta:
+        checks += _check_frames(meta, values, ref, joint_values, slopes, size, is_error,
+                                error_code, tol, relative)
     checks += _check_degree_windows(model, mech.input_column, sweep, pos, ref, values, size)
 
     # Derived constants: a time ratio from the reversals of its output (the reference's own
@@ -437,6 +441,116 @@ def _check_links(pos: dict, description: dict, ref: dict, size: float) -> Check:
                                              "a link between joined points",
                                              f"{a}–{b}, which nothing joins"))
     return c
+
+
+# ---------------------------------------------------------------- drawing frames
+# The rule of a live frame (docs/mechanisms.md, "Drawings"), restated here from the documented
+# convention: the frame is centred on the extents of what a chart draws, and a grid square is
+# the smallest 1, 2 or 5 × 10ⁿ that fits MARGIN times the larger extent in 2·HALF squares.
+FRAME_HALF, FRAME_MARGIN = 5, 1.12
+FRAME_SQUARES = (1.0, 2.0, 5.0, 10.0)
+
+
+def frame_squares(need: float) -> list[tuple[float, float]]:
+    """(power of ten, grid square) for `need` per square; two when `need` is within rounding of
+    a step (1, 2, 5 × 10ⁿ), where either evaluation may fall on either side."""
+    out = []
+    for r in (need * (1 - 1e-9), need, need * (1 + 1e-9)):
+        decade = 10.0 ** math.floor(math.log10(r))
+        square = decade * next(m for m in FRAME_SQUARES if r <= m * decade * (1 + 1e-15))
+        if (decade, square) not in out:
+            out.append((decade, square))
+    return out
+
+
+def _check_frames(meta, values, ref, joint_values, slopes, size, is_error, error_code, tol,
+                  relative) -> list[Check]:
+    """Each equal-scale chart's frame (extents, centre, grid square, the scale bar's legend)
+    from the reference's points, and each mapped cell: the reference's coordinate in squares
+    of that frame."""
+    sheet, pos = meta["frames"]["sheet"], meta["position"]
+    unit = meta.get("length_unit", "mm")
+    checks = []
+    for frame in meta["frames"]["frames"]:
+        name = "drawing" if "chart" not in frame else f"chart {frame['chart'] + 1}"
+        cells = frame["cells"]
+        ext = frame["extent"]
+        lo, hi = {}, {}
+        for i, axis in enumerate("xy"):
+            parts = [_expected(ref, key) for key in ext[axis]]
+            if ext["position"]:
+                parts.append(np.array([xy[i] for xy in joint_values.values()]))
+            v = np.concatenate(parts) if parts else np.array([])
+            v = v[np.isfinite(v)]
+            lo[axis], hi[axis] = (float(v.min()), float(v.max())) if v.size else (0.0, 0.0)
+        need = max(hi["x"] - lo["x"], hi["y"] - lo["y"], 1e-12) * FRAME_MARGIN / (2 * FRAME_HALF)
+        centre = {"x": (lo["x"] + hi["x"]) / 2, "y": (lo["y"] + hi["y"]) / 2}
+        expected = {"xmin": lo["x"], "xmax": hi["x"], "ymin": lo["y"], "ymax": hi["y"],
+                    "cx": centre["x"], "cy": centre["y"], "need": need}
+        c = Check("frame", f"{name}: extents", size, 1.0, size)
+        keys = list(expected)
+        compare(c, sheet, [cells[k] for k in keys],
+                [values.get((sheet, cells[k])) for k in keys],
+                np.array([expected[k] for k in keys]), "length", is_error, error_code, tol,
+                relative)
+        checks.append(c)
+        square_check, g = _check_square(sheet, cells, values, need, size, unit, name)
+        checks.append(square_check)
+        for s in frame["series"]:
+            checks += _check_mapped(sheet, s, pos, values, ref, joint_values, slopes, centre,
+                                    g, f"{name}: {s['title']}", size, is_error, error_code,
+                                    tol, relative)
+    return checks
+
+
+def _check_square(sheet, cells, values, need, size, unit, name) -> tuple[Check, float]:
+    """The power of ten and the grid square: the rule's choice for the reference's `need`
+    (either one at a step); the legend's text names the square the book chose."""
+    c = Check("frame", f"{name}: grid square", size, 1.0, size)
+    options = frame_squares(need)
+    got = tuple(values.get((sheet, cells[k])) for k in ("decade", "square"))
+    chosen = next((o for o in options if all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v - e) <= 1e-12 * e
+        for v, e in zip(got, o))), None)
+    for k, v, e in zip(("decade", "square"), got, options[0]):
+        c.cells += 1
+        c.judged.add((sheet, cells[k]))
+        if chosen is None:
+            c.mismatches.append(Mismatch(sheet, cells[k], " or ".join(
+                f"{o[k == 'square']:g}" for o in options), v))
+    square = (chosen or options[0])[1]
+    places = max(0, -math.floor(round(math.log10(square), 6)))
+    compare_exact(c, sheet, [cells["label"]], [values.get((sheet, cells["label"]))],
+                  [f"grid square {square:.{places}f} {unit}"])
+    return c, square
+
+
+def _check_mapped(sheet, series, pos, values, ref, joint_values, slopes, centre, square,
+                  name, size, is_error, error_code, tol, relative) -> list[Check]:
+    """A mapped column pair: (coordinate − centre) / square, the coordinate the reference's
+    (a joint at the current position, or a sweep column at the sweep's angles), judged with the
+    bound of a length scaled to squares."""
+    first, last = series["mapped_rows"]
+    out = []
+    for i, axis in enumerate("xy"):
+        letter = series["columns"][i]
+        cells = [f"{letter}{r}" for r in range(first, last + 1)]
+        slope = None
+        if series["kind"] == "links":
+            world = np.full(len(cells), np.nan)
+            for link in pos["drawing"]:
+                for k, joint in enumerate(link["joints"]):
+                    world[link["rows"][0] + k - series["rows"][0]] = joint_values[joint][i]
+        else:
+            key = series[axis]
+            world = _expected(ref, key)
+            if key in slopes:
+                slope = (lambda f: lambda j: f(j) / square)(slopes[key])
+        c = Check("frame", f"{name} {axis}", size, 1.0, size / square)
+        compare(c, sheet, cells, [values.get((sheet, x)) for x in cells],
+                (world - centre[axis]) / square, "-", is_error, error_code, tol, relative, slope)
+        out.append(c)
+    return out
 
 
 WINDOW_STARTS = (-180.0, 180.0)   # where a degree view's 360° window may start

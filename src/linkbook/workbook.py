@@ -96,6 +96,8 @@ def build(t: Template) -> Built:
         meta["stroke"] = (meta["grid"] if grid_is_fine(t) else
                           _stroke_sheet(wb.create_sheet(STROKE), t, model, names, meta["grid"]))
         meta["grid"]["stroke_row"] = _stroke_row(wb[GRID], t, meta["grid"], meta["stroke"])
+    from .frames import frames_sheet      # it lays its cells out with this module's helpers
+    meta["frames"] = frames_sheet(wb, t, model, meta)
     _write_meta(wb.create_sheet(META), meta)
     return Built(wb, model, meta)
 

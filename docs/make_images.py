@@ -1,0 +1,71 @@
+"""Remake the pictures in docs/images from the bundled books, as LibreOffice prints them.
+
+    python docs/make_images.py            # needs LibreOffice and pdftoppm (linkbook preview)
+
+Each picture is cut from a printed page: a book's drawing (found by its blue grid), the whole
+Mechanism page of the four-bar, the four-bar's first Charts page, the pump's family chart.
+"""
+from __future__ import annotations
+
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from linkbook import builder, charts, office, templates
+
+IMAGES = Path(__file__).resolve().parent / "images"
+DRAWINGS = ("boom-cylinder", "garage-door", "hoeken", "jansen", "toggle-press", "watt-sixbar",
+            "whitworth")
+DPI = 110
+
+
+def pages(name: str, tmp: Path, sheets=("Mechanism",)) -> list[Path]:
+    """The printed pages of the named sheets of a freshly built bundled book."""
+    built, _ = builder.make(templates.load(name))
+    for ws in built.workbook.worksheets:
+        if ws.title not in sheets:
+            ws.sheet_state = "hidden"
+    path = tmp / f"{name}.xlsx"
+    built.workbook.save(path)
+    return office.preview(path, tmp / name, dpi=DPI)
+
+
+def drawing_box(page: Image.Image) -> tuple[int, int, int, int] | None:
+    """The box of the framed chart on a page, from its grid (the plot area's place in the
+    chart is fixed: charts.SIDE, charts.WIDTH_RATIO and the layout's left and top)."""
+    rgb = np.asarray(page.convert("RGB"), dtype=int)
+    grid = np.array([int(charts.GRID_COLOUR[i:i + 2], 16) for i in (0, 2, 4)])
+    mask = (np.abs(rgb - grid) <= 30).all(axis=2)
+    cols = np.flatnonzero(mask.sum(axis=0) > DPI)
+    rows = np.flatnonzero(mask.sum(axis=1) > DPI)
+    if cols.size < 2 or rows.size < 2:
+        return None
+    side = rows[-1] - rows[0]
+    height = side / charts.SIDE
+    width = height * charts.WIDTH_RATIO
+    left = cols[0] - 0.06 * width
+    top = rows[0] - 0.15 * height
+    return (max(0, int(left) - 4), max(0, int(top) - 4), int(left + width) + 4,
+            int(top + height) + 4)
+
+
+def main() -> int:
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        first = pages("fourbar", tmp, ("Mechanism", "Charts"))
+        Image.open(first[0]).save(IMAGES / "fourbar-mechanism.png")
+        chart_pages = [p for p in first[1:] if drawing_box(Image.open(p))]
+        Image.open(chart_pages[0]).save(IMAGES / "fourbar-charts.png")
+        Image.open(pages("pump", tmp, ("Grid",))[0]).save(IMAGES / "pump-family.png")
+        for name in DRAWINGS:
+            page = Image.open(pages(name, tmp)[0])
+            page.crop(drawing_box(page)).save(IMAGES / f"{name}-mechanism.png")
+            print(f"wrote {IMAGES / name}-mechanism.png")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,185 @@
+"""Live frames for the equal-scale charts: the mechanism's drawing and the coupler curves.
+
+A chart cannot take its axis limits from cells, and automatic axes do not give equal scales. So
+each such chart has fixed axes, -HALF to HALF on both, in a square plot area (charts.py), and draws
+coordinates that formulas on the sheet `Drawing data` map into that frame: centred on the live
+extents of what the chart draws and divided by a grid square of 1, 2 or 5 × 10ⁿ length units, the
+smallest that holds everything with a margin. Edit a length and the drawing stays in view, at
+equal scales; the legend's scale bar, one grid square long, says how big a square is.
+"""
+from __future__ import annotations
+
+from openpyxl.styles import Alignment
+from openpyxl.utils import get_column_letter, quote_sheetname
+
+from .model import LENGTH, Model
+from .templates import Template
+from .workbook import (AGGREGATE, BOLD, DERIVED_FILL, DRAWING_COLUMNS, MAX_OF, MECH, MIN_OF,
+                       NOTE, SKIP_ERRORS, SWEEP, TITLE, _head, _text, number_format)
+
+SHEET = "Drawing data"
+HALF = 5                 # the frame: -HALF … HALF grid squares on both axes
+MARGIN = 1.12            # the drawing fills at most 1/MARGIN of the frame's width
+SQUARES = (1, 2, 5)      # a grid square is one of these × 10ⁿ length units
+BAR = ((3.5, -4.75), (4.5, -4.75))   # the scale bar: one square, bottom right, in the margin
+FIRST_ROW = 5            # the first row of every block (the Sweep sheet's first row too)
+# The frame's cells, top to bottom: (key, label, is a length).
+FRAME_CELLS = (("xmin", "x min", True), ("xmax", "x max", True), ("ymin", "y min", True),
+               ("ymax", "y max", True), ("cx", "centre x", True), ("cy", "centre y", True),
+               ("need", "size needed per grid square", True),
+               ("decade", "its power of ten", True), ("square", "grid square", True),
+               ("label", "legend of the scale bar", False))
+MAPPED_FORMAT = "0.0000"
+
+
+def square_label(text: str, unit: str) -> str:
+    """The scale bar's legend formula, from the grid square's cell: `grid square 50 mm`."""
+    decimals = f"MAX(0,-INT(ROUND(LOG10({text}),6)))"
+    return f'="grid square "&FIXED({text},{decimals},TRUE)&" {unit}"'
+
+
+def frames_sheet(wb, t: Template, model: Model, meta: dict) -> dict:
+    """The sheet of live frames: one block of columns per equal-scale chart (the drawing first)."""
+    ws = wb.create_sheet(SHEET)
+    _text(ws, "A1", "Drawing frames", TITLE)
+    _text(ws, "A2", f"Each drawing is a fixed square of {2 * HALF} × {2 * HALF} grid squares. "
+                    "These formulas centre it on the live extents and pick the grid square "
+                    f"(1, 2 or 5 × 10ⁿ {t.length_unit}), so it stays in view and to scale after "
+                    "any edit.", NOTE)
+    pos, sweep = meta["position"], meta["sweep"]
+    frames, col = [], 1
+    extent = _drawing_extent(model, sweep)
+    frames.append(_block(ws, t, col, "The mechanism (sheet Mechanism)", extent,
+                         [_ranges(extent, a, pos, sweep) for a in "xy"],
+                         _drawing_series(model, pos, sweep)))
+    for i, spec in enumerate(model.charts):
+        if not spec.equal_axes:
+            continue
+        col = frames[-1]["next_column"] + 1
+        extent = {"x": [spec.x], "y": list(spec.ys), "position": False}
+        series = [{"kind": "sweep", "x": spec.x, "y": k, "title": _path_title(model, spec.x, k),
+                   "source": [sweep["columns"][spec.x], sweep["columns"][k]],
+                   "rows": list(sweep["rows"])} for k in spec.ys]
+        frame = _block(ws, t, col, f"{spec.title} (sheet Charts)", extent,
+                       [_ranges(extent, a, pos, sweep) for a in "xy"], series)
+        frame["chart"] = i
+        frames.append(frame)
+    for f in frames:
+        del f["next_column"]
+    ws.freeze_panes = f"A{FIRST_ROW}"
+    return {"sheet": SHEET, "frames": frames}
+
+
+def _path_title(model: Model, x: str, y: str) -> str:
+    """`path of C` for a joint's two coordinate columns, else `yC (xC)`."""
+    joint = next((j.name for j in model.joints if (j.x, j.y) == (f"{{{x}}}", f"{{{y}}}")), None)
+    return f"path of {joint}" if joint else f"{y} ({x})"
+
+
+def _sweep_range(sweep: dict, key: str) -> str:
+    letter = sweep["columns"][key]
+    r0, r1 = sweep["rows"]
+    return f"{SWEEP}!${letter}${r0}:${letter}${r1}"
+
+
+def _drawing_extent(model: Model, sweep: dict) -> dict:
+    """What the drawing's frame must hold: every joint at the current position (the joints
+    table), and over the sweep every joint whose coordinates are sweep columns."""
+    out: dict = {"x": [], "y": [], "position": True}
+    for joint in model.joints:
+        for axis, expr in (("x", joint.x), ("y", joint.y)):
+            key = expr.strip("{}")
+            if expr == f"{{{key}}}" and key in sweep["columns"]:
+                out[axis].append(key)
+    return out
+
+
+def _ranges(extent: dict, axis: str, pos: dict, sweep: dict) -> list[str]:
+    out = [_sweep_range(sweep, key) for key in extent[axis]]
+    if extent["position"]:
+        col = DRAWING_COLUMNS[0 if axis == "x" else 1]
+        rows = sorted(int(cells[0][1:]) for cells in pos["joints"].values())
+        out.insert(0, f"{MECH}!${col}${rows[0]}:${col}${rows[-1]}")
+    return out
+
+
+def _drawing_series(model: Model, pos: dict, sweep: dict) -> list[dict]:
+    """The links (the joints table's link rows, mapped row for row), then the traced path."""
+    first, last = pos["drawing"][0]["rows"][0], pos["drawing"][-1]["rows"][1]
+    series = [{"kind": "links", "title": "links", "source": list(DRAWING_COLUMNS),
+               "sheet": MECH, "rows": [first, last]}]
+    if model.path:
+        x, y = model.path
+        series.append({"kind": "sweep", "x": x, "y": y, "title": f"path of {y[1:]}",
+                       "source": [sweep["columns"][x], sweep["columns"][y]],
+                       "rows": list(sweep["rows"])})
+    return series
+
+
+def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[list[str]],
+           series: list[dict]) -> dict:
+    """A frame's cells (label, value) and its mapped columns, from column `col` on."""
+    label, value = get_column_letter(col), get_column_letter(col + 1)
+    ws.column_dimensions[label].width = 26
+    ws.column_dimensions[value].width = 22     # the scale bar's legend: grid square 0.005 mm
+    _text(ws, f"{label}3", title, BOLD)
+    _head(ws, 4, col, "Frame")
+    _head(ws, 4, col + 1, f"Value [{t.length_unit}]")
+    cells = {k: f"{value}{FIRST_ROW + i}" for i, (k, _, _) in enumerate(FRAME_CELLS)}
+    ref = {k: f"${c[0]}${c[1:]}" for k, c in cells.items()}
+    formulas = {
+        "xmin": _extreme("MIN", MIN_OF, ranges[0]), "xmax": _extreme("MAX", MAX_OF, ranges[0]),
+        "ymin": _extreme("MIN", MIN_OF, ranges[1]), "ymax": _extreme("MAX", MAX_OF, ranges[1]),
+        "cx": f"=({ref['xmin']}+{ref['xmax']})/2", "cy": f"=({ref['ymin']}+{ref['ymax']})/2",
+        "need": f"=MAX({ref['xmax']}-{ref['xmin']},{ref['ymax']}-{ref['ymin']},1E-12)"
+                f"*{MARGIN}/{2 * HALF}",
+        "decade": f"=10^INT(LOG10({ref['need']}))",
+        "square": "={d}*IF({n}<={d},1,IF({n}<=2*{d},2,IF({n}<=5*{d},5,10)))".format(
+            d=ref["decade"], n=ref["need"]),
+        "label": square_label(ref["square"], t.length_unit),
+    }
+    for i, (key, text, is_length) in enumerate(FRAME_CELLS):
+        r = FIRST_ROW + i
+        _text(ws, f"{label}{r}", text)
+        ws[f"{value}{r}"] = formulas[key]
+        ws[f"{value}{r}"].fill = DERIVED_FILL
+        if is_length:
+            ws[f"{value}{r}"].number_format = number_format(LENGTH, t.length_unit)
+        else:
+            ws[f"{value}{r}"].alignment = Alignment(horizontal="right")
+    c = col + 2
+    for s in series:
+        x_letter, y_letter = get_column_letter(c), get_column_letter(c + 1)
+        sheet = s.get("sheet", SWEEP)
+        for j, axis in enumerate(("x", "y")):
+            letter = (x_letter, y_letter)[j]
+            ws.column_dimensions[letter].width = 11
+            _head(ws, 4, c + j, f"{s[axis]} [squares]" if s["kind"] == "sweep"
+                  else f"links {axis} [squares]")
+            centre = ref["cx"] if axis == "x" else ref["cy"]
+            for k, r in enumerate(range(s["rows"][0], s["rows"][1] + 1)):
+                cell = ws[f"{letter}{FIRST_ROW + k}"]
+                cell.value = f"=({quote_sheetname(sheet)}!{s['source'][j]}{r}-{centre})/" \
+                             f"{ref['square']}"
+                cell.number_format = MAPPED_FORMAT
+        s["columns"] = [x_letter, y_letter]
+        s["mapped_rows"] = [FIRST_ROW, FIRST_ROW + s["rows"][1] - s["rows"][0]]
+        c += 2
+    bar = [get_column_letter(c), get_column_letter(c + 1)]
+    for j, axis in enumerate(("x", "y")):
+        ws.column_dimensions[bar[j]].width = 11
+        _head(ws, 4, c + j, f"scale bar {axis} [squares]")
+        for k, point in enumerate(BAR):
+            ws[f"{bar[j]}{FIRST_ROW + k}"] = point[j]
+    ws.row_dimensions[4].height = 45
+    for k in range(col, c + 2):
+        ws.cell(4, k).alignment = Alignment(horizontal="center", vertical="center",
+                                            wrap_text=True)
+    return {"cells": cells, "extent": extent, "series": series,
+            "bar": {"columns": bar, "rows": [FIRST_ROW, FIRST_ROW + 1]},
+            "next_column": c + 2}
+
+
+def _extreme(fn: str, code: int, ranges: list[str]) -> str:
+    """The least or greatest number in the ranges, skipping #N/A (no assembly)."""
+    return f"={fn}(" + ",".join(f"{AGGREGATE}({code},{SKIP_ERRORS},{r})" for r in ranges) + ")"

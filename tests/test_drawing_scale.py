@@ -1,0 +1,129 @@
+"""Drawings to scale that follow every edit (issue 16), measured where a person sees them: every
+bundled book's drawing and coupler curves rendered by LibreOffice to PDF, as built and after an
+edit in the book that doubles a link length. On the rendered page a grid square must be as wide
+as it is tall (the same points per length unit on x and y, within 2 %), and the frame must show
+all of its 10 × 10 squares; the edited book's mapped coordinates (what the charts draw) must all
+lie inside the frame."""
+from __future__ import annotations
+
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import openpyxl
+import pytest
+from conftest import template
+
+from linkbook import builder, charts, engine, frames, office
+from linkbook.mechanisms import LENGTH_KIND
+from linkbook.verifier import inputs_of
+
+pytestmark = pytest.mark.libreoffice
+DPI = 150
+
+
+def _bundled() -> list[str]:
+    return sorted(p.stem for p in (Path(__file__).parents[1] / "templates").glob("*.toml"))
+
+
+def _first_length(t) -> str:
+    return next(p.symbol for p in t.parameters if p.kind == LENGTH_KIND)
+
+
+def _grid_lines(counts: np.ndarray) -> list[float]:
+    """Centres of the runs of pixel columns (rows) that are mostly gridline (and long: a
+    frame's side is over an inch at this resolution)."""
+    hot = np.flatnonzero(counts > max(0.5 * counts.max(), DPI))
+    runs = np.split(hot, np.flatnonzero(np.diff(hot) > 1) + 1)
+    return [float(r.mean()) for r in runs if r.size]
+
+
+def _measure(png) -> tuple[float, float] | None:
+    """(x, y) gridline spacing in pixels of the one framed chart on a page (None: no frame),
+    from the outermost lines: to a fraction of a pixel."""
+    from PIL import Image
+    rgb = np.asarray(Image.open(png).convert("RGB"), dtype=int)
+    grid = np.array([int(charts.GRID_COLOUR[i:i + 2], 16) for i in (0, 2, 4)])
+    mask = (np.abs(rgb - grid) <= 30).all(axis=2)
+    xs, ys = _grid_lines(mask.sum(axis=0)), _grid_lines(mask.sum(axis=1))
+    if len(xs) < 3 and len(ys) < 3:
+        return None
+    return _spacing(xs, png), _spacing(ys, png)
+
+
+def _spacing(lines: list[float], png) -> float:
+    """A square's side from the frame's two edges, which must be 2·HALF squares apart (a link
+    lying on a gridline may hide that one line: the squares are counted, not the lines)."""
+    span = lines[-1] - lines[0]
+    squares = round(span / float(np.median(np.diff(lines))))
+    assert squares == 2 * frames.HALF, (png.name, lines)
+    return span / squares
+
+
+@pytest.fixture(scope="module")
+def rendered(tmp_path_factory):
+    """Each bundled book, as built and with its first length doubled, printed to PNG pages
+    (only the sheets with drawings: Mechanism and Charts)."""
+    if not office.soffice_path() or not shutil.which("pdftoppm"):
+        pytest.skip("LibreOffice and pdftoppm are needed")
+    pytest.importorskip("PIL")
+    tmp = tmp_path_factory.mktemp("scale")
+    out = {}
+    for name in _bundled():
+        t = template(name)
+        doubled = _first_length(t)
+        for edit in (False, True):
+            b, _ = builder.make(t)
+            wb = b.workbook
+            if edit:
+                cell = b.meta["inputs"][doubled]["cell"]
+                wb["Mechanism"][cell] = 2 * wb["Mechanism"][cell].value
+            for ws in wb.worksheets:
+                if ws.title not in ("Mechanism", "Charts"):
+                    ws.sheet_state = "hidden"
+            path = tmp / f"{name}-{'doubled' if edit else 'built'}.xlsx"
+            wb.save(path)
+            pdf = office.to_pdf(path, tmp / "pdf")
+            stem = tmp / "png" / path.stem
+            stem.parent.mkdir(exist_ok=True)
+            subprocess.run(["pdftoppm", "-png", "-r", str(DPI), str(pdf), str(stem)], check=True)
+            out[(name, edit)] = (path, b.meta, sorted(stem.parent.glob(f"{path.stem}-*.png")))
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("edit", [False, True], ids=["built", "link-doubled"])
+@pytest.mark.parametrize("name", _bundled())
+def test_every_drawing_is_to_scale_on_the_page(rendered, name, edit):
+    path, meta, pages = rendered[(name, edit)]
+    spacings = [m for page in pages if (m := _measure(page))]
+    framed = 1 + sum(1 for f in meta["frames"]["frames"] if "chart" in f)
+    assert len(spacings) == framed, f"{len(spacings)} framed charts printed, {framed} built"
+    for x, y in spacings:
+        assert x > 10 and abs(x / y - 1) <= 0.02, (name, x, y)
+
+
+@pytest.mark.parametrize("edit", [False, True], ids=["built", "link-doubled"])
+@pytest.mark.parametrize("name", _bundled())
+def test_the_mapped_drawing_stays_inside_its_frame(rendered, name, edit):
+    """Every mapped coordinate of the printed book (evaluated by the engine that verify checks
+    against LibreOffice) inside the frame, with the margin the frame keeps for the scale bar."""
+    path, meta, _ = rendered[(name, edit)]
+    wb = openpyxl.load_workbook(path)
+    values = engine.evaluate(wb)
+    sheet = meta["frames"]["sheet"]
+    inside = frames.HALF / frames.MARGIN * (1 + 1e-9)
+    drawn = 0
+    for frame in meta["frames"]["frames"]:
+        for s in frame["series"]:
+            first, last = s["mapped_rows"]
+            for letter in s["columns"]:
+                column = [values[(sheet, f"{letter}{r}")] for r in range(first, last + 1)]
+                numbers = [v for v in column if isinstance(v, float)]
+                drawn += len(numbers)
+                assert all(abs(v) <= inside for v in numbers), (name, frame["cells"], letter)
+    assert drawn > 0
+    if edit:
+        t = template(name)
+        assert inputs_of(wb, meta)[_first_length(t)] == 2 * t.values()[_first_length(t)]
