@@ -15,7 +15,8 @@ from openpyxl.utils import get_column_letter, quote_sheetname
 from .model import LENGTH, Model
 from .templates import Template
 from .workbook import (AGGREGATE, BOLD, DERIVED_FILL, DRAWING_COLUMNS, MAX_OF, MECH, MIN_OF,
-                       NOTE, SKIP_ERRORS, SWEEP, TITLE, _head, _text, number_format)
+                       NOTE, SKIP_ERRORS, SWEEP, TITLE, _head, _text, number_format,
+                       text_width)
 
 SHEET = "Drawing data"
 HALF = 5                 # the frame: -HALF … HALF grid squares on both axes
@@ -30,6 +31,7 @@ FRAME_CELLS = (("xmin", "x min", True), ("xmax", "x max", True), ("ymin", "y min
                ("decade", "its power of ten", True), ("square", "grid square", True),
                ("label", "legend of the scale bar", False))
 MAPPED_FORMAT = "0.0000"
+MAPPED_WIDTH = 14        # a header's longest word, "[squares]", in bold
 
 
 def square_label(text: str, unit: str) -> str:
@@ -120,7 +122,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
            series: list[dict]) -> dict:
     """A frame's cells (label, value) and its mapped columns, from column `col` on."""
     label, value = get_column_letter(col), get_column_letter(col + 1)
-    ws.column_dimensions[label].width = 26
+    ws.column_dimensions[label].width = max(text_width(text) for _, text, _ in FRAME_CELLS)
     ws.column_dimensions[value].width = 22     # the scale bar's legend: grid square 0.005 mm
     _text(ws, f"{label}3", title, BOLD)
     _head(ws, 4, col, "Frame")
@@ -153,7 +155,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
         sheet = s.get("sheet", SWEEP)
         for j, axis in enumerate(("x", "y")):
             letter = (x_letter, y_letter)[j]
-            ws.column_dimensions[letter].width = 11
+            ws.column_dimensions[letter].width = MAPPED_WIDTH
             _head(ws, 4, c + j, f"{s[axis]} [squares]" if s["kind"] == "sweep"
                   else f"links {axis} [squares]")
             centre = ref["cx"] if axis == "x" else ref["cy"]
@@ -167,7 +169,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
         c += 2
     bar = [get_column_letter(c), get_column_letter(c + 1)]
     for j, axis in enumerate(("x", "y")):
-        ws.column_dimensions[bar[j]].width = 11
+        ws.column_dimensions[bar[j]].width = MAPPED_WIDTH
         _head(ws, 4, c + j, f"scale bar {axis} [squares]")
         for k, point in enumerate(BAR):
             ws[f"{bar[j]}{FIRST_ROW + k}"] = point[j]

@@ -200,8 +200,8 @@ def apply_print_setup(wb, fit_to_width: tuple[str, ...] = ()) -> None:
     """Landscape or portrait, a scale, page breaks and a footer for every visible sheet, so
     that printed (and previewed) pages are readable and no chart is split across pages.
     Sheets named in `fit_to_width` print landscape, one page wide (blocks side by side stay
-    together), with the row breaks chosen for them. Call after the charts have been added; it
-    changes no cell."""
+    together), with the row breaks chosen for them. A title or note wider than the first page
+    wraps within it. Call after the charts have been added; it changes no cell's value."""
     from openpyxl.worksheet.page import PageMargins
     for ws in wb.worksheets:
         if ws.sheet_state != "visible":
@@ -212,17 +212,24 @@ def apply_print_setup(wb, fit_to_width: tuple[str, ...] = ()) -> None:
         _repeat_frozen_titles(ws)
         sheet = _SheetShape.of(ws)
         orientation, scale, col_breaks, row_breaks = sheet.best_layout()
-        if ws.title in fit_to_width:
+        fit = ws.title in fit_to_width
+        room = sheet.first_page_cm(orientation, None if fit else scale, col_breaks)
+        if _wrap_title_rows(ws, sheet, room):     # taller rows: the row breaks move
+            sheet = _SheetShape.of(ws)
+            orientation, scale, col_breaks, row_breaks = sheet.best_layout()
+        if fit:
             orientation, scale, col_breaks = "landscape", None, []
             ws.sheet_properties.pageSetUpPr.fitToPage = True
             ws.page_setup.fitToWidth, ws.page_setup.fitToHeight = 1, 0
         ws.page_setup.orientation = orientation
         ws.page_setup.scale = scale
         _set_breaks(ws, col_breaks, row_breaks)
+        _column_page_areas(ws, sheet, col_breaks)
         ws.oddFooter.center.text = "&A, page &P of &N"
         ws.oddFooter.center.size = 8
 
 
+SPARE_COLUMNS = 3
 TITLE_ROWS = 2      # a sheet's title (A1) and note (A2): printed once, as text that overflows
 HEADER_CHARS = 200  # Excel allows 255 characters in a page header, codes included
 
@@ -250,6 +257,50 @@ def _repeat_frozen_titles(ws) -> None:
         ws.print_title_rows = f"1:{row - 1}"
     if column_index_from_string(letter) > 1:
         ws.print_title_cols = f"A:{_letter(column_index_from_string(letter) - 1)}"
+
+
+def _wrap_title_rows(ws, sheet: "_SheetShape", room_cm: float) -> bool:
+    """The title and note (rows 1 to TITLE_ROWS, column A) whose text is wider than the first
+    printed page: merged across the page's columns and wrapped there, the row as tall as its
+    lines (text that overflows a page edge is cut in print)."""
+    from openpyxl.styles import Alignment
+    from .workbook import LINE_HEIGHT, label_lines
+    last, x = 1, 0.0
+    for i in sorted(sheet.col_cm):
+        if x + sheet.col_cm[i] > room_cm:
+            break
+        x, last = x + sheet.col_cm[i], i
+    changed = False
+    for r in range(1, TITLE_ROWS + 1):
+        cell = ws.cell(r, 1)
+        if not isinstance(cell.value, str) or any(
+                ws.cell(r, c).value is not None for c in range(2, last + 1)):
+            continue
+        size = float(cell.font.sz or 11) if cell.font else 11.0
+        grow = size / 11 * (1.1 if cell.font is not None and cell.font.b else 1.0)
+        lines = label_lines(cell.value, x / CHAR_CM / grow)
+        if len(lines) < 2:
+            continue
+        ws.merge_cells(start_row=r, start_column=1, end_row=r, end_column=last)
+        cell.alignment = Alignment(wrap_text=True, vertical="top")
+        ws.row_dimensions[r].height = LINE_HEIGHT * size / 11 * len(lines)
+        changed = True
+    return changed
+
+
+def _column_page_areas(ws, sheet: "_SheetShape", col_breaks) -> None:
+    """A sheet printed in several columns of pages: one print range per column of pages, the
+    later ones from the row under the title and note, so that the repeated column A does not
+    print a slice of them on every continuation page."""
+    if not col_breaks or not ws.print_title_cols:
+        return
+    # the last range a few empty columns wider: a chart at the right edge keeps its right
+    # side where LibreOffice's default column is narrower than this count of it
+    last_col, last_row = max(sheet.col_cm) + SPARE_COLUMNS, max(sheet.row_cm)
+    starts = [1] + [c + 1 for c in col_breaks]
+    ends = [c for c in col_breaks] + [last_col]
+    ws.print_area = [f"{_letter(a)}{1 if i == 0 else TITLE_ROWS + 1}:{_letter(b)}{last_row}"
+                     for i, (a, b) in enumerate(zip(starts, ends))]
 
 
 def _set_breaks(ws, col_breaks, row_breaks) -> None:
@@ -319,9 +370,19 @@ class _SheetShape:
                     best = (cost, orientation, scale, col_breaks, row_breaks)
         return best[1:]
 
+    def first_page_cm(self, orientation: str, scale: int | None, col_breaks) -> float:
+        """The width the first page prints, in the sheet's cm (scale None: the sheet is
+        fitted to one page wide)."""
+        used = max(self.used_cols, default=1)
+        last = col_breaks[0] if col_breaks else used
+        width = sum(self.col_cm.get(i, 0.0) for i in range(1, last + 1))
+        if scale is None:
+            return width
+        return min(width, _printable_cm(orientation)[0] * FIT / (scale / 100))
+
     def _column_pages(self, width: float):
         """Greedy: whole blocks of used columns (split at empty spacer columns) per page; a
-        block wider than a page is split by LibreOffice where it must."""
+        block wider than a page is broken between the columns that fill each page."""
         breaks, x, pages, previous = [], 0.0, 1, 0
         room = width - self.title_cols_cm
         for first, last in self._blocks():
@@ -334,9 +395,15 @@ class _SheetShape:
             if x and x + spacers + block > limit:
                 breaks.append(first - 1)
                 pages, x, spacers, limit = pages + 1, 0.0, 0.0, room
-            x += spacers + block
-            while x > limit:              # LibreOffice's own breaks inside a wide block
-                pages, x = pages + 1, x - limit
+            if x + spacers + block <= limit:
+                x += spacers + block
+                continue
+            x += spacers                  # a block wider than a page: break between columns
+            for c in range(first, last + 1):
+                if x and x + self.col_cm[c] > limit:
+                    breaks.append(c - 1)
+                    pages, x, limit = pages + 1, 0.0, room
+                x += self.col_cm[c]
         return breaks, pages
     def _blocks(self):
         cols = sorted(self.used_cols)
@@ -349,8 +416,8 @@ class _SheetShape:
         return blocks
 
     def _row_pages(self, height: float):
-        """Automatic breaks as LibreOffice makes them, plus a manual one before a chart that
-        would otherwise be cut at the foot of a page."""
+        """A break where each page is full, and one before a chart that would otherwise be cut
+        at the foot of a page."""
         starts = {}
         for _, _, r0, r1 in self._merged_chart_rows():
             starts[r0] = r1
@@ -361,9 +428,15 @@ class _SheetShape:
             if r in starts:
                 span = sum(self.row_cm[i] for i in range(r, starts[r] + 1))
                 if y + span > (height if pages == 1 else room) and y > 0 and span <= room:
-                    breaks.append(r - 1)
-                    pages, y = pages + 1, 0.0
+                    # the break a row above the chart: a chart whose top edge lies on the
+                    # break prints that edge at the foot of the page before too
+                    gap = self.row_cm.get(r - 1, 0.0) if r > 2 else 0.0
+                    breaks.append(r - 2 if gap else r - 1)
+                    pages, y = pages + 1, gap
             if y + h > (height if pages == 1 else room):
+                # written too: LibreOffice's own page is a little longer than this one (FIT),
+                # and would end below a chart that this count put on the next page
+                breaks.append(r - 1)
                 pages, y = pages + 1, 0.0
             y += h
         return breaks, pages

@@ -183,6 +183,8 @@ def _block_head(ws, first_col: str, title: str, columns, row: int = 5) -> None:
     ws[f"{first_col}{row}"].font = BOLD
     start = column_index_from_string(first_col)
     for i, (head, width) in enumerate(columns):
+        # a header on one line: at least its bold width in the font LibreOffice draws
+        width = max(width, round(text_width(head, bold=True), 1))
         ws.column_dimensions[get_column_letter(start + i)].width = width
         _head(ws, row + 1, start + i, head)
 
@@ -214,13 +216,16 @@ def _inputs_block(wb, ws, t: Template, model: Model):
     _text(ws, "A2", t.source, NOTE)
     _text(ws, "A3", "Yellow cells are inputs: change them and every formula, table and chart "
                     "follows.", NOTE)
-    _block_head(ws, "A", "Inputs", (("Quantity", 36), ("Symbol", 9), ("Value", 12),
-                                      ("Unit", 8), ("Excel name", 14)))
+    symbols = [p.symbol for p in t.parameters] + [q.symbol for q in model.of_role(CONSTANT)]
+    _block_head(ws, "A", "Inputs", (("Quantity", 36),
+                                      ("Symbol", max([9] + [text_width(s) for s in symbols])),
+                                      ("Value", 12), ("Unit", 8), ("Excel name", 14)))
     names: dict[str, str] = {}
     inputs: dict[str, dict] = {}
     row = 7
     for p in t.parameters:
         _text(ws, f"A{row}", p.label)
+        _wrap_in(ws, f"A{row}")
         _text(ws, f"B{row}", p.symbol)
         value = ws[f"C{row}"]
         value.value = int(p.value) if p.kind == BRANCH_KIND else p.value
@@ -247,6 +252,7 @@ def _inputs_block(wb, ws, t: Template, model: Model):
         for q in derived:
             name = f"k_{q.key}"
             _text(ws, f"A{row}", q.label)
+            _wrap_in(ws, f"A{row}")
             _text(ws, f"B{row}", q.symbol)
             c = ws[f"C{row}"]
             c.value = resolve.formula(q.key)
@@ -268,6 +274,9 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
                 (("Quantity", 34), ("Symbol", 8), ("Value", 13), ("Unit", 7)))
     input_name = f"{mech.input_key}_now"
     _text(ws, "G7", f"input {mech.input_word}: change it, the drawing moves")
+    ws["G7"].alignment = Alignment(wrap_text=True, vertical="top")
+    ws.row_dimensions[7].height = LINE_HEIGHT * len(label_lines(ws["G7"].value,
+                                                                 ws.column_dimensions["G"].width))
     _text(ws, "H7", mech.input_symbol)
     ws["I7"] = t.position
     ws["I7"].fill = INPUT_FILL
@@ -598,12 +607,15 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
     def put(key: str, label: str, formula: str, unit: str = "", kind: str = "number") -> str:
         nonlocal row
         _text(ws, f"A{row}", label)
+        _wrap_across(ws, row, "A", "B", label)
         c = ws[f"C{row}"]
         c.value = formula
         c.fill = DERIVED_FILL
         c.number_format = number_format(unit, t.length_unit) if unit else "General"
-        c.alignment = Alignment(horizontal="right")
-        _text(ws, f"D{row}", unit_text(unit, t.length_unit) if unit else "")
+        # a text value (a Grashof class) reads on into the empty cells to its right
+        c.alignment = Alignment(horizontal="left" if kind == "text" else "right")
+        if unit:
+            _text(ws, f"D{row}", unit_text(unit, t.length_unit))
         cells[key] = {"cell": f"C{row}", "kind": kind, "unit": unit}
         row += 1
         return f"$C${row - 1}"
@@ -637,6 +649,32 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
     for i, loop in enumerate(model.fourbars, start=1):
         _fourbar_summary(put, loop, summary_prefix("", i), Resolver(model, names, {}))
     return cells
+
+
+def _wrap_in(ws, cell: str) -> None:
+    """A label longer than its column: wrapped there, its row tall enough for every line."""
+    letter = cell.rstrip("0123456789")
+    lines = label_lines(str(ws[cell].value), ws.column_dimensions[letter].width or 8.43)
+    if len(lines) < 2:
+        return
+    ws[cell].alignment = Alignment(wrap_text=True, vertical="top")
+    row = ws[cell].row
+    ws.row_dimensions[row].height = max(ws.row_dimensions[row].height or LINE_HEIGHT,
+                                        LINE_HEIGHT * len(lines))
+
+
+def _wrap_across(ws, row: int, first: str, last: str, text: str) -> None:
+    """A label longer than the columns first..last (the cells beside it empty): merged across
+    them and wrapped, its row as tall as its lines."""
+    width = sum(ws.column_dimensions[get_column_letter(c)].width or 8.43
+                for c in range(column_index_from_string(first), column_index_from_string(last) + 1))
+    lines = label_lines(text, width)
+    if len(lines) < 2:
+        return
+    ws.merge_cells(f"{first}{row}:{last}{row}")
+    ws[f"{first}{row}"].alignment = Alignment(wrap_text=True, vertical="top")
+    ws.row_dimensions[row].height = max(ws.row_dimensions[row].height or LINE_HEIGHT,
+                                        LINE_HEIGHT * len(lines))
 
 
 def summary_prefix(base: str, i: int) -> str:
@@ -682,9 +720,8 @@ def _grid_sheet(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
                     "=AdjustablePump(…; B$5; $A6). No macros.", NOTE)
     head_row, first = 5, 6
     angles = t.sweep.angles()
-    ws.column_dimensions["A"].width = 14
     _head(ws, head_row - 1, 1, "")
-    _head(ws, head_row, 1, f"{t.mechanism.input_symbol} [deg] / {param} [{t.length_unit}]")
+    _corner_head(ws, head_row, f"{t.mechanism.input_symbol} [deg] / {param} [{t.length_unit}]")
     cols = []
     for j, value in enumerate(t.grid_values, start=2):
         letter = get_column_letter(j)
@@ -700,6 +737,17 @@ def _grid_sheet(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
     _fill_grid(ws, t, model, names, head_row, range(first, first + len(angles)), cols)
     return {"sheet": GRID, "param": param, "key": out, "param_row": head_row,
             "rows": [first, first + len(angles) - 1], "columns": cols}
+
+
+def _corner_head(ws, row: int, text: str) -> None:
+    """A grid's corner header in A: its lines (bold: a tenth wider) each get room in the row,
+    so that none crosses the row's border."""
+    ws.column_dimensions["A"].width = GRID_CORNER_WIDTH
+    _head(ws, row, 1, text)
+    ws.row_dimensions[row].height = LINE_HEIGHT * len(label_lines(text, GRID_CORNER_WIDTH / 1.1))
+
+
+GRID_CORNER_WIDTH = 16     # also the bold `stroke [mm]` under the grid
 
 
 def _fill_grid(ws, t: Template, model: Model, names: dict, param_row: int, rows: range,
@@ -748,7 +796,7 @@ def _stroke_sheet(ws, t: Template, model: Model, names: dict[str, str], grid: di
     _text(ws, "A2", f"The stroke (max − min over a turn) is under the grid on sheet {GRID}.",
           NOTE)
     head_row, first = 4, 5
-    _head(ws, head_row, 1, f"{t.mechanism.input_symbol} [deg] / {param} [{t.length_unit}]")
+    _corner_head(ws, head_row, f"{t.mechanism.input_symbol} [deg] / {param} [{t.length_unit}]")
     cols = []
     grid_ws_ref = quote_sheetname(GRID)
     for j, letter in enumerate(grid["columns"], start=2):
@@ -783,7 +831,9 @@ def _stroke_row(ws, t: Template, grid: dict, stroke: dict) -> int:
         c.font = BOLD
         c.fill = DERIVED_FILL
     source = "the grid above" if stroke is grid else f"the {t.stroke_step:g}° sweep on sheet {STROKE}"
-    _text(ws, f"A{row + 1}", f"max − min of {source}", NOTE)
+    # under the values, not in column A: a continuation page repeats column A, and would cut
+    # the note at its edge
+    _text(ws, f"B{row + 1}", f"max − min of {source}", NOTE)
     return row
 
 
