@@ -11,16 +11,20 @@ from .model import COLUMN
 from .templates import Template
 
 
-def make(t: Template) -> tuple[workbook.Built, dict]:
-    """The workbook and the value of every cell (the fast engine: chart scales, cached values).
+def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict | None]:
+    """The workbook and the value of every cell (the fast engine), or None for the values when
+    not `values_needed` (a book saved without cached values: nothing else reads them).
 
     Output angles are shown in degrees in a 360° window chosen from the evaluated sweep, so that
-    each curve is continuous; the degree views are rewritten after the evaluation and only they
-    are evaluated again (every other cell keeps its value: no formula reads a degree view)."""
+    each curve is continuous; the degree views are rewritten after the evaluation and, when the
+    values are needed, only they are evaluated again (every other cell keeps its value: no
+    formula reads a degree view)."""
     built = workbook.build(t)
     values = engine.evaluate(built.workbook)
     changed = workbook.set_degree_windows(built, degree_windows(built, values))
-    if changed:
+    if not values_needed:
+        values = None
+    elif changed:
         known = {cell: v for cell, v in values.items() if cell not in changed}
         values = engine.evaluate(built.workbook, known=known)
     charts.add_charts(built, t, built.model)
@@ -69,7 +73,7 @@ def _cut(degs: list[float]) -> float:
 
 
 def build_file(t: Template, path: Path, with_values: bool = False) -> workbook.Built:
-    built, values = make(t)
+    built, values = make(t, values_needed=with_values)
 
     def write(tmp: Path) -> None:
         built.workbook.save(tmp)
