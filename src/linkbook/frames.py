@@ -14,9 +14,9 @@ from openpyxl.utils import get_column_letter, quote_sheetname
 
 from .model import LENGTH, Model
 from .templates import Template
-from .workbook import (AGGREGATE, BOLD, DERIVED_FILL, DRAWING_COLUMNS, MAX_OF, MECH, MIN_OF,
-                       NOTE, SKIP_ERRORS, SWEEP, TITLE, _head, _text, number_format,
-                       text_width)
+from .workbook import (AGGREGATE, BOLD, DERIVED_FILL, DRAWING_COLUMNS, LINE_HEIGHT, MAX_OF,
+                       MECH, MIN_OF, NOTE, SKIP_ERRORS, SWEEP, TITLE, _head, _text, label_lines,
+                       number_format, text_width)
 
 SHEET = "Drawing data"
 HALF = 5                 # the frame: -HALF … HALF grid squares on both axes
@@ -167,19 +167,24 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
         s["columns"] = [x_letter, y_letter]
         s["mapped_rows"] = [FIRST_ROW, FIRST_ROW + s["rows"][1] - s["rows"][0]]
         c += 2
-    bar = [get_column_letter(c), get_column_letter(c + 1)]
+    # the scale bar's two points under the frame's cells, in its two columns
+    bar_head = FIRST_ROW + len(FRAME_CELLS) + 1
+    lines = 1
     for j, axis in enumerate(("x", "y")):
-        ws.column_dimensions[bar[j]].width = MAPPED_WIDTH
-        _head(ws, 4, c + j, f"scale bar {axis} [squares]")
-        for k, point in enumerate(BAR):
-            ws[f"{bar[j]}{FIRST_ROW + k}"] = point[j]
+        head = f"scale bar {axis} [squares]"
+        _head(ws, bar_head, col + j, head)
+        width = ws.column_dimensions[get_column_letter(col + j)].width
+        lines = max(lines, len(label_lines(head, width / 1.1)))     # bold: a tenth wider
+        for k, point in enumerate(BAR, start=1):
+            ws.cell(bar_head + k, col + j, point[j]).number_format = MAPPED_FORMAT
+    ws.row_dimensions[bar_head].height = LINE_HEIGHT * lines
     ws.row_dimensions[4].height = 45
-    for k in range(col, c + 2):
+    for k in range(col, c):
         ws.cell(4, k).alignment = Alignment(horizontal="center", vertical="center",
                                             wrap_text=True)
     return {"cells": cells, "extent": extent, "series": series,
-            "bar": {"columns": bar, "rows": [FIRST_ROW, FIRST_ROW + 1]},
-            "next_column": c + 2}
+            "bar": {"columns": [label, value], "rows": [bar_head + 1, bar_head + 2]},
+            "next_column": c}
 
 
 def _extreme(fn: str, code: int, ranges: list[str]) -> str:
