@@ -481,3 +481,21 @@ def test_numeric_forms_give_formulas_own_bits_and_types():
         else:
             assert type(g) is type(w) and (g == w or (g != g and w != w)), (key, g, w)
     assert errors > 0        # the domain edges were reached: formulas made those errors
+
+
+def test_verifying_a_book_imports_no_scipy(tmp_path):
+    """`formulas`' statistics module imports scipy at its top; linkbook imports that module with
+    scipy standing in (issue 14: about a second of every verify's start-up), so a book that
+    uses no function needing scipy never imports it, and one that does still gets it."""
+    import subprocess
+    import sys
+    from linkbook import builder, templates
+    book = tmp_path / "fourbar.xlsx"
+    builder.build_file(templates.load("fourbar"), book)
+    code = ("import sys, linkbook; r = linkbook.verify(sys.argv[1]); "
+            "print(r.status, 'scipy' in sys.modules); "
+            "from formulas.functions import get_functions; "
+            "print(round(get_functions()['KURT'](1, 2, 3, 4, 7), 6), 'scipy' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code, str(book)], capture_output=True,
+                         text=True, check=True).stdout.split()
+    assert out == ["0", "False", "1.128515", "True"], out

@@ -106,6 +106,51 @@ DYNAMIC = frozenset({"INDIRECT", "OFFSET", "ISFORMULA", "_XLFN.ISFORMULA", "FORM
 
 
 
+class _OnUse:
+    """Stands for a scipy module (or one of its functions) until first used, then imports it."""
+
+    def __init__(self, module: str, attribute: str | None = None):
+        self._module, self._attribute = module, attribute
+
+    def _real(self):
+        import importlib
+        real = importlib.import_module(self._module)
+        return getattr(real, self._attribute) if self._attribute else real
+
+    def __getattr__(self, name):
+        return getattr(self._real(), name)
+
+    def __call__(self, *args, **kwargs):
+        return self._real()(*args, **kwargs)
+
+
+def _import_statistics_without_scipy() -> None:
+    """`formulas` gets any function (COS as much as MAX) through get_functions(), which imports
+    all its function modules; its statistics module imports scipy at its top (about a second
+    of start-up, ahead of any book's first formula) for functions no linkbook book uses. It is
+    imported here with scipy standing in: the same functions, and scipy imported for real the
+    first time one of them needs it."""
+    import sys
+    import types
+    name = "formulas.functions.stat"
+    if name in sys.modules or "scipy" in sys.modules:
+        return
+    scipy = types.ModuleType("scipy")
+    scipy.__path__ = []
+    scipy.stats, scipy.linalg = _OnUse("scipy.stats"), _OnUse("scipy.linalg")
+    interpolate = types.ModuleType("scipy.interpolate")
+    interpolate.interp1d = _OnUse("scipy.interpolate", "interp1d")
+    sys.modules["scipy"], sys.modules["scipy.interpolate"] = scipy, interpolate
+    try:
+        import importlib
+        importlib.import_module(name)
+    finally:
+        del sys.modules["scipy"], sys.modules["scipy.interpolate"]
+
+
+_import_statistics_without_scipy()
+
+
 def _aggregate(function_num, options, ref, *k):
     """Excel 2010's AGGREGATE, which `formulas` lacks, in the forms a workbook needs to skip
     the #N/A rows of a column: MAX (4), MIN (5), LARGE (14, k), SMALL (15, k) with option 6
