@@ -112,7 +112,7 @@ def _drawing_series(model: Model, pos: dict, sweep: dict) -> list[dict]:
                "sheet": MECH, "rows": [first, last]}]
     if model.path:
         x, y = model.path
-        series.append({"kind": "sweep", "x": x, "y": y, "title": f"path of {y[1:]}",
+        series.append({"kind": "sweep", "x": x, "y": y, "title": _path_title(model, x, y),
                        "source": [sweep["columns"][x], sweep["columns"][y]],
                        "rows": list(sweep["rows"])})
     return series

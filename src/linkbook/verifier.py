@@ -353,8 +353,9 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         "length")
     checks.append(_check_links(pos, solver.description, ref, size))
     if "frames" in meta:
-        checks += _check_frames(meta, values, ref, joint_values, slopes, size, is_error,
-                                error_code, tol, relative)
+        drawn = {j.name: joint_values[j.name] for j in model.joints}   # the joints table's
+        checks += _check_frames(meta, values, ref, drawn, slopes, size, is_error, error_code,
+                                tol, relative)
     checks += _check_degree_windows(model, mech.input_column, sweep, pos, ref, values, size)
 
     # Derived constants: a time ratio from the reversals of its output (the reference's own
