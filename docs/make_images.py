@@ -3,7 +3,8 @@
     python docs/make_images.py            # needs LibreOffice and pdftoppm (linkbook preview)
 
 Each picture is cut from a printed page: a book's drawing (found by its blue grid), the whole
-Mechanism page of the four-bar, the four-bar's first Charts page, the pump's family chart.
+Mechanism page of the four-bar, the four-bar's first Charts page with a drawing, the page of
+the pump's family chart.
 """
 from __future__ import annotations
 
@@ -52,6 +53,12 @@ def drawing_box(page: Image.Image) -> tuple[int, int, int, int] | None:
             int(top + height) + 4)
 
 
+def colourful(page: Image.Image) -> int:
+    """Pixels of clear colour (the curves of a chart), not grey or white."""
+    rgb = np.asarray(page, dtype=int)
+    return int(((rgb.max(axis=2) - rgb.min(axis=2)) > 60).sum())
+
+
 def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
@@ -59,7 +66,8 @@ def main() -> int:
         Image.open(first[0]).save(IMAGES / "fourbar-mechanism.png")
         chart_pages = [p for p in first[1:] if drawing_box(Image.open(p))]
         Image.open(chart_pages[0]).save(IMAGES / "fourbar-charts.png")
-        Image.open(pages("pump", tmp, ("Grid",))[0]).save(IMAGES / "pump-family.png")
+        grid = [Image.open(p).convert("RGB") for p in pages("pump", tmp, ("Grid",))]
+        max(grid, key=colourful).save(IMAGES / "pump-family.png")      # the family chart
         for name in DRAWINGS:
             page = Image.open(pages(name, tmp)[0])
             page.crop(drawing_box(page)).save(IMAGES / f"{name}-mechanism.png")

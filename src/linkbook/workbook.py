@@ -88,6 +88,7 @@ def build(t: Template) -> Built:
                                        meta["position"])
         _position_motion(ws_mech, t, model, meta["position"], meta["motion"])
     meta["summary"] = _summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1)
+    _top_align_tall_rows(ws_mech)
     meta["controls"] = {MECH: _controls(ws_mech, t, meta["inputs"])}
     if t.mechanism.grid:
         meta["grid"] = _grid_sheet(wb.create_sheet(GRID), t, model, names)
@@ -119,25 +120,45 @@ def _text(ws, cell: str, value: str, font: Font | None = None) -> None:
 
 
 LINE_HEIGHT = 15.0      # points per line of 11-pt text
-_NARROW, _WIDE = set("ijlI.,;:!|'()[] ft1"), set("mwMW@%")
-
-
-# A column's width counts digits of Calibri 11 (7 px each, plus 5 px); LibreOffice without
-# Calibri draws with DejaVu Sans, whose digit is 9.55 px: the wider of the two decides.
-WIDER_FONT = 9.55 / 7.0
+# The widths of DejaVu Sans, the font LibreOffice draws with where Calibri is missing (and the
+# wider of the two): advances in units of 2048 per em, regular and bold (oblique as regular), of
+# the printable ASCII characters and then of _SYMBOLS. A character not listed counts as an em.
+_SYMBOLS = "θωαμϕψφβγδεΔλπρστ∠→←²³·×ⁿ—…−°–’“”√±≤≥∞"
+_REGULAR = (
+    651, 821, 942, 1716, 1303, 1946, 1597, 563, 799, 799, 1024, 1716, 651, 739, 651, 690,
+    1303, 1303, 1303, 1303, 1303, 1303, 1303, 1303, 1303, 1303, 690, 690, 1716, 1716, 1716,
+    1087, 2048, 1401, 1405, 1430, 1577, 1294, 1178, 1587, 1540, 604, 604, 1343, 1141, 1767,
+    1532, 1612, 1235, 1612, 1423, 1300, 1251, 1499, 1401, 2025, 1403, 1251, 1403, 799, 690,
+    799, 1716, 1024, 1024, 1255, 1300, 1126, 1300, 1260, 721, 1300, 1298, 569, 569, 1186,
+    569, 1995, 1298, 1253, 1300, 1300, 842, 1067, 803, 1298, 1212, 1675, 1212, 1212, 1075,
+    1303, 690, 1303, 1716, 1253, 1715, 1350, 1303, 1351, 1351, 1351, 1307, 1212, 1253, 1107,
+    1401, 1212, 1233, 1300, 1298, 1233, 1836, 1716, 1716, 821, 821, 651, 1716, 816, 2048,
+    2048, 1716, 1024, 1024, 651, 1061, 1061, 1305, 1716, 1716, 1716, 1706,
+)
+_BOLD = (
+    713, 934, 1067, 1716, 1425, 2052, 1786, 627, 936, 936, 1071, 1716, 778, 850, 778, 748,
+    1425, 1425, 1425, 1425, 1425, 1425, 1425, 1425, 1425, 1425, 819, 819, 1716, 1716, 1716,
+    1188, 2048, 1585, 1561, 1503, 1700, 1399, 1399, 1681, 1714, 762, 762, 1587, 1305, 2038,
+    1714, 1741, 1501, 1741, 1577, 1475, 1397, 1663, 1585, 2259, 1579, 1483, 1485, 936, 748,
+    936, 1716, 1024, 1024, 1382, 1466, 1214, 1466, 1389, 891, 1466, 1458, 702, 702, 1362,
+    702, 2134, 1458, 1407, 1466, 1466, 1010, 1219, 979, 1458, 1335, 1892, 1321, 1335, 1192,
+    1458, 748, 1458, 1716, 1407, 1780, 1407, 1507, 1631, 1626, 1602, 1466, 1395, 1407, 1140,
+    1585, 1296, 1620, 1466, 1595, 1307, 1836, 1716, 1716, 897, 897, 778, 1716, 933, 2048,
+    2048, 1716, 1024, 1024, 778, 1346, 1346, 1366, 1716, 1716, 1716, 1706,
+)
+_CHARS = "".join(map(chr, range(32, 127))) + _SYMBOLS
+_ADVANCE = {False: dict(zip(_CHARS, _REGULAR)), True: dict(zip(_CHARS, _BOLD))}
+PX_PER_UNIT = 15 / 2048       # 11-pt text on a 96-dpi screen: 14.7 px, hinted to 15
+DIGIT_PX = 7                           # a column's width counts Calibri digits of 7 px
 
 
 def text_width(text: str, bold: bool = False) -> float:
-    """The column width `text` needs on one line: its characters in digit widths (a wide
-    letter 1.5, a narrow one 0.6, a capital or a symbol 1.2; bold 10 % more), in DejaVu Sans,
-    plus the cell's padding."""
-    def one(ch: str) -> float:
-        if ch in _WIDE:
-            return 1.5
-        if ch in _NARROW:
-            return 0.6
-        return 1.0 if ch.islower() or ch.isdigit() else 1.2
-    return sum(one(ch) for ch in text) * (1.1 if bold else 1.0) * WIDER_FONT + 1.0
+    """The column width `text` needs on one line in DejaVu Sans 11 pt: its advances in pixels,
+    in digits of 7 px, plus one digit for the cell's padding (combining marks take none)."""
+    import unicodedata
+    table = _ADVANCE[bold]
+    units = sum(0 if unicodedata.combining(ch) else table.get(ch, 2048) for ch in text)
+    return units * PX_PER_UNIT / DIGIT_PX + 1.0
 
 
 def label_lines(text: str, width: float) -> list[str]:
@@ -217,7 +238,7 @@ def _inputs_block(wb, ws, t: Template, model: Model):
     _text(ws, "A3", "Yellow cells are inputs: change them and every formula, table and chart "
                     "follows.", NOTE)
     symbols = [p.symbol for p in t.parameters] + [q.symbol for q in model.of_role(CONSTANT)]
-    _block_head(ws, "A", "Inputs", (("Quantity", 36),
+    _block_head(ws, "A", "Inputs", (("Quantity", 43),
                                       ("Symbol", max([9] + [text_width(s) for s in symbols])),
                                       ("Value", 12), ("Unit", 8), ("Excel name", 14)))
     names: dict[str, str] = {}
@@ -271,12 +292,10 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     """The textbook's spin-button row: one input value drives every step and the drawing."""
     mech = t.mechanism
     _block_head(ws, "G", "Current position",
-                (("Quantity", 34), ("Symbol", 8), ("Value", 13), ("Unit", 7)))
+                (("Quantity", 37), ("Symbol", 8), ("Value", 13), ("Unit", 7)))
     input_name = f"{mech.input_key}_now"
-    _text(ws, "G7", f"input {mech.input_word}: change it, the drawing moves")
-    ws["G7"].alignment = Alignment(wrap_text=True, vertical="top")
-    ws.row_dimensions[7].height = LINE_HEIGHT * len(label_lines(ws["G7"].value,
-                                                                 ws.column_dimensions["G"].width))
+    _text(ws, "G7", f"input {mech.input_word}: change it, all follows")
+    _wrap_in(ws, "G7")
     _text(ws, "H7", mech.input_symbol)
     ws["I7"] = t.position
     ws["I7"].fill = INPUT_FILL
@@ -649,6 +668,20 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
     for i, loop in enumerate(model.fourbars, start=1):
         _fourbar_summary(put, loop, summary_prefix("", i), Resolver(model, names, {}))
     return cells
+
+
+def _top_align_tall_rows(ws) -> None:
+    """A row made taller for a wrapped label holds the other blocks' cells too: every cell of
+    it starts at the top, level with the label's first line."""
+    from copy import copy
+    for r, dim in ws.row_dimensions.items():
+        if not dim.height or dim.height <= LINE_HEIGHT:
+            continue
+        for cell in ws[r]:
+            if cell.value is not None:
+                align = copy(cell.alignment)
+                align.vertical = "top"
+                cell.alignment = align
 
 
 def _wrap_in(ws, cell: str) -> None:
