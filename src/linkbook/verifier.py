@@ -956,7 +956,8 @@ def likely_causes(wb, checks: list[Check]) -> set[tuple[str, str]]:
             if any((sheet, rc) != me for rc in hits):
                 return True
         return False
-    reads = engines.cells_read(wb, differ)
+    # a cell on a sheet the edit deleted reads nothing: it is a cause itself
+    reads = engines.cells_read(wb, {k for k in differ if k[0] in wb.sheetnames})
     return {key for key in differ if not reads_a_differing_cell(key, reads.get(key, []))}
 
 
