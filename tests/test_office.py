@@ -63,9 +63,8 @@ def _built_and_values(name: str, sets, tmp: Path):
 
 
 def _book_with_charts(name: str, tmp: Path, sets=()) -> Path:
-    """The full layout: charts scaled from LibreOffice's values, then the print setup."""
+    """The full layout: the charts (framed live: they read no values), then the print setup."""
     t = _template(name, sets)
-    _, _, values = _built_and_values(name, sets, tmp)
     b = workbook.build(t)
     charts.add_charts(b, t, b.model)
     office.apply_print_setup(b.workbook)

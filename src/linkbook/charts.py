@@ -100,11 +100,6 @@ def nice_step(span: float) -> float:
     return next(m * power for m in (1, 2, 2.5, 5, 10) if m * power >= raw)
 
 
-def decimals(step: float) -> int:
-    """The decimals a tick label of a 1-2-5 step needs (0.25 → 2, 50 → 0)."""
-    return next((d for d in range(16) if abs(round(step, d) - step) <= 1e-9 * step), 15)
-
-
 def _frame_axes(chart: ScatterChart, size_cm: float) -> None:
     """A live frame's fixed axes (frames.py): -HALF … HALF grid squares on both, a gridline
     per square, no tick labels (they would count squares, not lengths: the scale bar's legend
