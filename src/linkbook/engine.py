@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import graphlib
 import io
 import math
 import re
@@ -62,8 +63,9 @@ import openpyxl
 import schedula as sh
 from formulas import Parser
 from formulas.cell import CELL
-from formulas.functions import (FUNCTIONS, Array, flatten, get_functions, replace_empty,
-                                wrap_func)
+from formulas.errors import AnchorRangeName, InvalidRangeName
+from formulas.functions import (COMPILING, FUNCTIONS, Array, flatten, get_functions,
+                                parse_ranges, replace_empty, wrap_func)
 from formulas.ranges import Ranges
 from formulas.tokens.function import Function
 from formulas.tokens.operand import Error, Range, XlError
@@ -784,13 +786,87 @@ def _compile(builder, batch: _Batch | None = None, host: Ranges | None = None):
             node["function"] = _vector_node(node["function"], batch, name in ELEMENTWISE,
                                             NUMERIC_FORMS.get(name))
     extra = {CELL: host} if host is not None else {}
-    return builder.compile(**extra)
+    return _Pipe.of(builder, extra) or builder.compile(**extra)
+
+
+class _Pipe:
+    """A parsed formula's function nodes called one after the other in dependency order: the
+    same functions on the same arguments as the graph `formulas` compiles, without building
+    schedula's dispatcher (most of the cost of compiling) or running its dispatch (about 1 ms a
+    call).  `inputs` are the ones `compile()` gives: every reference and name the formula reads,
+    in sorted order, with its range.  A constant part is computed at each call, not once.  A
+    node that gives no value sends the call to the compiled graph."""
+
+    def __init__(self, builder, extra, inputs, steps, defaults, output):
+        self.builder, self.extra, self.compiled = builder, extra, None
+        self.inputs = inputs
+        self.steps = steps
+        self.defaults = defaults
+        self.output = output
+
+    @classmethod
+    def of(cls, builder, extra: dict) -> "_Pipe | None":
+        """The pipe of builder's graph, or None where it takes more than a plain order: a node
+        with several outputs or options, a function that behaves otherwise while compiling, an
+        operator on references."""
+        dsp = builder.dsp
+        output = builder.get_node_id(builder[-1])
+        functions, producer = {}, {}
+        for fid, node in dsp.function_nodes.items():
+            if len(node["outputs"]) != 1 or set(node) - _PLAIN_FUNCTION_KEYS \
+                    or COMPILING in node["inputs"] \
+                    or re.sub(r"<\d+>$", "", fid) in _REFERENCE_OPERATORS:
+                return None
+            functions[fid] = node
+            producer[node["outputs"][0]] = fid
+        defaults = {k: v["value"] for k, v in dsp.default_values.items()} | extra
+        defaults[sh.START] = sh.NONE      # the input of a function without arguments, PI()
+        if output not in producer or any(
+                d.get("filters") for k, d in dsp.data_nodes.items() if k != output):
+            return None
+        inputs = {}
+        for k in sorted(dsp.data_nodes):
+            if k in producer or k in defaults or k is sh.START:
+                continue
+            try:
+                inputs[k] = Ranges().push(k)
+            except AnchorRangeName:
+                inputs[k] = sh.NONE
+            except InvalidRangeName:
+                inputs[k] = None
+        order = graphlib.TopologicalSorter(
+            {fid: {producer[i] for i in n["inputs"] if i in producer}
+             for fid, n in functions.items()}).static_order()
+        steps = [(functions[f]["function"], tuple(functions[f]["inputs"]),
+                  functions[f]["outputs"][0]) for f in order]
+        return cls(builder, extra, inputs, steps, defaults, output)
+
+    def __call__(self, *args):
+        values = dict(self.defaults)
+        values.update(zip(self.inputs, args))
+        for func, inputs, output in self.steps:
+            value = func(*[v for i in inputs if (v := values[i]) is not sh.NONE])  # as schedula
+            if value is sh.NONE:    # no value (formulas' RangeValueError): schedula decides
+                if self.compiled is None:
+                    self.compiled = self.builder.compile(**self.extra)
+                return self.compiled(*args)
+            values[output] = value
+        # compile()'s filter on the result: a range becomes its values
+        return parse_ranges(values[self.output])[0][0]
+
+
+# Union, intersection and range operators: compile() resolves them to one input range.
+_REFERENCE_OPERATORS = frozenset({",", " ", ":"})
+_PLAIN_FUNCTION_KEYS = frozenset({"type", "function", "inputs", "outputs", "wait_inputs",
+                                  "index", "solve_cycle"})
 
 
 def _call(func, args):
     """Call a compiled formula as ExcelModel does (#NAME? for unimplemented functions)."""
     try:
         return func(*args)
+    except NotImplementedError:
+        return Error.errors["#NAME?"]
     except sh.DispatcherError as ex:
         if isinstance(getattr(ex, "ex", None), NotImplementedError):
             return Error.errors["#NAME?"]
