@@ -1,7 +1,9 @@
 """Build and verify time of every bundled template at its default step, whole process (Python
-start-up and imports included), medians of --runs runs. With --against DIR (another checkout of
-linkbook, e.g. a git worktree of an older commit) the same commands run from that tree too,
-interleaved in the same run, and the table gives both medians and their ratio.
+start-up and imports included), medians of --runs runs; and the *work* of each: the same build
+and verify in a fresh process timed after the modules they use are imported (start-up and
+imports left out, first-call costs kept). With --against DIR (another checkout of linkbook,
+e.g. a git worktree of an older commit) the same commands run from that tree too, interleaved
+in the same run, and the table gives both medians and their ratio.
 
     python benchmarks/templates_speed.py [--runs 5] [--against /tmp/old-linkbook]
 """
@@ -30,6 +32,34 @@ def timed(tree: Path, args: list[str]) -> float:
     return seconds
 
 
+WORK = """
+import contextlib, io, sys, time
+from pathlib import Path
+import openpyxl, numpy
+from linkbook import builder, charts, cli, engine, office, package, verifier, workbook
+out = []
+with contextlib.redirect_stdout(io.StringIO()):
+    start = time.perf_counter()
+    assert cli.main(["build", sys.argv[1], "-o", sys.argv[2]]) == 0
+    out.append(time.perf_counter() - start)
+    start = time.perf_counter()
+    assert cli.main(["verify", sys.argv[2]]) == 0
+    out.append(time.perf_counter() - start)
+print(*out)
+"""
+
+
+def work(tree: Path, name: str, book: str) -> tuple[float, float]:
+    """(build, verify) seconds of work: in one fresh process, after the imports."""
+    env = {**os.environ, "PYTHONPATH": str(tree / "src"), "TQDM_DISABLE": "1"}
+    proc = subprocess.run([sys.executable, "-c", WORK, name, book], env=env,
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise SystemExit(f"{tree}: work of {name} failed:\n{proc.stderr}")
+    build, verify = map(float, proc.stdout.split())
+    return build, verify
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=5)
@@ -49,22 +79,26 @@ def main() -> int:
                         timed(tree, ["build", name, "-o", book]))
                     results.setdefault((name, label, "verify"), []).append(
                         timed(tree, ["verify", book]))
+                    for job, seconds in zip(("build work", "verify work"),
+                                            work(tree, name, book)):
+                        results.setdefault((name, label, job), []).append(seconds)
             print(f"{name}: done", file=sys.stderr, flush=True)
-    cols = [(label, job) for label in trees for job in ("build", "verify")]
-    print(f"{'template':22}" + "".join(f"{label + ' ' + job:>14}" for label, job in cols)
-          + ("".join(f"{'now/other ' + job:>18}" for job in ("build", "verify"))
-             if opts.against else ""))
+    jobs = ("build", "verify", "build work", "verify work")
+    cols = [(label, job) for label in trees for job in jobs]
+    print(f"{'template':22}" + "".join(f"{label + ' ' + job:>18}" for label, job in cols)
+          + ("".join(f"{'now/other ' + job:>22}" for job in jobs) if opts.against else ""))
     for name in names:
         med = {k: statistics.median(v) for k, v in results.items() if k[0] == name}
         row = f"{name:22}" + "".join(
-            f"{med[(name, label, job)]:13.2f}s" if (name, label, job) in med else f"{'-':>14}"
+            f"{med[(name, label, job)]:17.2f}s" if (name, label, job) in med else f"{'-':>18}"
             for label, job in cols)
         if opts.against:
-            for job in ("build", "verify"):
+            for job in jobs:
                 a, b = med.get((name, "now", job)), med.get((name, "other", job))
-                row += f"{a / b:17.2f}x" if a and b else f"{'-':>18}"
+                row += f"{a / b:21.2f}x" if a and b else f"{'-':>22}"
         print(row)
-    print(f"\nmedians of {opts.runs} whole-process runs (start-up and imports included)"
+    print(f"\nmedians of {opts.runs} runs; build and verify: whole process (start-up and imports"
+          " included); work: the same in a fresh process after the imports"
           + (f"; other = {opts.against}" if opts.against else ""))
     return 0
 

@@ -11,13 +11,24 @@ and peak memory of that process):
   reference  the numpy reference alone, for the same angles and adjustments
 and prints a table with ratios against ExcelModel and against the reference.
 
+Then, side by side in the same run, the whole-process wall time (medians of --runs runs) of
+  verify     `python -m linkbook verify BOOK`
+  office     LibreOffice's headless recalculation (the soffice process linkbook.office runs)
+  ironcalc   `python -c "import ironcalc; load_from_xlsx(BOOK).evaluate()"` (if the optional
+             `ironcalc` package is installed: pip install ironcalc)
+  excelmodel the ExcelModel job's process (one run; where it ran)
+with the ratios the issue's targets are stated in.
+
     python benchmarks/verify_speed.py [--json results.json] [--only fourbar-1] [--templates]
+                                      [--runs 3]
 """
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -122,6 +133,39 @@ def run_job(job: str, name: str, args: list[str], book: Path, timeout: float = 1
     return out
 
 
+IRONCALC = """
+import sys, ironcalc
+model = ironcalc.load_from_xlsx(sys.argv[1], "en", "UTC")
+model.evaluate()
+"""
+
+
+def wall(command: list[str]) -> float:
+    start = time.perf_counter()
+    proc = subprocess.run(command, capture_output=True, text=True,
+                          env={**os.environ, "PYTHONPATH": str(SRC), "TQDM_DISABLE": "1"})
+    seconds = time.perf_counter() - start
+    if proc.returncode not in (0, 1):          # verify exits 1 on a failed check: still timed
+        raise SystemExit(f"{' '.join(command)} failed:\n{proc.stderr}")
+    return seconds
+
+
+def whole_process(name: str, args: list[str], book: Path, runs: int, office: bool,
+                  ironcalc: bool) -> dict[str, float]:
+    """Medians of `runs` whole-process wall times, the tools interleaved run by run."""
+    times: dict[str, list[float]] = {}
+    for _ in range(runs):
+        times.setdefault("verify", []).append(
+            wall([sys.executable, "-m", "linkbook", "verify", str(book)]))
+        if ironcalc:
+            times.setdefault("ironcalc", []).append(
+                wall([sys.executable, "-c", IRONCALC, str(book)]))
+        if office:
+            times.setdefault("office", []).append(
+                run_job("office", name, args, book)["seconds"])   # the soffice process alone
+    return {tool: statistics.median(v) for tool, v in times.items()}
+
+
 def formula_cells(book: Path) -> int:
     sys.path.insert(0, str(SRC))
     import openpyxl
@@ -136,11 +180,14 @@ def main() -> int:
     ap.add_argument("--only", action="append", help="run only these cases")
     ap.add_argument("--templates", action="store_true",
                     help="also every bundled template at its default step")
+    ap.add_argument("--runs", type=int, default=3,
+                    help="runs per whole-process measurement (medians)")
     opts = ap.parse_args()
     cases = dict(CASES)
     if opts.templates:
         cases.update({p.stem: (p.stem, []) for p in sorted((ROOT / "templates").glob("*.toml"))})
     have_office = bool(__import__("shutil").which("soffice"))
+    have_ironcalc = importlib.util.find_spec("ironcalc") is not None
     results = {}
     seconds_per_cell = None    # ExcelModel cost, calibrated on the first case it runs
     with tempfile.TemporaryDirectory() as tmp:
@@ -165,9 +212,13 @@ def main() -> int:
             r["office"] = run_job("office", name, args, book) if have_office else \
                 {"skipped": "no soffice"}
             r["reference"] = run_job("reference", name, args, book)
+            r["whole"] = whole_process(name, args, book, opts.runs, have_office, have_ironcalc)
+            if "wall" in r["excelmodel"] and "seconds" in r["excelmodel"]:
+                r["whole"]["excelmodel"] = r["excelmodel"]["wall"]
             results[case] = r
             print_row(case, r, flush=True)
     print_table(results)
+    print_whole(results, opts.runs)
     if opts.json:
         Path(opts.json).write_text(json.dumps(results, indent=2))
     return 0
@@ -212,6 +263,21 @@ def print_table(results: dict) -> None:
     if f1 and f01 and "seconds" in f1["vector"] and "seconds" in f01["vector"]:
         print(f"0.1° / 1° four-bar vector verify: {f01['vector']['seconds'] / f1['vector']['seconds']:.1f}x"
               f" for {f01['cells'] / f1['cells']:.1f}x the cells")
+
+
+def print_whole(results: dict, runs: int) -> None:
+    tools = ("verify", "office", "ironcalc", "excelmodel")
+    print(f"\nWhole process, wall seconds, medians of {runs} runs (ExcelModel: one run)")
+    print(f"{'case':21} " + "".join(f"{t:>11}" for t in tools)
+          + f"{'office/verify':>15}{'verify/ironcalc':>17}{'excelmodel/verify':>19}")
+    for case, r in results.items():
+        w = r["whole"]
+        cells = "".join(f"{w[t]:11.2f}" if t in w else f"{'-':>11}" for t in tools)
+
+        def ratio(a, b, width):
+            return f"{w[a] / w[b]:{width - 1}.2f}x" if a in w and b in w else f"{'-':>{width}}"
+        print(f"{case:21} {cells}{ratio('office', 'verify', 15)}"
+              f"{ratio('verify', 'ironcalc', 17)}{ratio('excelmodel', 'verify', 19)}")
 
 
 if __name__ == "__main__":

@@ -194,6 +194,24 @@ def test_in_memory_book_equals_saved_book(book_path):
     assert compare(engine.evaluate(build_book()), engine.evaluate_file(book_path)) == 0.0
 
 
+@pytest.mark.parametrize("wanted, needs, not_needed", [
+    # a name, a range of a column that reads itself down the rows, a union of two columns
+    ([("Summary sheet", "A6"), ("Summary sheet", "A14")], [(SWEEP, f"Q{LAST}")],
+     [("Grid", "B8"), (SWEEP, "C5")]),
+    ([(SWEEP, "V9")], [(SWEEP, "B9"), (SWEEP, "C9")], [(SWEEP, "D9"), ("Summary sheet", "A1")]),
+    ([("Summary sheet", "A5")], [("Grid", "G26")], [(SWEEP, "B5")]),
+])
+def test_only_evaluates_what_the_wanted_cells_need(book_path, model_values, wanted, needs,
+                                                    not_needed):
+    """evaluate(only=...) gives ExcelModel's values for the wanted cells and what they read, and
+    leaves out formulas they do not need."""
+    values = engine.evaluate(openpyxl.load_workbook(book_path), only=set(wanted))
+    for cell in wanted + needs:
+        compare({cell: values[cell]}, {cell: model_values[cell]})
+    for cell in not_needed:
+        assert cell not in values
+
+
 def test_per_cell_mode_matches_excel_model(book_path, model_values):
     """The fallback path alone (no vector calls) is also ExcelModel's result."""
     eng = engine.Engine(openpyxl.load_workbook(book_path), vectorize=False)

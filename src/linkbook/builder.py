@@ -16,17 +16,13 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
     not `values_needed` (a book saved without cached values: nothing else reads them).
 
     Output angles are shown in degrees in a 360° window chosen from the evaluated sweep, so that
-    each curve is continuous; the degree views are rewritten after the evaluation and, when the
-    values are needed, only they are evaluated again (every other cell keeps its value: no
-    formula reads a degree view)."""
+    each curve is continuous: the angles, and only what they need, are evaluated first; the
+    degree views are written with their windows; then, when the values are needed, the whole
+    book is evaluated."""
     built = workbook.build(t)
-    values = engine.evaluate(built.workbook)
-    changed = workbook.set_degree_windows(built, degree_windows(built, values))
-    if not values_needed:
-        values = None
-    elif changed:
-        known = {cell: v for cell, v in values.items() if cell not in changed}
-        values = engine.evaluate(built.workbook, known=known)
+    angles = engine.evaluate(built.workbook, only=degree_window_sources(built))
+    workbook.set_degree_windows(built, degree_windows(built, angles))
+    values = engine.evaluate(built.workbook) if values_needed else None
     charts.add_charts(built, t, built.model)
     _print_setup(built.workbook)
     return built, values
@@ -39,19 +35,30 @@ def _print_setup(wb) -> None:
     apply_print_setup(wb, fit_to_width=(workbook.MECH,))
 
 
+def _angle_columns(built: workbook.Built):
+    """(quantity, its sweep column letter) of every output angle shown in degrees."""
+    columns = built.meta["sweep"]["columns"]
+    return [(q, columns[q.key]) for q in built.model.of_role(COLUMN) if q.in_degrees]
+
+
+def degree_window_sources(built: workbook.Built) -> set[tuple[str, str]]:
+    """The sweep cells whose values choose the degree windows."""
+    sweep = built.meta["sweep"]
+    r0, r1 = sweep["rows"]
+    return {(sweep["sheet"], f"{letter}{r}") for q, letter in _angle_columns(built)
+            if not q.wrap_360 for r in range(r0, r1 + 1)}
+
+
 def degree_windows(built: workbook.Built, values: dict) -> dict[str, float]:
     """For each output angle: the start of a 360° window that puts the cut in the widest empty
     arc of its sampled values (a multiple of 10°, in [-180°, 180°)). A full turn keeps [0°, 360°)."""
     sweep = built.meta["sweep"]
     r0, r1 = sweep["rows"]
     out = {}
-    for q in built.model.of_role(COLUMN):
-        if not q.in_degrees:
-            continue
+    for q, letter in _angle_columns(built):
         if q.wrap_360:
             out[q.key] = 0.0
             continue
-        letter = sweep["columns"][q.key]
         degs = sorted(math.degrees(v) % 360.0 for r in range(r0, r1 + 1)
                       if isinstance(v := values.get((sweep["sheet"], f"{letter}{r}")), float)
                       and math.isfinite(v))

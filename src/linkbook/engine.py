@@ -15,7 +15,11 @@ Method
    reference descriptors of the shape (and checked against the ranges `formulas` resolved), so
    any member's inputs are the descriptors shifted to that member.  The representative is the
    first member unless two descriptors share one input there (``=B5+$B$5`` in row 5): then a
-   member where they do not (row 6) is compiled instead.
+   member where they do not (row 6) is compiled instead.  "Compiled" means a _Pipe: the parsed
+   graph's function nodes (formulas' own functions) called in dependency order, without
+   schedula's dispatcher; only a graph with operators on references or impure functions goes
+   through ``compile()``.  With ``only`` (cells wanted), the groups those cells do not need,
+   by the references of the shapes, are dropped before anything is compiled.
 3. *Order.* A group depends on the groups owning the cells it reads.  Groups are evaluated in
    topological order of their strongly connected components; a group that reads itself (a running
    column) or a cycle of groups is evaluated cell by cell in cell-level topological order.
@@ -208,18 +212,19 @@ class CircularReferenceError(EngineError):
 
 # --------------------------------------------------------------------------- public API
 
-def evaluate(wb: openpyxl.Workbook, known: dict | None = None,
+def evaluate(wb: openpyxl.Workbook, only=None,
              excel_model_constants: bool = False) -> dict[tuple[str, str], object]:
     """Value of every non-empty cell of every worksheet, keyed by (sheet title, 'B7').
 
     Formula cells get a float, a `formulas` XlError (#N/A, #NUM!, #DIV/0!, ...), or a str/bool
-    where the formula yields one; constants keep their type (ints stay ints).  `known`: values
-    (as this function returns them) of formula cells that are taken as they are, not evaluated:
-    the caller vouches that nothing they read has changed since. Number constants are read as
-    the double the file holds, as Excel and LibreOffice read them; `excel_model_constants`
-    rounds them to 15 decimals first, as formulas.ExcelModel does (which loses digits of small
-    numbers: 1.2345678901234e-5 becomes 1.2345678901e-5), for bit-for-bit comparisons with it."""
-    return Engine(wb, known=known, excel_model_constants=excel_model_constants).run()
+    where the formula yields one; constants keep their type (ints stay ints).  `only`: cells
+    ((sheet title, 'B7')) whose values are wanted: then only the formulas they need, directly
+    or not, are evaluated, and the result holds those formula cells and every constant. Number
+    constants are read as the double the file holds, as Excel and LibreOffice read them;
+    `excel_model_constants` rounds them to 15 decimals first, as formulas.ExcelModel does (which
+    loses digits of small numbers: 1.2345678901234e-5 becomes 1.2345678901e-5), for bit-for-bit
+    comparisons with it."""
+    return Engine(wb, only=only, excel_model_constants=excel_model_constants).run()
 
 
 def vary(wb: openpyxl.Workbook, cell: tuple[str, str], inputs, read) -> Iterator[dict]:
@@ -932,11 +937,11 @@ class Group:
 class Engine:
     """One evaluation of one workbook; `stats` tells how it was grouped and run."""
 
-    def __init__(self, wb: openpyxl.Workbook, vectorize: bool = True, known: dict | None = None,
+    def __init__(self, wb: openpyxl.Workbook, vectorize: bool = True, only=None,
                  excel_model_constants: bool = False):
         self.wb = wb
         self.excel_model_constants = excel_model_constants
-        self.known = known or {}
+        self.only = only
         self.vectorize = vectorize
         self.refs = References.of(wb)
         self.constants: dict[str, dict[tuple[int, int], object]] = {}
@@ -966,6 +971,8 @@ class Engine:
         if self.groups or self.constants:
             raise EngineError("an Engine runs once; make a new one")
         self._group(self._read_cells())
+        if self.only is not None:
+            self._keep_needed(self.only)
         for g in self.groups:
             self._plan(g)
         self._allocate()
@@ -980,10 +987,6 @@ class Engine:
                 if cell.value is None:
                     continue
                 if cell.data_type == "f":
-                    value = self.known.get((ws.title, _a1(row, col)), self)
-                    if value is not self:
-                        consts[(row, col)] = value
-                        continue
                     forms.append((row, col, _formula_text(cell)))
                 else:
                     value = _constant(cell, self.excel_model_constants)
@@ -1036,6 +1039,51 @@ class Engine:
         for gid, ((sheet, shape), (members, info, descs)) in enumerate(exact.items()):
             self.groups.append(Group(gid, sheet, shape, members, info, descs))
         self.stats["shapes"] = len(self.groups)
+
+    def _keep_needed(self, cells) -> None:
+        """Keep only the groups that the formula cells among `cells` need, directly or not,
+        following the references of each shape (before any compile: that is the cost saved)."""
+        owner = {}
+        for g in self.groups:
+            rows, cols = owner.get(g.sheet, (0, 0))
+            owner[g.sheet] = (max(rows, max(m.row for m in g.members)),
+                              max(cols, max(m.col for m in g.members)))
+        owner = {sheet: np.full((r + 1, c + 1), -1, dtype=np.int64)
+                 for sheet, (r, c) in owner.items()}
+        for g in self.groups:
+            owner[g.sheet][[m.row for m in g.members], [m.col for m in g.members]] = g.gid
+        todo = set()
+        for sheet, a1 in cells:
+            row, col = openpyxl.utils.cell.coordinate_to_tuple(a1)
+            grid = owner.get(sheet)
+            if grid is not None and row < grid.shape[0] and col < grid.shape[1]:
+                todo.add(int(grid[row, col]))
+        todo.discard(-1)
+        needed = set()
+        while todo:
+            gid = todo.pop()
+            needed.add(gid)
+            todo |= self._owners_read(self.groups[gid], owner) - needed - {-1}
+        self.groups = [g for g in self.groups if g.gid in needed]
+        for gid, g in enumerate(self.groups):
+            g.gid = gid
+
+    @staticmethod
+    def _owners_read(g: Group, owner: dict[str, np.ndarray]) -> set[int]:
+        """The groups (in `owner`, one grid per sheet) owning a cell that group g's references
+        name, for any member."""
+        rows = np.array([m.row for m in g.members])
+        cols = np.array([m.col for m in g.members])
+        found = set()
+        for d in g.descs:
+            grid = owner.get(d.sheet)
+            if grid is None:
+                continue
+            r1, c1, r2, c2 = np.broadcast_arrays(*d.at(rows, cols), rows)[:4]
+            for a, b, c, e in {(int(a), int(b), int(c), int(e))
+                               for a, b, c, e in zip(r1, c1, r2, c2)}:
+                found.update(np.unique(grid[a:c + 1, b:e + 1]).tolist())
+        return found
 
     @staticmethod
     def _copied_shape(formula, row, col, above, left):

@@ -417,11 +417,9 @@ def default_window(q) -> float:
     return 0.0 if q.wrap_360 else -180.0
 
 
-def set_degree_windows(built: Built, windows: dict[str, float]) -> set[tuple[str, str]]:
+def set_degree_windows(built: Built, windows: dict[str, float]) -> None:
     """Rewrite the degree views (current position and sweep) of the output angles whose window
-    start `windows` gives; the (sheet, cell)s rewritten.  No formula reads a degree view (charts
-    do), so no other cell changes value."""
-    changed = set()
+    start `windows` gives."""
     position, sweep = built.meta["position"], built.meta["sweep"]
     r0, r1 = sweep["rows"]
     ws_mech, ws_sweep = built.workbook[MECH], built.workbook[SWEEP]
@@ -431,12 +429,9 @@ def set_degree_windows(built: Built, windows: dict[str, float]) -> set[tuple[str
             continue
         cell = position["cells"][key]
         ws_mech[cell] = _degree_formula(q, position["cells"][q.key], windows[q.key])
-        changed.add((MECH, cell))
         letter, source = sweep["columns"][key], sweep["columns"][q.key]
         for r in range(r0, r1 + 1):
             ws_sweep[f"{letter}{r}"].value = _degree_formula(q, f"{source}{r}", windows[q.key])
-            changed.add((SWEEP, f"{letter}{r}"))
-    return changed
 
 
 def _degree_formula(q, ref: str, lo: float | None = None) -> str:
