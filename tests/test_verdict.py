@@ -26,7 +26,7 @@ def _edited(src: Path, dst: Path, edit) -> Path:
     meta = layout.read_meta(wb)
     edit(wb, meta)
     del wb[layout.META]
-    layout._write_meta(wb.create_sheet(layout.META), meta)
+    layout.write_meta(wb.create_sheet(layout.META), meta)
     wb.save(dst)
     return dst
 

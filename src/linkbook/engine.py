@@ -63,7 +63,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import openpyxl
 import schedula as sh
 from formulas import Parser
 from formulas.cell import CELL
@@ -74,8 +73,8 @@ from formulas.ranges import Ranges
 from formulas.tokens.function import Function
 from formulas.tokens.operand import Error, Range, XlError
 from formulas.tokens.operator import Intersect, OperatorToken
-from openpyxl.compat import safe_string
-from openpyxl.utils import get_column_letter
+
+from .xlsx import column_letter, coordinate_to_tuple
 
 __all__ = [
     "evaluate", "evaluate_file", "evaluate_formulas_model", "is_error", "error_code", "shape_of",
@@ -212,7 +211,7 @@ class CircularReferenceError(EngineError):
 
 # --------------------------------------------------------------------------- public API
 
-def evaluate(wb: openpyxl.Workbook, only=None,
+def evaluate(wb, only=None,
              excel_model_constants: bool = False) -> dict[tuple[str, str], object]:
     """Value of every non-empty cell of every worksheet, keyed by (sheet title, 'B7').
 
@@ -227,7 +226,7 @@ def evaluate(wb: openpyxl.Workbook, only=None,
     return Engine(wb, only=only, excel_model_constants=excel_model_constants).run()
 
 
-def vary(wb: openpyxl.Workbook, cell: tuple[str, str], inputs, read) -> Iterator[dict]:
+def vary(wb, cell: tuple[str, str], inputs, read) -> Iterator[dict]:
     """For each value of `inputs` put into the input cell `cell` ((sheet title, 'I7')): the
     values (as evaluate() gives them) of the cells in `read`. The book is evaluated once; then
     only the formulas downstream of the input cell are evaluated again for each value."""
@@ -236,6 +235,7 @@ def vary(wb: openpyxl.Workbook, cell: tuple[str, str], inputs, read) -> Iterator
 
 def evaluate_file(path, excel_model_constants: bool = False) -> dict[tuple[str, str], object]:
     """evaluate() of the workbook at `path`, loaded with its formulas (not data_only)."""
+    import openpyxl
     return evaluate(openpyxl.load_workbook(path, data_only=False),
                     excel_model_constants=excel_model_constants)
 
@@ -244,7 +244,7 @@ def shape_of(formula: str, cell: str, sheet: str = "Sheet", wb=None) -> str:
     """The shape of `formula` written in `cell` ('C8') of `sheet`: every reference in R1C1 form
     with its sheet, names of `wb` replaced by their targets.  Found by the `formulas` tokenizer."""
     refs = References.of(wb) if wb is not None else References([sheet])
-    row, col = openpyxl.utils.cell.coordinate_to_tuple(cell)
+    row, col = coordinate_to_tuple(cell)
     return _shape(formula, _tokenize(formula).spans, refs, refs.sheet(sheet), row, col)[0]
 
 
@@ -267,6 +267,7 @@ def evaluate_formulas_model(path) -> dict[tuple[str, str], object]:
     path = str(Path(path).resolve())
     with contextlib.redirect_stderr(io.StringIO()):  # ExcelModel.finish() draws a tqdm bar
         solution = formulas.ExcelModel().loads(path).finish().calculate()
+    import openpyxl
     book = openpyxl.load_workbook(path, data_only=False)
     titles = {ws.title.upper(): ws.title for ws in book.worksheets}
     formula_cells = {(ws.title, c.coordinate) for ws in book.worksheets
@@ -470,7 +471,7 @@ class References:
         self.names = {k.upper(): v for k, v in (names or {}).items()}   # NAME -> "'S'!$C$6"
 
     @classmethod
-    def of(cls, wb: openpyxl.Workbook) -> "References":
+    def of(cls, wb) -> "References":
         return cls([ws.title for ws in wb.worksheets], dict(_global_names(wb)))
 
     def sheet(self, text: str) -> str:
@@ -937,7 +938,7 @@ class Group:
 class Engine:
     """One evaluation of one workbook; `stats` tells how it was grouped and run."""
 
-    def __init__(self, wb: openpyxl.Workbook, vectorize: bool = True, only=None,
+    def __init__(self, wb, vectorize: bool = True, only=None,
                  excel_model_constants: bool = False):
         self.wb = wb
         self.excel_model_constants = excel_model_constants
@@ -1054,7 +1055,7 @@ class Engine:
             owner[g.sheet][[m.row for m in g.members], [m.col for m in g.members]] = g.gid
         todo = set()
         for sheet, a1 in cells:
-            row, col = openpyxl.utils.cell.coordinate_to_tuple(a1)
+            row, col = coordinate_to_tuple(a1)
             grid = owner.get(sheet)
             if grid is not None and row < grid.shape[0] and col < grid.shape[1]:
                 todo.add(int(grid[row, col]))
@@ -1300,7 +1301,7 @@ class Engine:
         needed may be evaluated, never less."""
         self._prepare()
         read = list(read)
-        row, col = openpyxl.utils.cell.coordinate_to_tuple(cell)
+        row, col = coordinate_to_tuple(cell)
         grid = self.grid.get(sheet)
         if grid is None or row >= grid.shape[0] or col >= grid.shape[1]:
             raise EngineError(f"no cell {sheet}!{cell}")
@@ -1308,7 +1309,7 @@ class Engine:
             raise EngineError(f"{sheet}!{cell} holds a formula, not an input value")
         targets = []
         for s, a1 in read:
-            r, c = openpyxl.utils.cell.coordinate_to_tuple(a1)
+            r, c = coordinate_to_tuple(a1)
             if s in self.grid and r < self.grid[s].shape[0] and c < self.grid[s].shape[1]:
                 targets.append((s, a1, r, c))
         deps = {g.gid: self._group_deps(g) for g in self.groups}
@@ -1637,7 +1638,7 @@ def _same_cells(desc: RefDesc, template, rep: _Member, host_sheet: str, refs: Re
     return (sheet, int(r["r1"]), r["n1"], int(r["r2"]), r["n2"]) == desc.rect(rep.row, rep.col)
 
 
-def cells_read(wb: openpyxl.Workbook, cells) -> dict[tuple[str, str], list[tuple]]:
+def cells_read(wb, cells) -> dict[tuple[str, str], list[tuple]]:
     """For each (sheet, cell) holding a formula: the rectangles (sheet, top, left, bottom,
     right) it reads directly, through references and defined names (the lexer's reading). A
     reference the workbook cannot resolve is left out: this serves reports, not evaluation."""
@@ -1680,7 +1681,7 @@ def _constant(cell, excel_model: bool = False):
     `excel_model`, floats rounded to 15 decimals as ExcelModel rounds them."""
     value, kind = cell.value, cell.data_type
     if kind == "n" and not isinstance(value, bool):
-        text = safe_string(value)
+        text = _number_text(value)
         if text == "":
             return None  # NaN and infinities are written as empty cells
         value = float(text) if any(ch in text for ch in ".eE") else int(text)
@@ -1694,13 +1695,20 @@ def _constant(cell, excel_model: bool = False):
     return value
 
 
+def _number_text(value) -> str:
+    """A number as openpyxl saves it ('%.16g'; '' for NaN and infinities)."""
+    if math.isnan(value) or math.isinf(value):
+        return ""
+    return "%.16g" % value
+
+
 def _sheet_prefix(sheet: str) -> str:
     return "'" + sheet.upper().replace("'", "''") + "'!"
 
 
 @functools.lru_cache(maxsize=None)
 def _column_letter(col: int) -> str:
-    return get_column_letter(col)
+    return column_letter(col)
 
 
 def _a1(row: int, col: int) -> str:

@@ -61,3 +61,15 @@ def load_workbook_safely(path: Path, data_only: bool = False):
     except Exception as exc:  # openpyxl raises many kinds on a damaged file
         raise UnsafeFile(f"{path}: cannot be read as a workbook ({type(exc).__name__}: "
                          f"{exc})") from None
+
+
+def read_workbook_safely(path: Path):
+    """The book's cells and names for reading only: the fast view (linkbook.xlsx) where it
+    models the file, else openpyxl's full load (which also words the error of a damaged
+    file)."""
+    from . import xlsx
+    check_zip(path)
+    try:
+        return xlsx.read(path)
+    except Exception:   # xlsx.Unsupported, or a part openpyxl will judge
+        return load_workbook_safely(path)

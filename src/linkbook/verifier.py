@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import generic, workbook as layout
-from .workbook import summary_prefix
+from . import generic, sheets as layout
+from .sheets import summary_prefix
 from .templates import InputError, check_lengths_together, check_value
 
 ABS_TOL = 1e-9
@@ -739,14 +739,13 @@ def _extreme(values: np.ndarray, fn) -> object:
 
 
 def _summary_expected(model, solver, params, ref, closes, starts, ends) -> dict:
-    from .workbook import GAPS_SHOWN
     out: dict[str, object] = {
         "assembles_all": "yes" if closes.all() else "no",
         "not_closing": float((~closes).sum()),
     }
     gap_starts = sorted(x for x in starts if x != DASH)
     gap_ends = sorted(x for x in ends if x != DASH)
-    for k in range(1, GAPS_SHOWN + 1):
+    for k in range(1, layout.GAPS_SHOWN + 1):
         out[f"gap{k}_from"] = gap_starts[k - 1] if k <= len(gap_starts) else DASH
         out[f"gap{k}_to"] = gap_ends[k - 1] if k <= len(gap_ends) else DASH
     if model.output:
@@ -895,9 +894,9 @@ def _check_stroke_sampling(solver, params: dict, grid: dict, adjust: list, value
 def verify(path: Path, engine: str = "vector") -> Report:
     """Every formula cell of the book at `path` compared with the independent reference.
     Raises UnusableFile with one line when the file cannot be verified."""
-    from .safety import UnsafeFile, load_workbook_safely
+    from .safety import UnsafeFile, read_workbook_safely
     try:
-        wb = load_workbook_safely(path)
+        wb = read_workbook_safely(path)
     except UnsafeFile as exc:
         raise UnusableFile(str(exc)) from None
     meta = layout.read_meta(wb)
@@ -938,7 +937,7 @@ def likely_causes(wb, checks: list[Check]) -> set[tuple[str, str]]:
     """The differing cells that read no other differing cell: where each chain of
     disagreement starts (a broken formula; the cells downstream differ because they read it)."""
     from . import engine as engines
-    from openpyxl.utils.cell import coordinate_to_tuple
+    from .xlsx import coordinate_to_tuple
     differ = {(m.sheet, m.cell) for c in checks for m in c.mismatches}
     where: dict[str, set[tuple[int, int]]] = {}
     for sheet, cell in differ:
@@ -967,18 +966,19 @@ def formula_cells(wb) -> set[tuple[str, str]]:
 
 
 def cell_order(key: tuple[str, str]) -> tuple:
-    from openpyxl.utils.cell import coordinate_from_string, column_index_from_string
-    col, row = coordinate_from_string(key[1])
-    return key[0], column_index_from_string(col), row
+    from .xlsx import coordinate_to_tuple
+    row, col = coordinate_to_tuple(key[1])
+    return key[0], col, row
 
 
 def cell_ranges(cells: list[tuple[str, str]], most: int = 6) -> str:
     """'Sweep!F5:F77, Mechanism!I9' for sorted (sheet, cell) pairs: runs down a column joined;
     after `most` runs, how many more."""
-    from openpyxl.utils.cell import coordinate_from_string
+    from .xlsx import column_letter, coordinate_to_tuple
     runs: list[list] = []
     for sheet, cell in cells:
-        col, row = coordinate_from_string(cell)
+        row, index = coordinate_to_tuple(cell)
+        col = column_letter(index)
         last = runs[-1] if runs else None
         if last and last[0] == sheet and last[1] == col and last[3] == row - 1:
             last[3] = row

@@ -7,7 +7,6 @@ where each quantity lives, so `verify` can read an edited workbook back.
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 
 from openpyxl import Workbook
@@ -21,16 +20,14 @@ from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS
 from .model import (ACCEL, ANG_ACCEL, ANG_SPEED, AREA, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
                     SPEED, Model, Resolver, header, render, unit_text)
 from .controls import control_record
+from .sheets import (CHARTS, DASH, DRAWING_COLUMNS, FORMAT_VERSION, GAPS_SHOWN, GRID, MECH,  # noqa: F401
+                     META, MOTION_SHEET, STROKE, SWEEP, read_meta, summary_prefix, write_meta)
 from .templates import Template
 
-MECH, SWEEP, MOTION_SHEET, CHARTS, GRID, STROKE, META = (
-    "Mechanism", "Sweep", "Motion", "Charts", "Grid", "Stroke sweep", "linkbook")
-FORMAT_VERSION = 1
 ROW = "\x00"   # stands for the row number in a rendered sweep formula
 SWEEP_ROW = "\x02"   # the Sweep sheet's row of a Motion row (MOTION_OFFSET rows up)
 MOTION_OFFSET = 2     # Motion row 5: the current position; row 7 on: Sweep row 5 on
 COL = "\x01"   # stands for the column letter in a rendered grid formula
-DRAWING_COLUMNS = ("N", "O")   # x and y of the joints table and of the links the drawing plots
 
 TITLE = Font(bold=True, size=14)
 BOLD = Font(bold=True)
@@ -99,7 +96,7 @@ def build(t: Template) -> Built:
         meta["grid"]["stroke_row"] = _stroke_row(wb[GRID], t, meta["grid"], meta["stroke"])
     from .frames import frames_sheet      # it lays its cells out with this module's helpers
     meta["frames"] = frames_sheet(wb, t, model, meta)
-    _write_meta(wb.create_sheet(META), meta)
+    write_meta(wb.create_sheet(META), meta)
     return Built(wb, model, meta)
 
 
@@ -593,8 +590,6 @@ def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int,
     return {"closes": closes, "gap_from": start, "gap_to": end}
 
 
-GAPS_SHOWN = 3
-DASH = "—"     # "no value here" in text cells (SMALL and AGGREGATE skip text)
 # Excel 2010's AGGREGATE: MIN (5) or MAX (4) with option 6, which skips error values (the #N/A
 # rows of a column). Functions newer than Excel 2007 are stored with the _xlfn. prefix; without
 # it Excel and LibreOffice show #NAME?. (MINIFS/MAXIFS would need Excel 2019.)
@@ -703,12 +698,6 @@ def _wrap_across(ws, row: int, first: str, last: str, text: str) -> None:
     ws[f"{first}{row}"].alignment = Alignment(wrap_text=True, vertical="top")
     ws.row_dimensions[row].height = max(ws.row_dimensions[row].height or LINE_HEIGHT,
                                         LINE_HEIGHT * len(lines))
-
-
-def summary_prefix(base: str, i: int) -> str:
-    """Keys of the summary's i-th transmission angle or four-bar loop: the first keeps the
-    names older books have (mu_min, fb_ground, grashof, limit_folded_1), then mu2_min, fb2_…"""
-    return base + (str(i) if i > 1 else "")
 
 
 def _fourbar_summary(put, fb, n: str, resolve) -> None:
@@ -863,30 +852,3 @@ def _stroke_row(ws, t: Template, grid: dict, stroke: dict) -> int:
     # the note at its edge
     _text(ws, f"B{row + 1}", f"max − min of {source}", NOTE)
     return row
-
-
-CELL_TEXT = 30_000    # Excel holds at most 32,767 characters in a cell
-
-
-def _write_meta(ws, meta: dict) -> None:
-    """The record as JSON in A2, continued in A3, A4, … when a large description needs it."""
-    ws.sheet_state = "hidden"
-    ws["A1"] = "linkbook build record: which template, branch and layout this workbook has."
-    ws["A1"].data_type = "s"
-    text = json.dumps(meta, ensure_ascii=False, sort_keys=True)
-    for i in range(0, len(text), CELL_TEXT):
-        cell = ws.cell(2 + i // CELL_TEXT, 1, text[i:i + CELL_TEXT])
-        cell.data_type = "s"
-
-
-def read_meta(wb) -> dict | None:
-    if META not in wb.sheetnames:
-        return None
-    ws, parts, row = wb[META], [], 2
-    while isinstance(part := ws.cell(row, 1).value, str):
-        parts.append(part)
-        row += 1
-    try:
-        return json.loads("".join(parts)) if parts else None
-    except json.JSONDecodeError:
-        return None

@@ -1,0 +1,251 @@
+"""A fast read-only view of an .xlsx for verify: every cell's value and formula text, and the
+workbook's defined names, read straight from the XML parts.
+
+openpyxl's full load builds every style, dimension and chart object and takes most of a small
+book's verify; verify needs only what this module reads. The view gives what openpyxl's
+`load_workbook(path)` gives for the same file through the attributes verify and the engine use
+(`wb.sheetnames`, `wb.worksheets`, `wb[title]`, `wb.defined_names`; `ws.title`, `ws[coord]`,
+`ws.cell(row, col)`, `ws._cells`, `ws.max_row`, `ws.max_column`; `cell.value`,
+`cell.data_type`, `cell.row`, `cell.column`, `cell.coordinate`, `cell.parent`), with openpyxl's
+own rules: numbers with a '.', 'e' or 'E' are floats, others ints; a formula cell's value is
+'=' and its text; shared strings lose 'x005F_'. A book with what the view does not model (a
+shared, array or data-table formula, a number styled as a date, a chart sheet, a cell without
+its address) raises Unsupported: the caller loads it with openpyxl.
+"""
+from __future__ import annotations
+
+import re
+import zipfile
+from dataclasses import dataclass
+from pathlib import PurePosixPath
+from xml.etree.ElementTree import iterparse
+
+__all__ = ["Unsupported", "read", "coordinate_to_tuple", "column_index", "column_letter"]
+
+MAIN = "{http://schemas.openxmlformats.org/spreadsheetml/2006/main}"
+REL = "{http://schemas.openxmlformats.org/officeDocument/2006/relationships}"
+PKG_REL = "{http://schemas.openxmlformats.org/package/2006/relationships}"
+# Built-in number formats that show a date or time (ECMA-376 18.8.30, with the East Asian ones).
+DATE_FORMAT_IDS = frozenset([*range(14, 23), *range(27, 37), *range(45, 48), *range(50, 59)])
+# A format code shows a date when a date/time letter is left after quoted text, escapes,
+# fill/space characters and [..] sections are taken out (a little more eager than openpyxl's
+# test: a false alarm only means openpyxl reads the book).
+_NOT_DATE_PARTS = re.compile(r'"[^"]*"|\\.|_.|\*.|\[[^\]]*\]')
+_DATE_LETTERS = re.compile(r"[dmyhsDMYHS]")
+_COORDINATE = re.compile(r"^\$?([A-Za-z]{1,3})\$?(\d+)$")
+
+
+class Unsupported(Exception):
+    """The book uses something this view does not model; read it with openpyxl."""
+
+
+class Cell:
+    __slots__ = ("parent", "row", "column", "value", "data_type")
+
+    def __init__(self, parent, row, column, value, data_type):
+        self.parent, self.row, self.column = parent, row, column
+        self.value, self.data_type = value, data_type
+
+    @property
+    def coordinate(self) -> str:
+        return f"{column_letter(self.column)}{self.row}"
+
+
+class Worksheet:
+    def __init__(self, title: str):
+        self.title = title
+        self._cells: dict[tuple[int, int], Cell] = {}
+
+    def __getitem__(self, coordinate: str) -> Cell:
+        return self.cell(*coordinate_to_tuple(coordinate))
+
+    def cell(self, row: int, column: int) -> Cell:
+        found = self._cells.get((row, column))
+        return found if found is not None else Cell(self, row, column, None, "n")
+
+    @property
+    def max_row(self) -> int:
+        return max((r for r, _ in self._cells), default=1)
+
+    @property
+    def max_column(self) -> int:
+        return max((c for _, c in self._cells), default=1)
+
+
+@dataclass(frozen=True)
+class DefinedName:
+    name: str
+    attr_text: str
+    hidden: bool = False
+    localSheetId: int | None = None
+
+
+class Workbook:
+    def __init__(self, worksheets: list[Worksheet], defined_names: dict[str, DefinedName]):
+        self.worksheets = worksheets
+        self.defined_names = defined_names
+        self._by_title = {ws.title: ws for ws in worksheets}
+
+    @property
+    def sheetnames(self) -> list[str]:
+        return [ws.title for ws in self.worksheets]
+
+    def __getitem__(self, title: str) -> Worksheet:
+        try:
+            return self._by_title[title]
+        except KeyError:
+            raise KeyError(f"Worksheet {title} does not exist.") from None
+
+    def __contains__(self, title: str) -> bool:
+        return title in self._by_title
+
+
+def read(path) -> Workbook:
+    """The view of the workbook at `path` (already checked by safety.check_zip)."""
+    with zipfile.ZipFile(path) as zf:
+        names = set(zf.namelist())
+        strings = _shared_strings(zf, "xl/sharedStrings.xml") if "xl/sharedStrings.xml" in \
+            names else []
+        date_styles = _date_styles(zf) if "xl/styles.xml" in names else frozenset()
+        sheets, defined = _workbook(zf)
+        worksheets = []
+        for title, part in sheets:
+            ws = Worksheet(title)
+            with zf.open(part) as f:
+                _read_cells(f, ws, strings, date_styles)
+            worksheets.append(ws)
+    return Workbook(worksheets, defined)
+
+
+def _workbook(zf: zipfile.ZipFile):
+    """[(sheet title, part name)] in tab order, and the workbook-scoped defined names."""
+    targets = {}
+    with zf.open("xl/_rels/workbook.xml.rels") as f:
+        for _, el in iterparse(f):
+            if el.tag == f"{PKG_REL}Relationship":
+                targets[el.get("Id")] = (el.get("Target"), el.get("Type", ""))
+    sheets, defined = [], {}
+    with zf.open("xl/workbook.xml") as f:
+        for _, el in iterparse(f):
+            if el.tag == f"{MAIN}sheet":
+                target, kind = targets[el.get(f"{REL}id")]
+                if not kind.endswith("/worksheet"):
+                    raise Unsupported(f"sheet {el.get('name')!r} is not a worksheet")
+                part = (target.lstrip("/") if target.startswith("/")
+                        else str(PurePosixPath("xl") / target))
+                sheets.append((el.get("name"), part))
+            elif el.tag == f"{MAIN}definedName":
+                local = el.get("localSheetId")
+                if local is None:
+                    name = el.get("name")
+                    defined[name] = DefinedName(name, el.text or "",
+                                                el.get("hidden") in ("1", "true"))
+    return sheets, defined
+
+
+def _text(el) -> str:
+    """The text of a string item: its <t>, or its runs' <t>s (phonetic runs left out)."""
+    t = el.find(f"{MAIN}t")
+    if t is not None:
+        return t.text or ""
+    return "".join(r.findtext(f"{MAIN}t") or "" for r in el.iterfind(f"{MAIN}r"))
+
+
+def _shared_strings(zf: zipfile.ZipFile, part: str) -> list[str]:
+    out = []
+    with zf.open(part) as f:
+        for _, el in iterparse(f):
+            if el.tag == f"{MAIN}si":
+                out.append(_text(el).replace("x005F_", ""))
+                el.clear()
+    return out
+
+
+def _date_styles(zf: zipfile.ZipFile) -> frozenset[int]:
+    """Indexes of the cell formats (the `s` of a cell) that show a number as a date or time."""
+    codes, xfs, in_cell_xfs = {}, [], False
+    with zf.open("xl/styles.xml") as f:
+        for event, el in iterparse(f, events=("start", "end")):
+            if el.tag == f"{MAIN}cellXfs":
+                in_cell_xfs = event == "start"
+            elif event == "end" and el.tag == f"{MAIN}numFmt":
+                codes[int(el.get("numFmtId"))] = el.get("formatCode", "")
+            elif event == "end" and el.tag == f"{MAIN}xf" and in_cell_xfs:
+                xfs.append(int(el.get("numFmtId", 0)))
+    return frozenset(i for i, fmt in enumerate(xfs)
+                     if (fmt in DATE_FORMAT_IDS and fmt not in codes)
+                     or (fmt in codes and _DATE_LETTERS.search(_NOT_DATE_PARTS.sub("", codes[fmt]))))
+
+
+def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int]) -> None:
+    c_tag, v_tag, f_tag, is_tag = f"{MAIN}c", f"{MAIN}v", f"{MAIN}f", f"{MAIN}is"
+    row_tag = f"{MAIN}row"
+    cells = ws._cells
+    for _, el in iterparse(f):
+        tag = el.tag
+        if tag == row_tag:
+            el.clear()
+            continue
+        if tag != c_tag:
+            continue
+        address = el.get("r")
+        m = _COORDINATE.match(address) if address else None
+        if m is None:
+            raise Unsupported("a cell without its address")
+        row, col = int(m[2]), column_index(m[1])
+        kind = el.get("t", "n")
+        formula = el.find(f_tag)
+        if formula is not None:
+            if formula.get("t") in ("shared", "array", "dataTable"):
+                raise Unsupported(f"{ws.title}!{address}: a {formula.get('t')} formula")
+            cells[(row, col)] = Cell(ws, row, col, "=" + (formula.text or ""), "f")
+            continue
+        if kind == "inlineStr":
+            child = el.find(is_tag)
+            value, kind = (_text(child), "s") if child is not None else (None, "n")
+        else:
+            value = el.findtext(v_tag) or None
+            if value is not None:
+                if kind == "n":
+                    if int(el.get("s", 0)) in date_styles:
+                        raise Unsupported(f"{ws.title}!{address}: a number shown as a date")
+                    value = float(value) if ("." in value or "e" in value or "E" in value) \
+                        else int(value)
+                elif kind == "s":
+                    value = strings[int(value)]
+                elif kind == "b":
+                    value = bool(int(value))
+                elif kind == "str":
+                    kind = "s"
+                elif kind == "d":
+                    raise Unsupported(f"{ws.title}!{address}: an ISO 8601 date")
+        cells[(row, col)] = Cell(ws, row, col, value, kind)
+
+
+def coordinate_to_tuple(coordinate: str) -> tuple[int, int]:
+    """'B7' -> (7, 2), as openpyxl.utils.cell.coordinate_to_tuple."""
+    m = _COORDINATE.match(coordinate)
+    if not m:
+        raise ValueError(f"{coordinate!r} is not a cell address")
+    return int(m[2]), column_index(m[1])
+
+
+def column_index(letters: str) -> int:
+    n = 0
+    for ch in letters.upper():
+        n = n * 26 + ord(ch) - 64
+    return n
+
+
+_LETTERS: dict[int, str] = {}
+
+
+def column_letter(col: int) -> str:
+    found = _LETTERS.get(col)
+    if found is None:
+        n, out = col, ""
+        while n:
+            n, r = divmod(n - 1, 26)
+            out = chr(65 + r) + out
+        found = _LETTERS[col] = out
+    return found

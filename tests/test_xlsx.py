@@ -1,0 +1,147 @@
+"""The fast read-only view (linkbook.xlsx) against openpyxl's own load of the same files, and
+its refusals: a book it does not model is read by openpyxl instead."""
+from __future__ import annotations
+
+import datetime
+import re
+import shutil
+import zipfile
+from pathlib import Path
+
+import openpyxl
+import pytest
+from openpyxl.workbook.defined_name import DefinedName
+
+from conftest import built
+from linkbook import safety, xlsx
+from test_engine import build_book, edge_book
+
+
+def cells(wb) -> dict:
+    return {(ws.title, c.coordinate): (c.value, type(c.value), c.data_type)
+            for ws in wb.worksheets for c in ws._cells.values() if c.value is not None}
+
+
+def names(wb) -> dict:
+    return {k: (v.attr_text, bool(v.hidden)) for k, v in wb.defined_names.items()}
+
+
+def assert_same_as_openpyxl(path: Path) -> None:
+    view, full = xlsx.read(path), openpyxl.load_workbook(path)
+    assert view.sheetnames == full.sheetnames
+    assert cells(view) == cells(full)
+    assert names(view) == names(full)
+    for ws in full.worksheets:
+        mine = view[ws.title]
+        for c in list(ws._cells.values())[:50]:
+            assert mine[c.coordinate].value == c.value
+            assert mine.cell(c.row, c.column).value == c.value
+        assert mine.max_row <= ws.max_row and mine.max_column <= ws.max_column
+
+
+def rich_book() -> openpyxl.Workbook:
+    """Strings of every kind (shared, rich text, escapes, empty), a hidden name, big and small
+    numbers, numbers written as ints and floats, booleans, error constants."""
+    from openpyxl.cell.rich_text import CellRichText, TextBlock
+    from openpyxl.cell.text import InlineFont
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    ws.title = "It's a sheet"
+    values = ["plain", "x005F_x000D_ escaped", "line\nbreak", " spaced ", 1, 1.0, -0.0, 1e300,
+              5e-324, 2 ** 62, True, False, "#DIV/0!", "=1/0", "=\"a\"&\"b\""]
+    for i, v in enumerate(values, start=1):
+        ws.cell(i, 2, v)
+    ws["C1"] = CellRichText("bold ", TextBlock(InlineFont(b=True), "and plain"))
+    ws["C2"].number_format = "0.000"
+    ws["C3"] = 7
+    ws["C3"].number_format = '0.0" mm/s"'          # letters of a date, but quoted
+    wb.defined_names["hidden_one"] = DefinedName("hidden_one", attr_text="'It''s a sheet'!$B$5",
+                                                 hidden=True)
+    return wb
+
+
+def with_shared_strings(path: Path) -> None:
+    """Rewrite openpyxl's inline strings as a shared-string table, as Excel and LibreOffice
+    save them."""
+    table: list[str] = []
+
+    def shared(m: re.Match) -> str:
+        table.append(f"<si>{m[2]}</si>")
+        return f'<c {m[1]} t="s"><v>{len(table) - 1}</v></c>'
+    tmp = path.with_suffix(".tmp")
+    with zipfile.ZipFile(path) as src, zipfile.ZipFile(tmp, "w") as dst:
+        for info in src.infolist():
+            data = src.read(info).decode()
+            if info.filename.startswith("xl/worksheets/sheet"):
+                data = re.sub(r'<c ([^>]*?) t="inlineStr"><is>(.*?)</is></c>', shared, data,
+                              flags=re.S)
+            elif info.filename == "xl/_rels/workbook.xml.rels":
+                data = data.replace("</Relationships>", (
+                    '<Relationship Id="rIdSST" Target="sharedStrings.xml" Type="http://schemas.'
+                    'openxmlformats.org/officeDocument/2006/relationships/sharedStrings"/>'
+                    "</Relationships>"))
+            elif info.filename == "[Content_Types].xml":
+                data = data.replace("</Types>", (
+                    '<Override PartName="/xl/sharedStrings.xml" ContentType="application/vnd.'
+                    'openxmlformats-officedocument.spreadsheetml.sharedStrings+xml"/></Types>'))
+            dst.writestr(info, data)
+        dst.writestr("xl/sharedStrings.xml", (
+            '<sst xmlns="http://schemas.openxmlformats.org/spreadsheetml/2006/main">'
+            + "".join(table) + "</sst>"))
+    shutil.move(tmp, path)
+    assert table
+
+
+@pytest.mark.parametrize("shared", [False, True], ids=["inline strings", "shared strings"])
+@pytest.mark.parametrize("make", [build_book, edge_book, rich_book])
+def test_the_view_reads_what_openpyxl_reads(tmp_path, make, shared):
+    path = tmp_path / "book.xlsx"
+    make().save(path)
+    if shared:
+        with_shared_strings(path)
+    assert_same_as_openpyxl(path)
+
+
+@pytest.mark.parametrize("name", ["pump", "jansen"])
+def test_the_view_reads_a_bundled_book_as_openpyxl_does(tmp_path, name):
+    path = tmp_path / f"{name}.xlsx"
+    built(name)[0].workbook.save(path)
+    assert_same_as_openpyxl(path)
+
+
+def _rewrite(path: Path, part: str, old: str, new: str) -> None:
+    tmp = path.with_suffix(".tmp")
+    with zipfile.ZipFile(path) as src, zipfile.ZipFile(tmp, "w") as dst:
+        for info in src.infolist():
+            data = src.read(info)
+            if info.filename == part:
+                assert old.encode() in data
+                data = data.replace(old.encode(), new.encode(), 1)
+            dst.writestr(info, data)
+    shutil.move(tmp, path)
+
+
+def _date_book(path: Path) -> None:
+    wb = openpyxl.Workbook()
+    wb.active["A1"] = datetime.datetime(2026, 11, 23)
+    wb.save(path)
+
+
+def _shared_formula_book(path: Path) -> None:
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    ws["A1"], ws["A2"], ws["B1"], ws["B2"] = 1, 2, "=A1*2", "=A2*2"
+    wb.save(path)
+    _rewrite(path, "xl/worksheets/sheet1.xml", "<f>A1*2</f>", '<f t="shared" ref="B1:B2" si="0">A1*2</f>')
+    _rewrite(path, "xl/worksheets/sheet1.xml", "<f>A2*2</f>", '<f t="shared" si="0"/>')
+
+
+@pytest.mark.parametrize("make", [_date_book, _shared_formula_book])
+def test_what_the_view_does_not_model_is_read_by_openpyxl(tmp_path, make):
+    path = tmp_path / "book.xlsx"
+    make(path)
+    with pytest.raises(xlsx.Unsupported):
+        xlsx.read(path)
+    wb = safety.read_workbook_safely(path)
+    assert isinstance(wb, openpyxl.Workbook)
+    assert cells(wb) == cells(openpyxl.load_workbook(path))
