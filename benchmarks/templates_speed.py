@@ -1,9 +1,9 @@
 """Build and verify time of every bundled template at its default step, whole process (Python
 start-up and imports included), medians of --runs runs; and the *work* of each: the same build
-and verify in a fresh process timed after the modules they use are imported (start-up and
-imports left out, first-call costs kept). With --against DIR (another checkout of linkbook,
-e.g. a git worktree of an older commit) the same commands run from that tree too, interleaved
-in the same run, and the table gives both medians and their ratio.
+and verify, each in a fresh process of its own, timed after the modules they use are imported
+(start-up and imports left out, first-call costs kept). With --against DIR (another checkout of
+linkbook, e.g. a git worktree of an older commit) the same commands run from that tree too,
+interleaved in the same run, and the table gives both medians and their ratio.
 
     python benchmarks/templates_speed.py [--runs 5] [--against /tmp/old-linkbook]
 """
@@ -17,6 +17,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from bytecode import compile_tree
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -37,27 +39,24 @@ import contextlib, io, sys, time
 from pathlib import Path
 import openpyxl, numpy
 from linkbook import builder, charts, cli, engine, office, package, verifier, workbook
-out = []
+args = ["build", sys.argv[2], "-o", sys.argv[3]] if sys.argv[1] == "build" else sys.argv[1:]
 with contextlib.redirect_stdout(io.StringIO()):
     start = time.perf_counter()
-    assert cli.main(["build", sys.argv[1], "-o", sys.argv[2]]) == 0
-    out.append(time.perf_counter() - start)
-    start = time.perf_counter()
-    assert cli.main(["verify", sys.argv[2]]) == 0
-    out.append(time.perf_counter() - start)
-print(*out)
+    assert cli.main(args) == 0
+    print(time.perf_counter() - start, file=sys.stderr)
 """
 
 
-def work(tree: Path, name: str, book: str) -> tuple[float, float]:
-    """(build, verify) seconds of work: in one fresh process, after the imports."""
+def work(tree: Path, job: str, *args: str) -> float:
+    """Seconds of work of one `linkbook build` or `verify` in a fresh process, timed after the
+    imports.  Each job has its own process: a verify after a build in the same process would
+    reuse the formulas the build compiled."""
     env = {**os.environ, "PYTHONPATH": str(tree / "src"), "TQDM_DISABLE": "1"}
-    proc = subprocess.run([sys.executable, "-c", WORK, name, book], env=env,
+    proc = subprocess.run([sys.executable, "-c", WORK, job, *args], env=env,
                           capture_output=True, text=True)
     if proc.returncode != 0:
-        raise SystemExit(f"{tree}: work of {name} failed:\n{proc.stderr}")
-    build, verify = map(float, proc.stdout.split())
-    return build, verify
+        raise SystemExit(f"{tree}: {job} work failed:\n{proc.stderr}")
+    return float(proc.stderr.split()[-1])
 
 
 def main() -> int:
@@ -66,6 +65,8 @@ def main() -> int:
     ap.add_argument("--against", type=Path, help="another linkbook checkout to compare with")
     opts = ap.parse_args()
     trees = {"now": ROOT} | ({"other": opts.against.resolve()} if opts.against else {})
+    for tree in trees.values():
+        compile_tree(tree / "src")
     names = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
     results: dict[tuple[str, str, str], list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -79,9 +80,10 @@ def main() -> int:
                         timed(tree, ["build", name, "-o", book]))
                     results.setdefault((name, label, "verify"), []).append(
                         timed(tree, ["verify", book]))
-                    for job, seconds in zip(("build work", "verify work"),
-                                            work(tree, name, book)):
-                        results.setdefault((name, label, job), []).append(seconds)
+                    results.setdefault((name, label, "build work"), []).append(
+                        work(tree, "build", name, book))
+                    results.setdefault((name, label, "verify work"), []).append(
+                        work(tree, "verify", book))
             print(f"{name}: done", file=sys.stderr, flush=True)
     jobs = ("build", "verify", "build work", "verify work")
     cols = [(label, job) for label in trees for job in jobs]

@@ -35,6 +35,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from bytecode import compile_tree
+
 ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src"
 EXCELMODEL_LIMIT_S = 120.0
@@ -183,6 +185,7 @@ def main() -> int:
     ap.add_argument("--runs", type=int, default=3,
                     help="runs per whole-process measurement (medians)")
     opts = ap.parse_args()
+    compile_tree(SRC)
     cases = dict(CASES)
     if opts.templates:
         cases.update({p.stem: (p.stem, []) for p in sorted((ROOT / "templates").glob("*.toml"))})
