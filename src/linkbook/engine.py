@@ -7,10 +7,12 @@ Method
    workbook-scoped defined name becomes the absolute reference to its target).  In C8,
    ``=A8*COS(B8)-$D$2+E$7`` has the shape ``='S'!R[0]C[-2]*COS('S'!R[0]C[-1])-'S'!R2C4+'S'!R7C[2]``.
    Cells of one sheet with one shape form a *group*: a column of a sweep table is one group.
-   References are found by a regex lexer (fast), and for every group the `formulas` tokenizer
-   re-reads the first member: if its Range tokens are not exactly the lexer's spans, every member
-   of that group is re-read by the tokenizer (slow but exact).
-2. *One compile per group.* ``Parser().ast(formula)[1].compile()`` of a representative member.
+   References are found by a regex lexer (fast), and for every group the parser re-reads the
+   first member: if its references are not exactly the lexer's spans, every member of that group
+   is re-read by the parser (slow but exact).  The parser is linkbook.grammar, which reads the
+   grammar linkbook writes into the graph `formulas`' parser would make, node for node, in a
+   fraction of its time; for any formula outside that grammar it is `formulas`' own parser.
+2. *One compile per group.* The parsed graph of a representative member, compiled.
    The compiled function's inputs (``'E5'``, ``'SWEEP!B5:B40'``, ``'A_3'``) are tied to the
    reference descriptors of the shape (and checked against the ranges `formulas` resolved), so
    any member's inputs are the descriptors shifted to that member.  The representative is the
@@ -69,11 +71,13 @@ from formulas.cell import CELL
 from formulas.errors import AnchorRangeName, InvalidRangeName
 from formulas.functions import (COMPILING, FUNCTIONS, Array, flatten, get_functions,
                                 parse_ranges, replace_empty, wrap_func)
+from formulas.functions.operators import OPERATORS
 from formulas.ranges import Ranges
 from formulas.tokens.function import Function
 from formulas.tokens.operand import Error, Range, XlError
 from formulas.tokens.operator import Intersect, OperatorToken
 
+from . import grammar
 from .xlsx import column_letter, coordinate_to_tuple
 
 __all__ = [
@@ -592,6 +596,40 @@ class TokenInfo:
 
 
 def _tokenize(formula: str) -> TokenInfo:
+    """References, keys and functions of a formula, with its graph: linkbook.grammar's reading
+    where the formula is in that grammar, else `formulas`' parser's."""
+    parsed = grammar.parse(formula, _plain_functions())
+    if parsed is not None:
+        info = TokenInfo(parsed.spans, parsed.keys, set(parsed.functions), parsed)
+    else:
+        info = _formulas_tokenize(formula)
+    bad = info.functions & DYNAMIC
+    if bad:
+        raise UnsupportedFormulaError(f"{', '.join(sorted(bad))} cannot be evaluated here (its "
+                                      f"result depends on more than the cells it names)")
+    return info
+
+
+@functools.lru_cache(maxsize=1)
+def _plain_functions() -> frozenset[str]:
+    """formulas' functions whose node is one callable on its arguments (not, as ROW's, a node
+    with more inputs than its arguments)."""
+    return frozenset(k for k, v in get_functions().items() if _plain_function(v) is not None)
+
+
+def _plain_function(entry):
+    """The callable of a get_functions() entry whose node calls it on its arguments alone:
+    the entry itself, or the 'function' of a dict that adds nothing but options schedula uses
+    for scheduling (IF's solve_cycle); None otherwise."""
+    if callable(entry):
+        return entry
+    if isinstance(entry, dict) and callable(entry.get("function")) \
+            and set(entry) <= {"function", "solve_cycle", "wait_inputs"}:
+        return entry["function"]
+    return None
+
+
+def _formulas_tokenize(formula: str) -> TokenInfo:
     try:
         tokens, builder = _PARSER.ast(formula)
     except Exception as ex:  # formulas raises several error types for bad syntax
@@ -612,10 +650,6 @@ def _tokenize(formula: str) -> TokenInfo:
             functions.add(" ")
         elif isinstance(tok, OperatorToken):
             functions.add(tok.name)
-    bad = functions & DYNAMIC
-    if bad:
-        raise UnsupportedFormulaError(f"{', '.join(sorted(bad))} cannot be evaluated here (its "
-                                      f"result depends on more than the cells it names)")
     return TokenInfo(spans, keys, functions, builder)
 
 
@@ -784,15 +818,51 @@ def _vector_node(func, batch: _Batch, elementwise: bool, numeric=None):
     return node
 
 
-def _compile(builder, batch: _Batch | None = None, host: Ranges | None = None):
-    """Compile a parsed formula; with `batch`, every node is wrapped for vector calls."""
+def _compile(graph, batch: _Batch | None = None, host: Ranges | None = None):
+    """Compile a parsed formula (a grammar.Parsed or a `formulas` AstBuilder); with `batch`,
+    every node is wrapped for vector calls."""
+    extra = {CELL: host} if host is not None else {}
+    if isinstance(graph, grammar.Parsed):
+        pipe = _Pipe.of_parsed(graph, batch, extra)
+        if pipe is not None:
+            return pipe
+        graph = _PARSER.ast(graph.formula)[1]
+    _wrap_nodes(graph, batch)
+    return _Pipe.of(graph, extra) or graph.compile(**extra)
+
+
+def _wrap_nodes(builder, batch: _Batch | None) -> None:
     if batch is not None:
         for node_id, node in builder.dsp.function_nodes.items():
-            name = re.sub(r"<\d+>$", "", node_id)
-            node["function"] = _vector_node(node["function"], batch, name in ELEMENTWISE,
-                                            NUMERIC_FORMS.get(name))
-    extra = {CELL: host} if host is not None else {}
-    return _Pipe.of(builder, extra) or builder.compile(**extra)
+            node["function"] = _wrap(node["function"], re.sub(r"<\d+>$", "", node_id), batch)
+
+
+def _wrap(func, name: str, batch: _Batch | None):
+    """A node's function as the graph runs it: for vector calls, wrapped by its name."""
+    if batch is None:
+        return func
+    return _vector_node(func, batch, name in ELEMENTWISE, NUMERIC_FORMS.get(name))
+
+
+def _formulas_graph(formula: str, batch: _Batch | None, extra: dict):
+    """The graph `formulas` compiles for a formula (a pipe's fallback)."""
+    builder = _PARSER.ast(formula)[1]
+    _wrap_nodes(builder, batch)
+    return builder.compile(**extra)
+
+
+def _input_templates(keys) -> dict:
+    """compile()'s inputs for the references and names a formula reads: each key, in sorted
+    order, with its range (None for a defined name)."""
+    inputs = {}
+    for k in sorted(keys):
+        try:
+            inputs[k] = Ranges().push(k)
+        except AnchorRangeName:
+            inputs[k] = sh.NONE
+        except InvalidRangeName:
+            inputs[k] = None
+    return inputs
 
 
 class _Pipe:
@@ -803,8 +873,8 @@ class _Pipe:
     in sorted order, with its range.  A constant part is computed at each call, not once.  A
     node that gives no value sends the call to the compiled graph."""
 
-    def __init__(self, builder, extra, inputs, steps, defaults, output):
-        self.builder, self.extra, self.compiled = builder, extra, None
+    def __init__(self, graph, inputs, steps, defaults, output):
+        self.graph, self.compiled = graph, None     # graph(): the compiled graph, on demand
         self.inputs = inputs
         self.steps = steps
         self.defaults = defaults
@@ -830,22 +900,40 @@ class _Pipe:
         if output not in producer or any(
                 d.get("filters") for k, d in dsp.data_nodes.items() if k != output):
             return None
-        inputs = {}
-        for k in sorted(dsp.data_nodes):
-            if k in producer or k in defaults or k is sh.START:
-                continue
-            try:
-                inputs[k] = Ranges().push(k)
-            except AnchorRangeName:
-                inputs[k] = sh.NONE
-            except InvalidRangeName:
-                inputs[k] = None
+        inputs = _input_templates(k for k in dsp.data_nodes
+                                  if k not in producer and k not in defaults and k is not sh.START)
         order = graphlib.TopologicalSorter(
             {fid: {producer[i] for i in n["inputs"] if i in producer}
              for fid, n in functions.items()}).static_order()
         steps = [(functions[f]["function"], tuple(functions[f]["inputs"]),
                   functions[f]["outputs"][0]) for f in order]
-        return cls(builder, extra, inputs, steps, defaults, output)
+        return cls(lambda: builder.compile(**extra), inputs, steps, defaults, output)
+
+    @classmethod
+    def of_parsed(cls, parsed: grammar.Parsed, batch: _Batch | None,
+                  extra: dict) -> "_Pipe | None":
+        """The pipe of grammar's graph: its nodes in their order (each after its arguments),
+        with the functions `formulas`' tokens compile to.  None if the result is not a call."""
+        if parsed.nodes[-1][0] != "call":
+            return None         # a lone reference or constant: compile() and its filter
+        table, ids, keys, steps = get_functions(), [], [], []
+        defaults = dict(extra)
+        for i, node in enumerate(parsed.nodes):
+            if node[0] == "input":
+                ids.append(node[1])
+                keys.append(node[1])
+            elif node[0] == "const":
+                ids.append(i)
+                defaults[i] = node[1]
+            else:
+                _, name, args = node
+                func = OPERATORS[name.upper()] if name in grammar.OPERATORS \
+                    else _plain_function(table[name.upper()])
+                steps.append((_wrap(func, name, batch), tuple(ids[a] for a in args), i))
+                ids.append(i)
+        formula = parsed.formula
+        return cls(lambda: _formulas_graph(formula, batch, extra), _input_templates(keys),
+                   steps, defaults, len(parsed.nodes) - 1)
 
     def __call__(self, *args):
         values = dict(self.defaults)
@@ -854,7 +942,7 @@ class _Pipe:
             value = func(*[v for i in inputs if (v := values[i]) is not sh.NONE])  # as schedula
             if value is sh.NONE:    # no value (formulas' RangeValueError): schedula decides
                 if self.compiled is None:
-                    self.compiled = self.builder.compile(**self.extra)
+                    self.compiled = self.graph()
                 return self.compiled(*args)
             values[output] = value
         # compile()'s filter on the result: a range becomes its values
@@ -971,9 +1059,11 @@ class Engine:
         """Group, plan, allocate and order: everything but the evaluation."""
         if self.groups or self.constants:
             raise EngineError("an Engine runs once; make a new one")
-        self._group(self._read_cells())
-        if self.only is not None:
-            self._keep_needed(self.only)
+        formulas_by_sheet = self._read_cells()
+        if self.only is None:
+            self._group(formulas_by_sheet)
+        else:
+            self._group_needed(formulas_by_sheet, self.only)
         for g in self.groups:
             self._plan(g)
         self._allocate()
@@ -1037,13 +1127,28 @@ class Engine:
                 exact_shape, descs = self._exact_shape(m, sheet, m_info)
                 entry = exact.setdefault((sheet, "\0" + exact_shape), ([], m_info, descs))
                 entry[0].append(m)
-        for gid, ((sheet, shape), (members, info, descs)) in enumerate(exact.items()):
-            self.groups.append(Group(gid, sheet, shape, members, info, descs))
+        for (sheet, shape), (members, info, descs) in exact.items():
+            self.groups.append(Group(len(self.groups), sheet, shape, members, info, descs))
         self.stats["shapes"] = len(self.groups)
 
-    def _keep_needed(self, cells) -> None:
-        """Keep only the groups that the formula cells among `cells` need, directly or not,
-        following the references of each shape (before any compile: that is the cost saved)."""
+    def _group_needed(self, formulas_by_sheet, cells) -> None:
+        """Group only what the formula cells among `cells` need, directly or not, following
+        the references of each shape (before any compile: that is the cost saved).  A sheet is
+        grouped when a needed group first reads it: a sheet that nothing needed reads (the
+        Motion sheet, for the sweep's angles) is never grouped at all."""
+        grouped: set[str] = set()
+        todo_sheets = {sheet for sheet, _ in cells} & set(formulas_by_sheet)
+        while todo_sheets:
+            self._group({s: formulas_by_sheet[s] for s in todo_sheets})
+            grouped |= todo_sheets
+            needed, read_sheets = self._needed_groups(cells)
+            todo_sheets = (read_sheets & set(formulas_by_sheet)) - grouped
+        self.groups = [g for g in self.groups if g.gid in needed]
+        for gid, g in enumerate(self.groups):
+            g.gid = gid
+
+    def _needed_groups(self, cells) -> tuple[set[int], set[str]]:
+        """The groups that the formula cells among `cells` need, and every sheet they read."""
         owner = {}
         for g in self.groups:
             rows, cols = owner.get(g.sheet, (0, 0))
@@ -1060,14 +1165,13 @@ class Engine:
             if grid is not None and row < grid.shape[0] and col < grid.shape[1]:
                 todo.add(int(grid[row, col]))
         todo.discard(-1)
-        needed = set()
+        needed, sheets = set(), set()
         while todo:
             gid = todo.pop()
             needed.add(gid)
+            sheets.update(d.sheet for d in self.groups[gid].descs)
             todo |= self._owners_read(self.groups[gid], owner) - needed - {-1}
-        self.groups = [g for g in self.groups if g.gid in needed]
-        for gid, g in enumerate(self.groups):
-            g.gid = gid
+        return needed, sheets
 
     @staticmethod
     def _owners_read(g: Group, owner: dict[str, np.ndarray]) -> set[int]:
@@ -1081,6 +1185,10 @@ class Engine:
             if grid is None:
                 continue
             r1, c1, r2, c2 = np.broadcast_arrays(*d.at(rows, cols), rows)[:4]
+            if not d.is_range:      # one cell per member: one look-up for all of them
+                inside = (r1 < grid.shape[0]) & (c1 < grid.shape[1])
+                found.update(np.unique(grid[r1[inside], c1[inside]]).tolist())
+                continue
             for a, b, c, e in {(int(a), int(b), int(c), int(e))
                                for a, b, c, e in zip(r1, c1, r2, c2)}:
                 found.update(np.unique(grid[a:c + 1, b:e + 1]).tolist())

@@ -1,0 +1,265 @@
+"""A fast reader of the formula grammar linkbook writes, for the engine.
+
+`formulas`' parser costs about 1.5 ms a formula, most of a small book's verify once the libraries
+are loaded.  This one reads the subset of Excel's grammar that linkbook's books use — numbers,
+strings, TRUE/FALSE, cell and range references (A1 style, optionally on a sheet, quoted or not),
+defined names, the arithmetic, text and comparison operators, postfix %, and calls of functions
+that `formulas` implements — in one regex pass and one operator-precedence pass, and gives the
+same graph `formulas`' parser would: the same operators and functions from `formulas`' own tables,
+the same constants, the same inputs under the same names, the same order of operations
+(`formulas`' precedence and left associativity, unary minus above ^ as in Excel), common
+subexpressions shared.  tests/test_grammar.py checks that node by node against `formulas` on every
+formula of the bundled books and on random formulas of the grammar.
+
+A run of signs is one operator, by the parity of its minus signs, as `formulas` reads it
+(``A1--B1`` is ``A1+B1``, ``=--A1`` is ``=+A1``).
+
+Anything else — whitespace outside strings, empty arguments, arrays,
+error literals, unions and intersections, R1C1, names with dots, a function `formulas` does not
+know — gives None, and the caller uses `formulas`' parser, which decides.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+# One token at a time, at the current position (re.match).  A reference or name must not run on
+# into more of a name, a call, a sheet, a range or a spill mark; a number must not run on into a
+# letter, a digit, a dot or a colon (the lookaheads `formulas` uses).
+_TOKEN = re.compile(r"""
+    (?P<string>"(?:[^"]|"")*")
+  | (?P<ref>(?:(?P<sheet>'(?:''|[^'?*/\[\]:\\])+'|[A-Za-z_][A-Za-z0-9_.]*)!)?
+        (?P<c1>\$?[A-Za-z]{1,3})(?P<r1>\$?[1-9][0-9]*)
+        (?::(?P<c2>\$?[A-Za-z]{1,3})(?P<r2>\$?[1-9][0-9]*))?
+    )(?![\w.(!:$\#\[])
+  | (?P<number>(?:[0-9]+(?:\.[0-9]+)?|\.[0-9]+)(?:[eE][+-][0-9]+)?)(?![A-Za-z0-9.:])
+  | (?P<call>[A-Za-z_][A-Za-z0-9_.]*)\(
+  | (?P<name>[A-Za-z_][A-Za-z0-9_]*)(?![\w.(!:$\#\[])
+  | (?P<signs>[-+]{2,})
+  | (?P<op><=|>=|<>|[-+*/^&=<>%])
+  | (?P<open>\()
+  | (?P<close>\))
+  | (?P<comma>,)
+""", re.X)
+# Names `formulas` reads otherwise: R1C1 references (R, C, RC, R2C3, ...).
+_R1C1 = re.compile(r"[Rr][0-9]*(?:[Cc][0-9]*)?|[Cc][0-9]*")
+_MAX_ROW, _MAX_COL = 1048576, 16384
+
+# formulas' precedences (tokens/operator.py): all binary operators are left-associative.
+_PRECEDENCE = {"u-": 7, "u+": 7, "%": 6, "^": 5, "*": 4, "/": 4, "+": 3, "-": 3, "&": 2,
+               "=": 1, "<": 1, ">": 1, "<=": 1, ">=": 1, "<>": 1}
+OPERATORS = frozenset(_PRECEDENCE)
+
+
+@dataclass(frozen=True)
+class Parsed:
+    """A formula as a graph.  `nodes[i]` is ("input", key) for a reference or name (key: the
+    name `formulas` gives its Range token), ("const", value), or ("call", name, arguments) where
+    name is the operator ('u-', '+', ...) or the function as written, and arguments are indices
+    of earlier nodes; the last node is the result.  `spans` and `keys` are the references in
+    the order of the text (one per occurrence); `functions` the operator and upper-case function
+    names called."""
+    formula: str
+    spans: list[tuple[int, int]]
+    keys: list[str]
+    functions: frozenset[str]
+    nodes: tuple[tuple, ...]
+
+
+class _Unread(Exception):
+    """Outside the grammar: `formulas` decides."""
+
+
+def parse(formula: str, known_functions) -> Parsed | None:
+    """The graph of `formula`, or None if it is outside this grammar (or calls a function not
+    in `known_functions`, upper-case names)."""
+    try:
+        return _Reader(formula, known_functions).read()
+    except _Unread:
+        return None
+
+
+class _Reader:
+    def __init__(self, formula: str, known_functions):
+        self.formula, self.known = formula, known_functions
+        self.nodes: list[tuple] = []
+        self.index: dict[tuple, int] = {}
+        self.values: list[int] = []         # node indices of the operands read so far
+        self.stack: list[list] = []         # operators, and ["(", None] / ["call", name, n]
+        self.spans: list[tuple[int, int]] = []
+        self.keys: list[str] = []
+        self.functions: set[str] = set()
+
+    def read(self) -> Parsed:
+        text = self.formula
+        if not text.startswith("=") or len(text) < 2:
+            raise _Unread
+        pos, expect_operand, last = 1, True, None
+        while pos < len(text):
+            m = _TOKEN.match(text, pos)
+            if m is None:
+                raise _Unread
+            kind, token = m.lastgroup, m.group(m.lastgroup)
+            if kind in ("string", "ref", "number", "name"):
+                if not expect_operand:
+                    raise _Unread
+                self.values.append(self._operand(kind, token, m))
+                expect_operand = False
+            elif kind in ("op", "signs"):
+                if kind == "signs":     # formulas folds a run of signs into one: --x is +x
+                    token = "-" if token.count("-") % 2 else "+"
+                expect_operand = self._operator(token, expect_operand, last)
+            elif kind == "open":
+                if not expect_operand:
+                    raise _Unread
+                self.stack.append(["(", None])
+            elif kind == "call":
+                if not expect_operand or token.upper() in ("TRUE", "FALSE") \
+                        or token.upper() not in self.known:
+                    raise _Unread
+                self.functions.add(token.upper())
+                self.stack.append(["call", token, 0])
+            elif kind == "comma":
+                if expect_operand:
+                    raise _Unread        # an empty argument
+                top = self._reduce_to_bracket()
+                if top[0] != "call":
+                    raise _Unread        # a union (A1,B1)
+                top[2] += 1
+                expect_operand = True
+            else:   # close
+                top = self._close(expect_operand, last)
+                expect_operand = False
+            last = (kind, token)
+            pos = m.end()
+        if expect_operand:
+            raise _Unread
+        while self.stack:
+            entry = self.stack.pop()
+            if entry[0] in ("(", "call"):
+                raise _Unread
+            self._apply(entry[0], 1 if entry[0] in ("u-", "u+", "%") else 2)
+        if self.values != [len(self.nodes) - 1]:
+            raise _Unread           # (the result is always the last node made)
+        return Parsed(text, self.spans, self.keys, frozenset(self.functions), tuple(self.nodes))
+
+    # ---- operands
+    def _operand(self, kind: str, token: str, m) -> int:
+        if kind == "string":
+            return self._node(("const", "s", token), ("const", token[1:-1].replace('""', '"')))
+        if kind == "number":
+            if len(token) > 1 and token[0] == "0" and token[1].isdigit():
+                raise _Unread       # 007: formulas evaluates the text as Python does
+            value = float(token) if any(c in token for c in ".eE") else int(token)
+            return self._node(("const", "n", token), ("const", value))
+        if kind == "name":
+            if token.upper() in ("TRUE", "FALSE"):
+                return self._node(("const", "b", token.upper()), ("const", token.upper() == "TRUE"))
+            if _R1C1.fullmatch(token):
+                raise _Unread
+            key = token.upper()
+        else:
+            key = self._ref_key(m)
+        self.spans.append(m.span(kind))
+        self.keys.append(key)
+        return self._node(("input", key), ("input", key))
+
+    @staticmethod
+    def _ref_key(m) -> str:
+        """The name formulas gives the Range token: upper case, no $, a range of one cell as that
+        cell, the sheet unquoted unless it has a space."""
+        corners = []
+        for c, r in (("c1", "r1"), ("c2", "r2")):
+            if m[c] is None:
+                continue
+            col, row = m[c].lstrip("$").upper(), int(m[r].lstrip("$"))
+            n = 0
+            for ch in col:
+                n = n * 26 + ord(ch) - 64
+            if n >= _MAX_COL or row >= _MAX_ROW:
+                raise _Unread       # formulas reads the last column or row as a whole one
+            corners.append((col, row, n))
+        if len(corners) == 2:
+            (_, r1, n1), (_, r2, n2) = corners
+            if r1 > r2 or n1 > n2:
+                raise _Unread
+        cells = dict.fromkeys(f"{col}{row}" for col, row, _ in corners)
+        ref = ":".join(cells)
+        sheet = m["sheet"]
+        if sheet is None:
+            return ref
+        if sheet.startswith("'"):
+            sheet = sheet[1:-1]
+        sheet = sheet.replace("''", "'").upper()
+        if " " in sheet:
+            sheet = f"'{sheet}'"
+        return f"{sheet}!{ref}"
+
+    # ---- operators
+    def _operator(self, op: str, expect_operand: bool, last) -> bool:
+        """Handle one operator token; whether an operand is expected next."""
+        if expect_operand:
+            if op not in ("+", "-"):
+                raise _Unread
+            self._push("u" + op)
+            return True
+        if op == "%":
+            if last == ("op", "%"):
+                raise _Unread          # formulas reads %% as one (unknown) operator
+            self._push("%")
+            return False
+        self._push(op)
+        return True
+
+    def _push(self, op: str) -> None:
+        """formulas' Operator.ast: pop what binds at least as tightly, then push."""
+        pred = _PRECEDENCE[op]
+        while self.stack and self.stack[-1][0] in _PRECEDENCE \
+                and pred <= _PRECEDENCE[self.stack[-1][0]]:
+            top = self.stack.pop()[0]
+            self._apply(top, 1 if top in ("u-", "u+", "%") else 2)
+        self.stack.append([op])
+
+    def _reduce_to_bracket(self) -> list:
+        while self.stack and self.stack[-1][0] in _PRECEDENCE:
+            top = self.stack.pop()[0]
+            self._apply(top, 1 if top in ("u-", "u+", "%") else 2)
+        if not self.stack:
+            raise _Unread
+        return self.stack[-1]
+
+    def _close(self, expect_operand: bool, last) -> None:
+        if expect_operand:
+            # only F(): a call with nothing between its brackets
+            if last is None or last[0] != "call":
+                raise _Unread
+            top = self.stack.pop()
+            self._apply_call(top[1], 0)
+            return
+        top = self._reduce_to_bracket()
+        self.stack.pop()
+        if top[0] == "call":
+            self._apply_call(top[1], top[2] + 1)
+
+    def _apply(self, op: str, n: int) -> None:
+        if len(self.values) < n:
+            raise _Unread
+        args = tuple(self.values[-n:])
+        del self.values[-n:]
+        self.functions.add(op)
+        self.values.append(self._node(("call", op, args), ("call", op, args)))
+
+    def _apply_call(self, name: str, n: int) -> None:
+        if len(self.values) < n:
+            raise _Unread
+        args = tuple(self.values[len(self.values) - n:])
+        del self.values[len(self.values) - n:]
+        self.values.append(self._node(("call", name.upper(), args), ("call", name, args)))
+
+    def _node(self, key: tuple, node: tuple) -> int:
+        """The index of the node with this key: a repeated subexpression is computed once."""
+        i = self.index.get(key)
+        if i is None:
+            i = self.index[key] = len(self.nodes)
+            self.nodes.append(node)
+        return i
