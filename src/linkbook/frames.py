@@ -159,11 +159,10 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
             _head(ws, 4, c + j, f"{s[axis]} [squares]" if s["kind"] == "sweep"
                   else f"links {axis} [squares]")
             centre = ref["cx"] if axis == "x" else ref["cy"]
+            source = f"{quote_sheetname(sheet)}!{s['source'][j]}"
             for k, r in enumerate(range(s["rows"][0], s["rows"][1] + 1)):
-                cell = ws[f"{letter}{FIRST_ROW + k}"]
-                cell.value = f"=({quote_sheetname(sheet)}!{s['source'][j]}{r}-{centre})/" \
-                             f"{ref['square']}"
-                cell.number_format = MAPPED_FORMAT
+                ws.cell(FIRST_ROW + k, c + j, f"=({source}{r}-{centre})/{ref['square']}") \
+                    .number_format = MAPPED_FORMAT
         s["columns"] = [x_letter, y_letter]
         s["mapped_rows"] = [FIRST_ROW, FIRST_ROW + s["rows"][1] - s["rows"][0]]
         c += 2

@@ -333,11 +333,10 @@ class _SheetShape:
     def of(cls, ws) -> "_SheetShape":
         from openpyxl.utils import column_index_from_string
         used_cols, max_row = set(), 0
-        for row in ws.iter_rows():
-            for c in row:
-                if c.value is not None:
-                    used_cols.add(c.column)
-                    max_row = max(max_row, c.row)
+        for (row, col), c in ws._cells.items():   # iter_rows() would fill the gaps with cells
+            if c.value is not None:
+                used_cols.add(col)
+                max_row = max(max_row, row)
         charts = [_chart_box(ws, ch) for ch in ws._charts]
         for c0, c1, r0, r1 in charts:
             used_cols.update(range(c0, c1 + 1))

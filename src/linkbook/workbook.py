@@ -427,8 +427,9 @@ def set_degree_windows(built: Built, windows: dict[str, float]) -> None:
         cell = position["cells"][key]
         ws_mech[cell] = _degree_formula(q, position["cells"][q.key], windows[q.key])
         letter, source = sweep["columns"][key], sweep["columns"][q.key]
+        col = column_index_from_string(letter)
         for r in range(r0, r1 + 1):
-            ws_sweep[f"{letter}{r}"].value = _degree_formula(q, f"{source}{r}", windows[q.key])
+            ws_sweep.cell(r, col).value = _degree_formula(q, f"{source}{r}", windows[q.key])
 
 
 def _degree_formula(q, ref: str, lo: float | None = None) -> str:
@@ -468,13 +469,12 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
             formulas[key] = resolve.formula(key)
     formats = {key: number_format(DEG if key.endswith("_deg") else q.unit, t.length_unit)
                for key, q in columns if q is not None}
+    columns_at = {key: column_index_from_string(letters[key]) for key in formulas}
     for r, angle in enumerate(angles, start=first):
         ws.cell(r, 1, angle).number_format = "0.0##"
         row_text = str(r)
-        for key, text in formulas.items():
-            c = ws[f"{letters[key]}{r}"]
-            c.value = text.replace(ROW, row_text)
-            c.number_format = formats[key]
+        for key, text in formulas.items():     # cell(row, col): no coordinate text to parse
+            ws.cell(r, columns_at[key], text.replace(ROW, row_text)).number_format = formats[key]
     last = first + len(angles) - 1
     if model.closes:
         letters.update(_assembly_columns(ws, letters, model.closes, first, last, head_row,
@@ -525,14 +525,14 @@ def _motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
         c.number_format = formats[q.key]
         c.fill = DERIVED_FILL
     texts = {q.key: at_sweep.formula(q.key) for q in qs}
+    columns_at = {key: column_index_from_string(letters[key]) for key in texts}
     r0, r1 = sweep["rows"]
     for r in range(r0, r1 + 1):
         row, row_text, sweep_text = r + MOTION_OFFSET, str(r + MOTION_OFFSET), str(r)
         ws.cell(row, 1, f"={src}!A{r}").number_format = number_format(mech.input_unit, t.length_unit)
         for key, text in texts.items():
-            c = ws[f"{letters[key]}{row}"]
-            c.value = text.replace(ROW, row_text).replace(SWEEP_ROW, sweep_text)
-            c.number_format = formats[key]
+            ws.cell(row, columns_at[key], text.replace(ROW, row_text).replace(
+                SWEEP_ROW, sweep_text)).number_format = formats[key]
     ws.freeze_panes = ws.cell(first, 2)
     return {"sheet": MOTION_SHEET, "rows": [r0 + MOTION_OFFSET, r1 + MOTION_OFFSET],
             "current_row": current, "columns": letters}
@@ -580,13 +580,13 @@ def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int,
         ws.column_dimensions[get_column_letter(col + i)].width = 11
     for r in range(first, last + 1):
         every = "*".join(f"ISNUMBER({letters[w]}{r})" for w in witnesses)
-        ws[f"{closes}{r}"] = f"=IF({every},1,0)"
+        ws.cell(r, col, f"=IF({every},1,0)")
         # (x=0)*(y=1) rather than AND(): the same truth in every application, and element-wise
         # for the vector engine (AND aggregates, so it would run row by row).
         before = f"{closes}{r}=0" if r == first else f"({closes}{r}=0)*({closes}{r - 1}=1)"
         after = f"{closes}{r}=0" if r == last else f"({closes}{r}=0)*({closes}{r + 1}=1)"
-        ws[f"{start}{r}"] = f'=IF({before},A{r},"{DASH}")'
-        ws[f"{end}{r}"] = f'=IF({after},A{r},"{DASH}")'
+        ws.cell(r, col + 1, f'=IF({before},A{r},"{DASH}")')
+        ws.cell(r, col + 2, f'=IF({after},A{r},"{DASH}")')
     return {"closes": closes, "gap_from": start, "gap_to": end}
 
 
