@@ -202,3 +202,21 @@ def test_a_book_evaluates_the_same_with_or_without_grammar(name, monkeypatch):
     differ = [k for k in fast if type(fast[k]) is not type(slow[k])
               or repr(fast[k]) != repr(slow[k])]
     assert not differ, f"{len(differ)} cells differ, e.g. {differ[:3]}"
+
+
+def test_a_node_without_a_value_hands_the_call_to_formulas_compiled_graph():
+    """A range given without its values makes formulas' node give no value: the pipe of
+    grammar's graph then runs formulas' own compiled graph, which decides."""
+    from formulas.ranges import Ranges
+    formula = "=SUM(A1:A2)+1"
+    pipe = engine._compile(engine._tokenize(formula).builder)
+    assert isinstance(pipe, engine._Pipe) and pipe.compiled is None
+    graph = engine._formulas_tokenize(formula).builder.compile()
+    outcomes = []
+    for func in (pipe, graph):
+        try:
+            outcomes.append(("value", repr(func(Ranges().push("A1:A2")))))
+        except Exception as ex:        # formulas' graph raises here; the pipe must do the same
+            outcomes.append(("raised", type(ex).__name__))
+    assert pipe.compiled is not None
+    assert outcomes[0] == outcomes[1]
