@@ -7,16 +7,19 @@ defined names, the arithmetic, text and comparison operators, postfix %, and cal
 that `formulas` implements — in one regex pass and one operator-precedence pass, and gives the
 same graph `formulas`' parser would: the same operators and functions from `formulas`' own tables,
 the same constants, the same inputs under the same names, the same order of operations
-(`formulas`' precedence and left associativity, unary minus above ^ as in Excel), common
-subexpressions shared.  tests/test_grammar.py checks that node by node against `formulas` on every
-formula of the bundled books and on random formulas of the grammar.
+(`formulas`' precedence and left associativity, unary minus above ^ as in Excel), repeated
+subexpressions computed once, as `formulas` shares them (by their expression text).
+tests/test_grammar.py checks that node by node against `formulas` on every formula of the bundled
+books and on random formulas in and around the grammar.
 
 A run of signs is one operator, by the parity of its minus signs, as `formulas` reads it
 (``A1--B1`` is ``A1+B1``, ``=--A1`` is ``=+A1``).
 
-Anything else — whitespace outside strings, empty arguments, arrays,
-error literals, unions and intersections, R1C1, names with dots, a function `formulas` does not
-know — gives None, and the caller uses `formulas`' parser, which decides.
+Anything else gives None, and the caller uses `formulas`' parser, which decides: whitespace
+outside strings, newlines, empty arguments, arrays, error literals, unions and intersections, R1C1,
+names with dots, a function `formulas` does not know, and the corners where `formulas` reads
+otherwise than Excel would (a name or sheet that begins TRUE_ or FALSE!, a name spelled as a
+function the formula calls, numbers with leading zeros or of hundreds of digits).
 """
 from __future__ import annotations
 
@@ -41,8 +44,12 @@ _TOKEN = re.compile(r"""
   | (?P<close>\))
   | (?P<comma>,)
 """, re.X)
-# Names `formulas` reads otherwise: R1C1 references (R, C, RC, R2C3, ...).
+# Names `formulas` reads otherwise: R1C1 references (R, C, RC, R2C3, ...); and a name or sheet
+# that begins with TRUE or FALSE followed by what cannot continue a number (TRUE_X, TRUE!A1),
+# which formulas' number token takes for the boolean.
 _R1C1 = re.compile(r"[Rr][0-9]*(?:[Cc][0-9]*)?|[Cc][0-9]*")
+_BOOLEAN_START = re.compile(r"(?:TRUE|FALSE)(?![A-Za-z0-9.])", re.IGNORECASE)
+_LONGEST_NUMBER = 300       # Python will not read an integer of over 4,300 digits
 _MAX_ROW, _MAX_COL = 1048576, 16384
 
 # formulas' precedences (tokens/operator.py): all binary operators are left-associative.
@@ -83,7 +90,8 @@ class _Reader:
     def __init__(self, formula: str, known_functions):
         self.formula, self.known = formula, known_functions
         self.nodes: list[tuple] = []
-        self.index: dict[tuple, int] = {}
+        self.index: dict[str, int] = {}     # node of each expression text
+        self.exprs: list[str] = []          # expression text of each node
         self.values: list[int] = []         # node indices of the operands read so far
         self.stack: list[list] = []         # operators, and ["(", None] / ["call", name, n]
         self.spans: list[tuple[int, int]] = []
@@ -92,8 +100,9 @@ class _Reader:
 
     def read(self) -> Parsed:
         text = self.formula
-        if not text.startswith("=") or len(text) < 2:
-            raise _Unread
+        if not text.startswith("=") or len(text) < 2 or "\n" in text \
+                or "_XLETA." in text.upper():
+            raise _Unread       # formulas drops newlines, and reads _xleta. as a lambda
         pos, expect_operand, last = 1, True, None
         while pos < len(text):
             m = _TOKEN.match(text, pos)
@@ -141,28 +150,35 @@ class _Reader:
             self._apply(entry[0], 1 if entry[0] in ("u-", "u+", "%") else 2)
         if self.values != [len(self.nodes) - 1]:
             raise _Unread           # (the result is always the last node made)
+        if set(self.keys) & self.functions:
+            raise _Unread           # a name or cell named as a called function: formulas fails
         return Parsed(text, self.spans, self.keys, frozenset(self.functions), tuple(self.nodes))
 
     # ---- operands
     def _operand(self, kind: str, token: str, m) -> int:
+        """The node of an operand; its expression text is the token as written, or the key."""
         if kind == "string":
-            return self._node(("const", "s", token), ("const", token[1:-1].replace('""', '"')))
+            return self._node(token, ("const", token[1:-1].replace('""', '"')))
         if kind == "number":
-            if len(token) > 1 and token[0] == "0" and token[1].isdigit():
+            if len(token) > 1 and token[0] == "0" and token[1].isdigit() \
+                    or len(token) > _LONGEST_NUMBER:
                 raise _Unread       # 007: formulas evaluates the text as Python does
             value = float(token) if any(c in token for c in ".eE") else int(token)
-            return self._node(("const", "n", token), ("const", value))
+            return self._node(token, ("const", value))
         if kind == "name":
             if token.upper() in ("TRUE", "FALSE"):
-                return self._node(("const", "b", token.upper()), ("const", token.upper() == "TRUE"))
-            if _R1C1.fullmatch(token):
+                return self._node(token, ("const", token.upper() == "TRUE"))
+            if _R1C1.fullmatch(token) or _BOOLEAN_START.match(token):
                 raise _Unread
             key = token.upper()
         else:
+            sheet = m["sheet"]
+            if sheet is not None and not sheet.startswith("'") and _BOOLEAN_START.match(sheet):
+                raise _Unread
             key = self._ref_key(m)
         self.spans.append(m.span(kind))
         self.keys.append(key)
-        return self._node(("input", key), ("input", key))
+        return self._node(key, ("input", key))
 
     @staticmethod
     def _ref_key(m) -> str:
@@ -247,19 +263,26 @@ class _Reader:
         args = tuple(self.values[-n:])
         del self.values[-n:]
         self.functions.add(op)
-        self.values.append(self._node(("call", op, args), ("call", op, args)))
+        texts = [self.exprs[a] for a in args]
+        expr = (f"{op[1]}{texts[0]}" if op in ("u-", "u+") else f"{texts[0]}%" if op == "%"
+                else f"({texts[0]} {op} {texts[1]})")
+        self.values.append(self._node(expr, ("call", op, args)))
 
     def _apply_call(self, name: str, n: int) -> None:
         if len(self.values) < n:
             raise _Unread
         args = tuple(self.values[len(self.values) - n:])
         del self.values[len(self.values) - n:]
-        self.values.append(self._node(("call", name.upper(), args), ("call", name, args)))
+        expr = f"{name.upper()}({', '.join(self.exprs[a] for a in args)})"
+        self.values.append(self._node(expr, ("call", name, args)))
 
-    def _node(self, key: tuple, node: tuple) -> int:
-        """The index of the node with this key: a repeated subexpression is computed once."""
-        i = self.index.get(key)
+    def _node(self, expr: str, node: tuple) -> int:
+        """The index of the node of this expression text, as formulas writes it (its node id):
+        a repeated subexpression is computed once, and what formulas takes for one (-(A1%) and
+        (-A1)%, both -A1%) is one node here too."""
+        i = self.index.get(expr)
         if i is None:
-            i = self.index[key] = len(self.nodes)
+            i = self.index[expr] = len(self.nodes)
             self.nodes.append(node)
+            self.exprs.append(expr)
         return i
