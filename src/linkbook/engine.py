@@ -21,7 +21,8 @@ Method
    graph's function nodes (formulas' own functions) called in dependency order, without
    schedula's dispatcher; only a graph with operators on references or impure functions goes
    through ``compile()``.  With ``only`` (cells wanted), the groups those cells do not need,
-   by the references of the shapes, are dropped before anything is compiled.
+   by the references of the shapes, are dropped before anything is compiled, and a sheet is
+   grouped only when a needed group reads it.
 3. *Order.* A group depends on the groups owning the cells it reads.  Groups are evaluated in
    topological order of their strongly connected components; a group that reads itself (a running
    column) or a cycle of groups is evaluated cell by cell in cell-level topological order.
