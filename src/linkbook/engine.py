@@ -445,7 +445,7 @@ class Template:
                 slots.append((is_row, value))
                 text = chunk
             else:
-                text += (str(value) if is_row else _column_letter(value)) + chunk
+                text += (str(value) if is_row else column_letter(value)) + chunk
         texts.append(text)
         return tuple(texts), tuple(slots)
 
@@ -464,7 +464,7 @@ class Template:
                 value += dc
                 if not 1 <= value <= MAX_COL:
                     return None
-                out += (_column_letter(value), text)
+                out += (column_letter(value), text)
         return "".join(out)
 
 
@@ -1138,6 +1138,7 @@ class Engine:
         grouped when a needed group first reads it: a sheet that nothing needed reads (the
         Motion sheet, for the sweep's angles) is never grouped at all."""
         grouped: set[str] = set()
+        needed: set[int] = set()
         todo_sheets = {sheet for sheet, _ in cells} & set(formulas_by_sheet)
         while todo_sheets:
             self._group({s: formulas_by_sheet[s] for s in todo_sheets})
@@ -1815,10 +1816,5 @@ def _sheet_prefix(sheet: str) -> str:
     return "'" + sheet.upper().replace("'", "''") + "'!"
 
 
-@functools.lru_cache(maxsize=None)
-def _column_letter(col: int) -> str:
-    return column_letter(col)
-
-
 def _a1(row: int, col: int) -> str:
-    return f"{_column_letter(int(col))}{int(row)}"
+    return f"{column_letter(int(col))}{int(row)}"

@@ -26,6 +26,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from .xlsx import column_index
+
 # One token at a time, at the current position (re.match).  A reference or name must not run on
 # into more of a name, a call, a sheet, a range or a spill mark; a number must not run on into a
 # letter, a digit, a dot or a colon (the lookaheads `formulas` uses).
@@ -56,6 +58,7 @@ _MAX_ROW, _MAX_COL = 1048576, 16384
 _PRECEDENCE = {"u-": 7, "u+": 7, "%": 6, "^": 5, "*": 4, "/": 4, "+": 3, "-": 3, "&": 2,
                "=": 1, "<": 1, ">": 1, "<=": 1, ">=": 1, "<>": 1}
 OPERATORS = frozenset(_PRECEDENCE)
+_UNARY = frozenset({"u-", "u+", "%"})
 
 
 @dataclass(frozen=True)
@@ -147,7 +150,7 @@ class _Reader:
             entry = self.stack.pop()
             if entry[0] in ("(", "call"):
                 raise _Unread
-            self._apply(entry[0], 1 if entry[0] in ("u-", "u+", "%") else 2)
+            self._apply(entry[0])
         if self.values != [len(self.nodes) - 1]:
             raise _Unread           # (the result is always the last node made)
         if set(self.keys) & self.functions:
@@ -189,9 +192,7 @@ class _Reader:
             if m[c] is None:
                 continue
             col, row = m[c].lstrip("$").upper(), int(m[r].lstrip("$"))
-            n = 0
-            for ch in col:
-                n = n * 26 + ord(ch) - 64
+            n = column_index(col)
             if n >= _MAX_COL or row >= _MAX_ROW:
                 raise _Unread       # formulas reads the last column or row as a whole one
             corners.append((col, row, n))
@@ -232,14 +233,12 @@ class _Reader:
         pred = _PRECEDENCE[op]
         while self.stack and self.stack[-1][0] in _PRECEDENCE \
                 and pred <= _PRECEDENCE[self.stack[-1][0]]:
-            top = self.stack.pop()[0]
-            self._apply(top, 1 if top in ("u-", "u+", "%") else 2)
+            self._apply(self.stack.pop()[0])
         self.stack.append([op])
 
     def _reduce_to_bracket(self) -> list:
         while self.stack and self.stack[-1][0] in _PRECEDENCE:
-            top = self.stack.pop()[0]
-            self._apply(top, 1 if top in ("u-", "u+", "%") else 2)
+            self._apply(self.stack.pop()[0])
         if not self.stack:
             raise _Unread
         return self.stack[-1]
@@ -257,11 +256,8 @@ class _Reader:
         if top[0] == "call":
             self._apply_call(top[1], top[2] + 1)
 
-    def _apply(self, op: str, n: int) -> None:
-        if len(self.values) < n:
-            raise _Unread
-        args = tuple(self.values[-n:])
-        del self.values[-n:]
+    def _apply(self, op: str) -> None:
+        args = self._arguments(1 if op in _UNARY else 2)
         self.functions.add(op)
         texts = [self.exprs[a] for a in args]
         expr = (f"{op[1]}{texts[0]}" if op in ("u-", "u+") else f"{texts[0]}%" if op == "%"
@@ -269,12 +265,17 @@ class _Reader:
         self.values.append(self._node(expr, ("call", op, args)))
 
     def _apply_call(self, name: str, n: int) -> None:
+        args = self._arguments(n)
+        expr = f"{name.upper()}({', '.join(self.exprs[a] for a in args)})"
+        self.values.append(self._node(expr, ("call", name, args)))
+
+    def _arguments(self, n: int) -> tuple[int, ...]:
+        """The last n operands read, taken off the operand stack."""
         if len(self.values) < n:
             raise _Unread
         args = tuple(self.values[len(self.values) - n:])
         del self.values[len(self.values) - n:]
-        expr = f"{name.upper()}({', '.join(self.exprs[a] for a in args)})"
-        self.values.append(self._node(expr, ("call", name, args)))
+        return args
 
     def _node(self, expr: str, node: tuple) -> int:
         """The index of the node of this expression text, as formulas writes it (its node id):
