@@ -79,7 +79,7 @@ from formulas.tokens.operand import Error, Range, XlError
 from formulas.tokens.operator import Intersect, OperatorToken
 
 from . import grammar
-from .xlsx import column_letter, coordinate_to_tuple
+from .xlsx import column_index, column_letter, coordinate_to_tuple
 
 __all__ = [
     "evaluate", "evaluate_file", "evaluate_formulas_model", "is_error", "error_code", "shape_of",
@@ -388,14 +388,6 @@ _REF_TEXT = re.compile(r"""^(?:(?P<sheet>'(?:[^']|'')+'|[^\W\d][\w.]*)!)?
 _NAME_TEXT = re.compile(r"^[^\W\d][\w.]*$")
 
 
-@functools.lru_cache(maxsize=None)
-def _col_index(letters: str) -> int:
-    n = 0
-    for ch in letters.upper():
-        n = n * 26 + ord(ch) - 64
-    return n
-
-
 @functools.lru_cache(maxsize=65536)
 def _parse_a1(text: str):
     """'Sheet'!$B5:C$7 -> (sheet text or None, (row, col, row_abs, col_abs) x 1 or 2), or None."""
@@ -405,9 +397,9 @@ def _parse_a1(text: str):
     sheet = m["sheet"]
     if sheet and sheet.startswith("'"):
         sheet = sheet[1:-1].replace("''", "'")
-    corners = [(int(m["r"]), _col_index(m["c"]), bool(m["ra"]), bool(m["ca"]))]
+    corners = [(int(m["r"]), column_index(m["c"]), bool(m["ra"]), bool(m["ca"]))]
     if m["c2"]:
-        corners.append((int(m["r2"]), _col_index(m["c2"]), bool(m["rb"]), bool(m["cb"])))
+        corners.append((int(m["r2"]), column_index(m["c2"]), bool(m["rb"]), bool(m["cb"])))
     for row, col, _, _ in corners:
         if not (1 <= row <= MAX_ROW and 1 <= col <= MAX_COL):
             return None
@@ -422,7 +414,7 @@ def _rc(digits: str, absolute: str, host: int, letter: str) -> str:
 
 
 def _rc_col(letters: str, absolute: str, host: int) -> str:
-    value = _col_index(letters)
+    value = column_index(letters)
     if value > MAX_COL:
         raise UnsupportedFormulaError(f"column {letters} out of range")
     return f"C{value}" if absolute else f"C[{value - host}]"
@@ -540,7 +532,7 @@ class References:
                 for group, dollar in corners:  # the numbers a copy of this cell would change
                     a, b = m.span(group)
                     is_row = group[0] == "r"
-                    value = int(m[group]) if is_row else _col_index(m[group])
+                    value = int(m[group]) if is_row else column_index(m[group])
                     chunks.append(formula[cut:a])
                     slots.append((is_row, value, not m[dollar]))
                     cut = b

@@ -14,6 +14,7 @@ its address) raises Unsupported: the caller loads it with openpyxl.
 """
 from __future__ import annotations
 
+import functools
 import re
 import zipfile
 from dataclasses import dataclass
@@ -230,7 +231,9 @@ def coordinate_to_tuple(coordinate: str) -> tuple[int, int]:
     return int(m[2]), column_index(m[1])
 
 
+@functools.lru_cache(maxsize=None)     # a book has few distinct column letters
 def column_index(letters: str) -> int:
+    """'AB' -> 28 (any case)."""
     n = 0
     for ch in letters.upper():
         n = n * 26 + ord(ch) - 64
