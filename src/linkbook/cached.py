@@ -17,9 +17,9 @@ from __future__ import annotations
 import math
 import numbers
 import re
-from xml.sax.saxutils import escape
 
 from .office import error_code
+from .xlsx import xml_text
 
 
 # One cell: optional namespace prefix, attributes, then either "/>" or a body up to its end tag.
@@ -88,7 +88,7 @@ def encode_value(value) -> tuple[str, bytes]:
         return "", repr(number).encode()
     if value is None:
         return "str", b""
-    return "str", escape(str(value)).encode()
+    return "str", xml_text(str(value)).encode()
 
 
 # ---------------------------------------------------------------- workbook part

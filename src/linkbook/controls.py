@@ -21,7 +21,8 @@ x:Anchor). A form control holds an integer from 0 to 30,000.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from xml.sax.saxutils import quoteattr
+
+from .xlsx import xml_attribute
 
 VML_TYPE = "application/vnd.openxmlformats-officedocument.vmlDrawing"
 CTRL_TYPE = "application/vnd.ms-excel.controlproperties+xml"
@@ -127,7 +128,7 @@ class SheetControls:
             items.append(
                 f'<mc:AlternateContent><mc:Choice Requires="x14">'
                 f'<control shapeId="{self.shape_id(i)}" r:id="rId{first_id + 1 + i}" '
-                f'name={quoteattr(name)}><controlPr defaultSize="0" autoPict="0">'
+                f'name={xml_attribute(name)}><controlPr defaultSize="0" autoPict="0">'
                 f'<anchor moveWithCells="1">{_xdr_marker("from", col0, dx0, row0, dy0)}'
                 f'{_xdr_marker("to", col1, dx1, row1, dy1)}</anchor></controlPr></control>'
                 f'</mc:Choice></mc:AlternateContent>')

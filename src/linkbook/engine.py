@@ -67,8 +67,6 @@ from pathlib import Path
 
 import numpy as np
 import schedula as sh
-from formulas import Parser
-from formulas.cell import CELL
 from formulas.errors import AnchorRangeName, InvalidRangeName
 from formulas.functions import (COMPILING, FUNCTIONS, Array, flatten, get_functions,
                                 parse_ranges, replace_empty, wrap_func)
@@ -193,7 +191,22 @@ def _register(names, func) -> None:
 
 _register(("AGGREGATE", "_XLFN.AGGREGATE"), wrap_func(_aggregate))
 
-_PARSER = Parser()
+
+
+def _cell_token():
+    """The input by which formulas gives a host-reading function (ROW, CELL) its cell; imported
+    where needed, as formulas.cell imports the parser."""
+    from formulas.cell import CELL
+    return CELL
+
+
+@functools.lru_cache(maxsize=1)
+def _parser():
+    """formulas' parser, imported on first use: linkbook.grammar reads what linkbook writes, and
+    the parser's modules take a tenth of a second to import."""
+    from formulas import Parser
+    return Parser()
+
 # Compiled functions by (sheet, skeleton, pattern of equal references, mode): see _compiled.
 _COMPILED: dict[tuple, tuple[object, list[int], "_Batch"]] = {}
 # Skeletons whose references the `formulas` tokenizer has been seen to read exactly as the
@@ -624,7 +637,7 @@ def _plain_function(entry):
 
 def _formulas_tokenize(formula: str) -> TokenInfo:
     try:
-        tokens, builder = _PARSER.ast(formula)
+        tokens, builder = _parser().ast(formula)
     except Exception as ex:  # formulas raises several error types for bad syntax
         raise UnsupportedFormulaError(f"cannot parse {formula!r}: {ex!r}") from ex
     spans, keys, functions = [], [], set()
@@ -814,12 +827,12 @@ def _vector_node(func, batch: _Batch, elementwise: bool, numeric=None):
 def _compile(graph, batch: _Batch | None = None, host: Ranges | None = None):
     """Compile a parsed formula (a grammar.Parsed or a `formulas` AstBuilder); with `batch`,
     every node is wrapped for vector calls."""
-    extra = {CELL: host} if host is not None else {}
+    extra = {_cell_token(): host} if host is not None else {}
     if isinstance(graph, grammar.Parsed):
         pipe = _Pipe.of_parsed(graph, batch, extra)
         if pipe is not None:
             return pipe
-        graph = _PARSER.ast(graph.formula)[1]
+        graph = _parser().ast(graph.formula)[1]
     _wrap_nodes(graph, batch)
     return _Pipe.of(graph, extra) or graph.compile(**extra)
 
@@ -839,7 +852,7 @@ def _wrap(func, name: str, batch: _Batch | None):
 
 def _formulas_graph(formula: str, batch: _Batch | None, extra: dict):
     """The graph `formulas` compiles for a formula (a pipe's fallback)."""
-    builder = _PARSER.ast(formula)[1]
+    builder = _parser().ast(formula)[1]
     _wrap_nodes(builder, batch)
     return builder.compile(**extra)
 
