@@ -83,10 +83,12 @@ def build_file(t: Template, path: Path, with_values: bool = False) -> workbook.B
     built, values = make(t, values_needed=with_values)
 
     def write(tmp: Path) -> None:
-        built.workbook.save(tmp)
+        with package.cells_held_back(built.workbook) as cells:
+            built.workbook.save(tmp)
         controls = {sheet: [Control.of(c) for c in items]
                     for sheet, items in built.meta.get("controls", {}).items()}
-        package.finish(tmp, tmp, values=values if with_values else None, controls=controls)
+        package.finish(tmp, tmp, values=values if with_values else None, controls=controls,
+                       cells=cells)
 
     write_atomic(path, write)
     return built

@@ -16,7 +16,7 @@ from .model import LENGTH, Model
 from .templates import Template
 from .workbook import (AGGREGATE, BOLD, DERIVED_FILL, DRAWING_COLUMNS, LINE_HEIGHT, MAX_OF,
                        MECH, MIN_OF, NOTE, SKIP_ERRORS, SWEEP, TITLE, _head, _text, label_lines,
-                       number_format, text_width)
+                       number_format, put, table_style, text_width)
 
 SHEET = "Drawing data"
 HALF = 5                 # the frame: -HALF … HALF grid squares on both axes
@@ -160,9 +160,9 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
                   else f"links {axis} [squares]")
             centre = ref["cx"] if axis == "x" else ref["cy"]
             source = f"{quote_sheetname(sheet)}!{s['source'][j]}"
+            style = table_style(ws, MAPPED_FORMAT)
             for k, r in enumerate(range(s["rows"][0], s["rows"][1] + 1)):
-                ws.cell(FIRST_ROW + k, c + j, f"=({source}{r}-{centre})/{ref['square']}") \
-                    .number_format = MAPPED_FORMAT
+                put(ws, FIRST_ROW + k, c + j, f"=({source}{r}-{centre})/{ref['square']}", style)
         s["columns"] = [x_letter, y_letter]
         s["mapped_rows"] = [FIRST_ROW, FIRST_ROW + s["rows"][1] - s["rows"][0]]
         c += 2

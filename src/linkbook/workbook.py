@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from openpyxl import Workbook
+from openpyxl.cell.cell import Cell
 from openpyxl.styles import Alignment, Border, Font, PatternFill, Side
 from openpyxl.utils import column_index_from_string, get_column_letter, quote_sheetname
 from openpyxl.workbook.defined_name import DefinedName
@@ -114,6 +115,26 @@ def _text(ws, cell: str, value: str, font: Font | None = None) -> None:
     c.data_type = "s"
     if font:
         c.font = font
+
+
+def table_style(ws, number_format: str):
+    """The style of a table cell with `number_format`, for `put`."""
+    probe = Cell(ws)
+    probe.number_format = number_format
+    return probe._style
+
+
+def put(ws, row: int, col: int, value, style=None) -> None:
+    """ws.cell(row, col, value) with a `table_style`, made straight into the sheet's cell map.
+    The table rows are most of a book's cells, and openpyxl's cell() would check each formula
+    for characters Excel refuses and add its format to the book's list once per cell (a third
+    of a big build): linkbook's formulas are its own text, and the style is made once."""
+    cell = Cell(ws, row=row, column=col, style_array=style)
+    if isinstance(value, str) and value.startswith("="):
+        cell._value, cell.data_type = value, "f"
+    else:
+        cell.value = value
+    ws._cells[row, col] = cell
 
 
 LINE_HEIGHT = 15.0      # points per line of 11-pt text
@@ -470,11 +491,13 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
     formats = {key: number_format(DEG if key.endswith("_deg") else q.unit, t.length_unit)
                for key, q in columns if q is not None}
     columns_at = {key: column_index_from_string(letters[key]) for key in formulas}
+    angle_style = table_style(ws, "0.0##")
+    styles = {key: table_style(ws, formats[key]) for key in formulas}
     for r, angle in enumerate(angles, start=first):
-        ws.cell(r, 1, angle).number_format = "0.0##"
+        put(ws, r, 1, angle, angle_style)
         row_text = str(r)
-        for key, text in formulas.items():     # cell(row, col): no coordinate text to parse
-            ws.cell(r, columns_at[key], text.replace(ROW, row_text)).number_format = formats[key]
+        for key, text in formulas.items():
+            put(ws, r, columns_at[key], text.replace(ROW, row_text), styles[key])
     last = first + len(angles) - 1
     if model.closes:
         letters.update(_assembly_columns(ws, letters, model.closes, first, last, head_row,
@@ -527,12 +550,14 @@ def _motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
     texts = {q.key: at_sweep.formula(q.key) for q in qs}
     columns_at = {key: column_index_from_string(letters[key]) for key in texts}
     r0, r1 = sweep["rows"]
+    input_style = table_style(ws, number_format(mech.input_unit, t.length_unit))
+    styles = {key: table_style(ws, formats[key]) for key in texts}
     for r in range(r0, r1 + 1):
         row, row_text, sweep_text = r + MOTION_OFFSET, str(r + MOTION_OFFSET), str(r)
-        ws.cell(row, 1, f"={src}!A{r}").number_format = number_format(mech.input_unit, t.length_unit)
+        put(ws, row, 1, f"={src}!A{r}", input_style)
         for key, text in texts.items():
-            ws.cell(row, columns_at[key], text.replace(ROW, row_text).replace(
-                SWEEP_ROW, sweep_text)).number_format = formats[key]
+            put(ws, row, columns_at[key],
+                text.replace(ROW, row_text).replace(SWEEP_ROW, sweep_text), styles[key])
     ws.freeze_panes = ws.cell(first, 2)
     return {"sheet": MOTION_SHEET, "rows": [r0 + MOTION_OFFSET, r1 + MOTION_OFFSET],
             "current_row": current, "columns": letters}
@@ -580,13 +605,13 @@ def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int,
         ws.column_dimensions[get_column_letter(col + i)].width = 11
     for r in range(first, last + 1):
         every = "*".join(f"ISNUMBER({letters[w]}{r})" for w in witnesses)
-        ws.cell(r, col, f"=IF({every},1,0)")
+        put(ws, r, col, f"=IF({every},1,0)")
         # (x=0)*(y=1) rather than AND(): the same truth in every application, and element-wise
         # for the vector engine (AND aggregates, so it would run row by row).
         before = f"{closes}{r}=0" if r == first else f"({closes}{r}=0)*({closes}{r - 1}=1)"
         after = f"{closes}{r}=0" if r == last else f"({closes}{r}=0)*({closes}{r + 1}=1)"
-        ws.cell(r, col + 1, f'=IF({before},A{r},"{DASH}")')
-        ws.cell(r, col + 2, f'=IF({after},A{r},"{DASH}")')
+        put(ws, r, col + 1, f'=IF({before},A{r},"{DASH}")')
+        put(ws, r, col + 2, f'=IF({after},A{r},"{DASH}")')
     return {"closes": closes, "gap_from": start, "gap_to": end}
 
 
@@ -773,11 +798,11 @@ def _fill_grid(ws, t: Template, model: Model, names: dict, param_row: int, rows:
     `param_row`; the same text with the row and column put in."""
     param, out = t.mechanism.grid
     text = _grid_formula(model, names, t.mechanism.input_column, param, out, param_row)
+    style = table_style(ws, number_format(LENGTH, t.length_unit))
+    at = {letter: column_index_from_string(letter) for letter in cols}
     for i in rows:
         for letter in cols:
-            c = ws[f"{letter}{i}"]
-            c.value = text.replace(COL, letter).replace(ROW, str(i))
-            c.number_format = number_format(LENGTH, t.length_unit)
+            put(ws, i, at[letter], text.replace(COL, letter).replace(ROW, str(i)), style)
     ws.freeze_panes = ws.cell(rows.start, 2)
 
 

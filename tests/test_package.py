@@ -1,0 +1,143 @@
+"""The cells `package.cells_held_back` writes in place of openpyxl's writer: the same package,
+part for part and byte for byte, as openpyxl's own save followed by the same `finish` — openpyxl
+is the oracle here, on sheets with every kind of cell linkbook writes and on random ones."""
+from __future__ import annotations
+
+import math
+import zipfile
+from pathlib import Path
+
+import openpyxl
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from openpyxl.comments import Comment
+from openpyxl.styles import Alignment, Font, PatternFill
+
+from linkbook import package, workbook
+
+
+def _parts(path: Path) -> dict[str, bytes]:
+    with zipfile.ZipFile(path) as z:
+        return {n: z.read(n) for n in z.namelist() if n != "docProps/core.xml"}  # a timestamp
+
+
+def _both_ways(tmp_path: Path, make) -> tuple[dict, dict]:
+    """The package of `make()`'s book saved by openpyxl and finished, and saved with its cells
+    held back and finished with them. Each gets a book of its own (writing styles numbers them)."""
+    plain, held = tmp_path / "plain.xlsx", tmp_path / "held.xlsx"
+    make().save(plain)
+    package.finish(plain, plain)
+    wb = make()
+    with package.cells_held_back(wb) as cells:
+        wb.save(held)
+    package.finish(held, held, cells=cells)
+    return _parts(plain), _parts(held)
+
+
+def _every_kind() -> openpyxl.Workbook:
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    ws["A1"] = "θ13 [deg]"
+    ws["A1"].font = Font(bold=True)
+    ws["B1"] = "  leading and trailing  "
+    ws["C1"] = "a & b < c > d\r\nline"
+    ws["D1"] = ""
+    ws["E1"] = "plain"
+    ws["F1"] = "plain"
+    ws["A2"] = 0.1 + 0.2
+    ws["B2"] = -1e-300
+    ws["C2"] = 12345678901234567
+    ws["D2"] = True
+    ws["E2"] = False
+    ws["F2"] = math.nan
+    ws["G2"] = math.inf
+    ws["H2"] = "#N/A"
+    ws["H2"].data_type = "e"
+    ws["A3"] = '=IF(B3<>"–",A2&"<x>",NA())'
+    ws["A3"].number_format = "0.000"
+    ws["B3"] = "=SUM(A2:C2)"
+    ws["B3"].fill = PatternFill("solid", fgColor="FFFF00")
+    ws["C4"].alignment = Alignment(wrap_text=True)     # styled, no value
+    ws["D4"]                                           # neither: not written
+    ws.row_dimensions[2].height = 30
+    ws.row_dimensions[7].height = 45                   # a row with no cells
+    ws.merge_cells("A9:C9")
+    ws["A9"] = "merged"
+    second = wb.create_sheet("Sweep θ")
+    second["B5"] = "=Sheet!A2*2"
+    wb.create_sheet("Empty")
+    return wb
+
+
+def test_every_kind_of_cell_as_openpyxl_writes_it(tmp_path):
+    plain, held = _both_ways(tmp_path, _every_kind)
+    assert plain.keys() == held.keys()
+    for name in plain:
+        assert held[name] == plain[name], name
+
+
+def test_a_bundled_book_as_openpyxl_writes_it(tmp_path):
+    """The whole fourbar book: every sheet, chart anchor, control and style."""
+    from conftest import template
+
+    def make():
+        built = workbook.build(template("fourbar"))
+        return built.workbook
+
+    plain, held = _both_ways(tmp_path, make)
+    assert plain == held
+
+
+_TEXT = st.text(st.characters(blacklist_categories=("Cs", "Cc")) | st.sampled_from("\r\n\t &<>"),
+                max_size=12)
+_VALUE = st.one_of(st.none(), st.booleans(), st.integers(-10**17, 10**17),
+                   st.floats(allow_nan=True, allow_infinity=True), _TEXT,
+                   _TEXT.map(lambda t: "=" + repr(t).replace("'", '"')))
+
+
+@settings(max_examples=150, derandomize=True, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(cells=st.dictionaries(st.tuples(st.integers(1, 40), st.integers(1, 30)),
+                             st.tuples(_VALUE, st.sampled_from(["", "0.00", "0.0##"])),
+                             max_size=40),
+       heights=st.dictionaries(st.integers(1, 50), st.sampled_from([15, 30.5, 45]), max_size=4))
+def test_random_sheets_as_openpyxl_writes_them(tmp_path, cells, heights):
+    def make():
+        wb = openpyxl.Workbook()
+        ws = wb.active
+        for (row, col), (value, fmt) in cells.items():
+            c = ws.cell(row, col)
+            c.value = value
+            if fmt:
+                c.number_format = fmt
+        for row, height in heights.items():
+            ws.row_dimensions[row].height = height
+        return wb
+
+    plain, held = _both_ways(tmp_path, make)
+    assert plain == held
+
+
+def test_table_cells_are_openpyxl_cells(tmp_path):
+    """workbook.put makes the cell openpyxl's cell() would: same type, value and style."""
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    style = workbook.table_style(ws, "0.000")
+    workbook.put(ws, 3, 2, "=A1*2", style)
+    workbook.put(ws, 4, 2, 1.5, style)
+    workbook.put(ws, 5, 2, "=A1")
+    for row, value, fmt in ((3, "=A1*2", "0.000"), (4, 1.5, "0.000"), (5, "=A1", "General")):
+        made = ws.cell(row, 2)
+        expected = openpyxl.Workbook().active.cell(row, 2, value)
+        assert (made.value, made.data_type, made.number_format) == \
+            (expected.value, expected.data_type, fmt)
+
+
+def test_what_it_does_not_write_is_refused(tmp_path):
+    wb = openpyxl.Workbook()
+    wb.active["A1"] = "noted"
+    wb.active["A1"].comment = Comment("a comment", "me")
+    with pytest.raises(ValueError, match="Sheet!A1: comments"):
+        with package.cells_held_back(wb):
+            pass
