@@ -236,7 +236,8 @@ def evaluate(wb, only=None,
     Formula cells get a float, a `formulas` XlError (#N/A, #NUM!, #DIV/0!, ...), or a str/bool
     where the formula yields one; constants keep their type (ints stay ints).  `only`: cells
     ((sheet title, 'B7')) whose values are wanted: then only the formulas they need, directly
-    or not, are evaluated, and the result holds those formula cells and every constant. Number
+    or not, are evaluated, and the result holds those formula cells and every constant of the
+    sheets they read (other sheets are not read at all). Number
     constants are read as the double the file holds, as Excel and LibreOffice read them;
     `excel_model_constants` rounds them to 15 decimals first, as formulas.ExcelModel does (which
     loses digits of small numbers: 1.2345678901234e-5 becomes 1.2345678901e-5), for bit-for-bit
@@ -454,9 +455,34 @@ class Template:
         texts.append(text)
         return tuple(texts), tuple(slots)
 
+    @functools.cached_property
+    def _down(self) -> tuple[tuple[str, ...], tuple[int, ...]]:
+        """_relative with its column slots written in: the text between relative rows, and
+        those rows (a copy down the column moves only them)."""
+        texts, slots = self._relative
+        out, rows, text = [], [], texts[0]
+        for (is_row, value), chunk in zip(slots, texts[1:]):
+            if is_row:
+                out.append(text)
+                rows.append(value)
+                text = chunk
+            else:
+                text += column_letter(value) + chunk
+        out.append(text)
+        return tuple(out), tuple(rows)
+
     def shifted(self, dr: int, dc: int) -> str | None:
         """The text of this formula copied dr rows down and dc columns right (None if a
         reference would leave the sheet)."""
+        if dc == 0:
+            texts, rows = self._down
+            out = [texts[0]]
+            for value, text in zip(rows, texts[1:]):
+                value += dr
+                if not 1 <= value <= MAX_ROW:
+                    return None
+                out += (str(value), text)
+            return "".join(out)
         texts, slots = self._relative
         out = [texts[0]]
         for (is_row, value), text in zip(slots, texts[1:]):
@@ -1065,20 +1091,21 @@ class Engine:
         """Group, plan, allocate and order: everything but the evaluation."""
         if self.groups or self.constants:
             raise EngineError("an Engine runs once; make a new one")
-        formulas_by_sheet = self._read_cells()
         if self.only is None:
-            self._group(formulas_by_sheet)
+            self._group(self._read_cells(self.wb.worksheets))
         else:
-            self._group_needed(formulas_by_sheet, self.only)
+            self._group_needed(self.only)
         for g in self.groups:
             self._plan(g)
         self._allocate()
         self.order = self._untangled_components()
 
     # ---- 1. cells
-    def _read_cells(self) -> dict[str, list[tuple[int, int, str]]]:
+    def _read_cells(self, worksheets) -> dict[str, list[tuple[int, int, str]]]:
+        """The formulas of `worksheets` by sheet, sorted by row and column; their constants go
+        to self.constants."""
         formulas_by_sheet = {}
-        for ws in self.wb.worksheets:
+        for ws in worksheets:
             consts, forms = {}, []
             for (row, col), cell in ws._cells.items():  # only cells that exist (ExcelModel too)
                 if cell.value is None:
@@ -1137,19 +1164,20 @@ class Engine:
             self.groups.append(Group(len(self.groups), sheet, shape, members, info, descs))
         self.stats["shapes"] = len(self.groups)
 
-    def _group_needed(self, formulas_by_sheet, cells) -> None:
+    def _group_needed(self, cells) -> None:
         """Group only what the formula cells among `cells` need, directly or not, following
         the references of each shape (before any compile: that is the cost saved).  A sheet is
-        grouped when a needed group first reads it: a sheet that nothing needed reads (the
-        Motion sheet, for the sweep's angles) is never grouped at all."""
+        read and grouped when a needed group first reads it: a sheet that nothing needed reads
+        (the Motion sheet, for the sweep's angles) is never read at all."""
+        sheets = {ws.title: ws for ws in self.wb.worksheets}
         grouped: set[str] = set()
         needed: set[int] = set()
-        todo_sheets = {sheet for sheet, _ in cells} & set(formulas_by_sheet)
+        todo_sheets = {sheet for sheet, _ in cells} & set(sheets)
         while todo_sheets:
-            self._group({s: formulas_by_sheet[s] for s in todo_sheets})
+            self._group(self._read_cells([sheets[s] for s in sorted(todo_sheets)]))
             grouped |= todo_sheets
             needed, read_sheets = self._needed_groups(cells)
-            todo_sheets = (read_sheets & set(formulas_by_sheet)) - grouped
+            todo_sheets = (read_sheets & set(sheets)) - grouped
         self.groups = [g for g in self.groups if g.gid in needed]
         for gid, g in enumerate(self.groups):
             g.gid = gid
@@ -1194,11 +1222,11 @@ class Engine:
             r1, c1, r2, c2 = np.broadcast_arrays(*d.at(rows, cols), rows)[:4]
             if not d.is_range:      # one cell per member: one look-up for all of them
                 inside = (r1 < grid.shape[0]) & (c1 < grid.shape[1])
-                found.update(np.unique(grid[r1[inside], c1[inside]]).tolist())
+                found.update(grid[r1[inside], c1[inside]].ravel().tolist())
                 continue
             for a, b, c, e in {(int(a), int(b), int(c), int(e))
                                for a, b, c, e in zip(r1, c1, r2, c2)}:
-                found.update(np.unique(grid[a:c + 1, b:e + 1]).tolist())
+                found.update(grid[a:c + 1, b:e + 1].ravel().tolist())
         return found
 
     @staticmethod
@@ -1349,7 +1377,8 @@ class Engine:
     # ---- 4. storage
     def _allocate(self):
         """Value grid (object, EMPTY where nothing), and which group/member owns each cell."""
-        size = {ws.title: [ws.max_row, ws.max_column] for ws in self.wb.worksheets}
+        size = {ws.title: [ws.max_row, ws.max_column] for ws in self.wb.worksheets
+                if ws.title in self.constants}          # the sheets read (all, without `only`)
         for g in self.groups:
             self._grow(size, g.sheet, int(g.rows.max()), int(g.cols.max()))
             if g.mode == "each":
@@ -1364,7 +1393,7 @@ class Engine:
         for sheet, (rows, cols) in size.items():
             grid = np.empty((rows + 1, cols + 1), object)
             grid.fill(sh.EMPTY)
-            for (r, c), v in self.constants[sheet].items():
+            for (r, c), v in self.constants.get(sheet, {}).items():
                 grid[r, c] = v
             self.grid[sheet] = grid
             self.owner[sheet] = np.full((rows + 1, cols + 1), -1, dtype=np.int64)
@@ -1391,18 +1420,18 @@ class Engine:
         if g.mode == "each":
             for i in range(len(g.members)):
                 for sheet, r1, c1, r2, c2 in g.reads(i):
-                    found.update(np.unique(grids[sheet][r1:r2 + 1, c1:c2 + 1]).tolist())
+                    found.update(grids[sheet][r1:r2 + 1, c1:c2 + 1].ravel().tolist())
         else:
             for d in g.inputs:
                 grid = grids[d.sheet]
                 if not d.is_range:
                     r1, c1, _, _ = d.at(g.rows, g.cols)
-                    found.update(np.unique(grid[r1, c1]).tolist())
+                    found.update(grid[r1, c1].ravel().tolist())
                     continue
                 hosts = [(g.rows[0], g.cols[0])] if d.is_absolute else zip(g.rows, g.cols)
                 for row, col in hosts:
                     _, r1, c1, r2, c2 = d.rect(int(row), int(col))
-                    found.update(np.unique(grid[r1:r2 + 1, c1:c2 + 1]).tolist())
+                    found.update(grid[r1:r2 + 1, c1:c2 + 1].ravel().tolist())
         return found
 
     def vary(self, sheet: str, cell: str, inputs, read) -> Iterator[dict]:
