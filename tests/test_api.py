@@ -49,3 +49,29 @@ def test_aggregate_is_known_even_when_formulas_made_its_table_first(tmp_path):
             f"p = linkbook.build('fourbar', {str(tmp_path / 'f.xlsx')!r}, step=30)\n"
             "raise SystemExit(linkbook.verify(p).status)")
     assert subprocess.run([sys.executable, "-c", code]).returncode == 0
+
+
+def test_the_garbage_collector_is_paused_only_during_a_call(tmp_path):
+    """build and verify pause Python's cyclic collector (linkbook.pause) and give it back as
+    they found it: on after a call that returns or raises, off if it was off."""
+    import gc
+    seen = []
+    real_verify = linkbook.verifier.verify.__wrapped__
+
+    def spy(*args, **kwargs):
+        seen.append(gc.isenabled())
+        return real_verify(*args, **kwargs)
+
+    path = linkbook.build("slider-crank", tmp_path / "sc.xlsx", step=30)
+    assert gc.isenabled()
+    paused = linkbook.pause.gc_paused(spy)
+    assert paused(path).status == 0 and seen == [False] and gc.isenabled()
+    with pytest.raises(linkbook.UnusableFile):
+        paused(tmp_path / "missing.xlsx")
+    assert seen == [False, False] and gc.isenabled()
+    gc.disable()
+    try:
+        paused(path)
+        assert seen[-1] is False and not gc.isenabled()
+    finally:
+        gc.enable()

@@ -8,6 +8,7 @@ from . import charts, engine, package, workbook
 from .controls import Control
 from .files import write_atomic
 from .model import COLUMN
+from .pause import gc_paused
 from .templates import Template
 
 
@@ -79,6 +80,7 @@ def _cut(degs: list[float]) -> float:
     return (lo + 180.0) % 360.0 - 180.0
 
 
+@gc_paused
 def build_file(t: Template, path: Path, with_values: bool = False) -> workbook.Built:
     built, values = make(t, values_needed=with_values)
 

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from . import generic, sheets as layout
+from .pause import gc_paused
 from .sheets import summary_prefix
 from .templates import InputError, check_lengths_together, check_value
 
@@ -891,6 +892,7 @@ def _check_stroke_sampling(solver, params: dict, grid: dict, adjust: list, value
 
 
 # ---------------------------------------------------------------- the command
+@gc_paused
 def verify(path: Path, engine: str = "vector") -> Report:
     """Every formula cell of the book at `path` compared with the independent reference.
     Raises UnusableFile with one line when the file cannot be verified."""
