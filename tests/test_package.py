@@ -141,3 +141,8 @@ def test_what_it_does_not_write_is_refused(tmp_path):
     with pytest.raises(ValueError, match="Sheet!A1: comments"):
         with package.cells_held_back(wb):
             pass
+    wb = openpyxl.Workbook()
+    workbook.put(wb.active, 2, 3, "=A1&\"\x07\"")     # put() does not check: the writer does
+    with pytest.raises(ValueError, match="Sheet!C2: a control character"):
+        with package.cells_held_back(wb):
+            pass

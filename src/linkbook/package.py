@@ -10,11 +10,12 @@ One streaming copy of the zip does all of it:
 - with `values`, every formula cell gets its cached value (cached.py);
 - with `cells` (from `cells_held_back`), every sheet's `<sheetData>` is written here: openpyxl
   saves the book with its worksheets emptied of cells, and this module writes the cells as
-  openpyxl would have, byte for byte but with shared strings, ten times as fast (openpyxl's
-  writer takes most of a big book's build).
+  openpyxl would have, byte for byte but with shared strings, four times as fast (openpyxl's
+  writer took most of a big book's build).
 
 Every other part, and every other byte of the parts it touches, is copied unchanged. Worksheet
-parts are streamed in chunks cut at row ends, so a sheet of 90 MB is never in memory twice.
+parts are streamed in chunks cut at row ends, so a sheet of 90 MB is never in memory twice (the
+cells written here are held once, in chunks, next to the cells they are written from).
 """
 from __future__ import annotations
 
@@ -270,7 +271,7 @@ class _SheetCells:
 @dataclass
 class HeldCells:
     sheets: dict[str, _SheetCells] = field(default_factory=dict)
-    strings: "_SharedStrings" = field(default_factory=lambda: _SharedStrings())
+    strings: _SharedStrings = field(default_factory=_SharedStrings)
 
 
 @contextmanager
@@ -314,6 +315,9 @@ def _sheet_cells(ws, strings: "_SharedStrings") -> _SheetCells:
             if cell.data_type == "f" and type(value) is str:      # most cells: formulas
                 text = value[1:]
                 if _NEEDS_ESCAPE.search(text):
+                    if _ILLEGAL.search(text):
+                        raise ValueError(f"{ws.title}!{cell.coordinate}: a control character "
+                                         f"in a formula")
                     text = text.translate(_TEXT)
                 items.append(f"{ref}><f>{text}</f><v></v></c>")
             else:
@@ -328,7 +332,8 @@ def _sheet_cells(ws, strings: "_SharedStrings") -> _SheetCells:
     return _SheetCells(ws.calculate_dimension(), chunks)
 
 
-_NEEDS_ESCAPE = re.compile("[&<>\r]")
+_NEEDS_ESCAPE = re.compile("[&<>\r\x00-\x08\x0b\x0c\x0e-\x1f]")
+_ILLEGAL = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f]")     # openpyxl's ILLEGAL_CHARACTERS_RE
 
 
 class _StyleIds:
