@@ -45,6 +45,12 @@ TOML_CASES = [
     ("unknown mechanism", 'mechanism = "fivebar"\n' + FOURBAR_TOML[:FOURBAR_TOML.index(
         "[mechanism]")], "fivebar"),
     ("title missing", FOURBAR_TOML.replace('title = ', 'xtitle = '), "title"),
+    ("control character in the title", FOURBAR_TOML.replace(
+        'title = "Four-bar', 'title = "Four\\u0007bar'),
+     "title: contains the control character U+0007"),
+    ("U+FFFF in a label", FOURBAR_TOML.replace(
+        'label = "rocker |B0B|"', 'label = "rocker \\uFFFF"'),
+     "label: contains the character U+FFFF"),
     ("sweep missing", FOURBAR_TOML.replace("[sweep]", "[sweeps]"), "sweep"),
     ("sweep step is text", FOURBAR_TOML.replace("step = 5", 'step = "5"'), "step"),
     ("sweep runs backwards", FOURBAR_TOML.replace("stop = 360", "stop = -10"), "stop"),

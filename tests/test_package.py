@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import math
 import zipfile
+from decimal import Decimal
 from pathlib import Path
 
+import numpy as np
 import openpyxl
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -54,6 +56,11 @@ def _every_kind() -> openpyxl.Workbook:
     ws["G2"] = math.inf
     ws["H2"] = "#N/A"
     ws["H2"].data_type = "e"
+    ws["I2"] = np.float32(0.1)                         # numbers of other types: openpyxl's
+    ws["J2"] = np.int64(2**60)                         # %.16g, as for floats
+    ws["K2"] = np.bool_(True)
+    ws["L2"] = Decimal("0.1000000000000000055511151231257827")
+    ws["M2"] = -0.0
     ws["A3"] = '=IF(B3<>"–",A2&"<x>",NA())'
     ws["A3"].number_format = "0.000"
     ws["B3"] = "=SUM(A2:C2)"
@@ -142,7 +149,30 @@ def test_what_it_does_not_write_is_refused(tmp_path):
         with package.cells_held_back(wb):
             pass
     wb = openpyxl.Workbook()
-    workbook.put(wb.active, 2, 3, "=A1&\"\x07\"")     # put() does not check: the writer does
-    with pytest.raises(ValueError, match="Sheet!C2: a control character"):
+    wb.active["B2"] = "=A1"
+    wb.active["B2"].comment = Comment("on a formula", "me")
+    with pytest.raises(ValueError, match="Sheet!B2: comments"):
+        with package.cells_held_back(wb):
+            pass
+    wb = openpyxl.Workbook()
+    wb.active["C3"].hyperlink = "https://example.org"
+    wb.active["C3"].value = None                        # a link on an empty cell
+    with pytest.raises(ValueError, match="Sheet!C3: comments and hyperlinks"):
+        with package.cells_held_back(wb):
+            pass
+
+
+@pytest.mark.parametrize("value,code", [('=A1&"\x07"', "0007"), ('=A1&"\uffff"', "FFFF"),
+                                        ("text \ufffe", "FFFE"), ("bytes \udcff", "DCFF")])
+def test_characters_no_workbook_can_hold_are_refused(value, code):
+    """openpyxl refuses them (when the cell is set, or at save); put() does not look, so the
+    writer must, or the part would not parse."""
+    wb = openpyxl.Workbook()
+    if value.startswith("="):
+        workbook.put(wb.active, 2, 3, value)
+    else:                       # text set past openpyxl's own check, as put() sets formulas
+        cell = wb.active.cell(2, 3)
+        cell._value, cell.data_type = value, "s"
+    with pytest.raises(ValueError, match=f"Sheet!C2: the character U\\+{code} cannot"):
         with package.cells_held_back(wb):
             pass

@@ -7,7 +7,6 @@ import sys
 from pathlib import Path
 
 from . import __version__, templates
-from .pause import gc_paused
 from .templates import InputError
 
 EPILOG = """examples:
@@ -124,7 +123,6 @@ def _parser() -> argparse.ArgumentParser:
     return ap
 
 
-@gc_paused          # the whole command, the imports it makes on the way included
 def main(argv: list[str] | None = None) -> int:
     import warnings
     try:

@@ -28,11 +28,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from defusedxml import ElementTree
+from openpyxl.compat import safe_string
 
 from . import cached
 from .controls import CTRL_TYPE, VML_TYPE, Control, SheetControls
 from .files import write_atomic
-from .xlsx import column_letter, xml_attribute
+from .xlsx import NOT_IN_XML, column_letter, xml_attribute
 
 MAIN_NS = "http://schemas.openxmlformats.org/spreadsheetml/2006/main"
 REL_NS = "http://schemas.openxmlformats.org/officeDocument/2006/relationships"
@@ -279,9 +280,12 @@ def cells_held_back(wb) -> Iterator[HeldCells]:
     """Write every worksheet's cells to XML (shared strings in one table), then let openpyxl's
     save run inside the block with the worksheets emptied of cells; `finish(cells=...)` puts
     them back. Styles are numbered here in openpyxl's order (sheet by sheet, cell by cell), so
-    the styles part it writes after the sheets is the one it would have written."""
+    the styles part it writes after the sheets is the one it would have written (but for styled
+    column dimensions, which openpyxl numbers before a sheet's cells: linkbook has none)."""
     held = HeldCells()
     for ws in wb.worksheets:
+        if ws.tables:       # openpyxl reads a table's column names from its cells while saving
+            raise ValueError(f"{ws.title}: sheets with tables are not written here")
         held.sheets[ws.title] = _sheet_cells(ws, held.strings)
     kept = [(ws, ws._cells) for ws in wb.worksheets]
     try:
@@ -307,6 +311,9 @@ def _sheet_cells(ws, strings: "_SharedStrings") -> _SheetCells:
         attrs = "".join(f" {k}={xml_attribute(v)}" for k, v in dims[row]) if row in dims else ""
         items = [f'<row r="{row}"{attrs}>']
         for cell in by_row[row]:
+            if cell.comment is not None or cell.hyperlink is not None:
+                raise ValueError(f"{ws.title}!{cell.coordinate}: comments and hyperlinks are "
+                                 f"not written here")
             style = style_ids.attribute(cell._style)
             value = cell._value
             if value is None and not style:
@@ -315,9 +322,7 @@ def _sheet_cells(ws, strings: "_SharedStrings") -> _SheetCells:
             if cell.data_type == "f" and type(value) is str:      # most cells: formulas
                 text = value[1:]
                 if _NEEDS_ESCAPE.search(text):
-                    if _ILLEGAL.search(text):
-                        raise ValueError(f"{ws.title}!{cell.coordinate}: a control character "
-                                         f"in a formula")
+                    _refuse_what_xml_cannot_hold(cell, text)
                     text = text.translate(_TEXT)
                 items.append(f"{ref}><f>{text}</f><v></v></c>")
             else:
@@ -332,8 +337,17 @@ def _sheet_cells(ws, strings: "_SharedStrings") -> _SheetCells:
     return _SheetCells(ws.calculate_dimension(), chunks)
 
 
-_NEEDS_ESCAPE = re.compile("[&<>\r\x00-\x08\x0b\x0c\x0e-\x1f]")
-_ILLEGAL = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f]")     # openpyxl's ILLEGAL_CHARACTERS_RE
+# What the formula of the fast path needs escaped, or refused (NOT_IN_XML's characters).
+_NEEDS_ESCAPE = re.compile("[&<>\r\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
+def _refuse_what_xml_cannot_hold(cell, text: str) -> None:
+    """openpyxl refuses these when a cell is set or saved; escaped as character references
+    they would make the part unreadable."""
+    bad = NOT_IN_XML.search(text)
+    if bad:
+        raise ValueError(f"{cell.parent.title}!{cell.coordinate}: the character "
+                         f"U+{ord(bad.group()):04X} cannot be written to a workbook")
 
 
 class _StyleIds:
@@ -358,8 +372,6 @@ class _StyleIds:
 def _cell_xml(cell, ref: str, strings: "_SharedStrings") -> str:
     """A cell other than a formula, after its `<c r=".." s=".."` (not yet closed)."""
     where = f"{cell.parent.title}!{cell.coordinate}"
-    if getattr(cell, "_comment", None) is not None or getattr(cell, "_hyperlink", None):
-        raise ValueError(f"{where}: comments and hyperlinks are not written here")
     kind, value = cell.data_type, cell._value
     if kind == "f":
         raise ValueError(f"{where}: array and data-table formulas are not written here")
@@ -368,6 +380,7 @@ def _cell_xml(cell, ref: str, strings: "_SharedStrings") -> str:
             raise ValueError(f"{where}: rich text is not written here")
         if value == "":
             return f'{ref} t="inlineStr"></c>'
+        _refuse_what_xml_cannot_hold(cell, value)
         space = ' xml:space="preserve"' if value != value.strip() else ""
         body = f"<t{space}>{value.translate(_TEXT)}</t>".encode("ascii", "xmlcharrefreplace")
         return f'{ref} t="s"><v>{strings.add(body)}</v></c>'
@@ -375,14 +388,9 @@ def _cell_xml(cell, ref: str, strings: "_SharedStrings") -> str:
         raise ValueError(f"{where}: cells of type {kind!r} are not written here")
     if value is None:
         return f'{ref} t="{kind}"></c>'
-    return f'{ref} t="{kind}"><v>{_safe_string(value).translate(_TEXT)}</v></c>'
-
-
-def _safe_string(value) -> str:
-    """openpyxl.compat.safe_string: numbers (and bools) as %.16g, NaN and infinities empty."""
-    if isinstance(value, (int, float)):
-        return "" if value != value or value in (float("inf"), float("-inf")) else "%.16g" % value
-    return str(value)
+    text = safe_string(value)                 # numbers as %.16g, as openpyxl writes them
+    _refuse_what_xml_cannot_hold(cell, text)
+    return f'{ref} t="{kind}"><v>{text.translate(_TEXT)}</v></c>'
 
 
 # ---------------------------------------------------------------- form controls

@@ -7,6 +7,8 @@ build and a quarter of its verify go to finding cycles that are not there
 (`benchmarks/`). Reference counting frees memory as usual meanwhile (the peak is the same);
 cycles made during the call are collected once the collector resumes. The collector is a
 process-wide switch: it is left off if it was off, and back on when the call returns or raises.
+It is paused per book, not for a whole command: `build --all` or a verify of many books collects
+between them (paused across them, garbage cycles would add up book after book).
 """
 from __future__ import annotations
 

@@ -229,12 +229,14 @@ CELL_TEXT_MAX = 32_767          # characters in one Excel cell
 
 
 def check_text(field: str, text: str) -> str:
-    """Text that goes into a cell: no control characters (a workbook cannot hold them), and at
-    most a quarter of what a cell holds (labels share cells with units and notes)."""
-    from openpyxl.cell.cell import ILLEGAL_CHARACTERS_RE
-    bad = ILLEGAL_CHARACTERS_RE.search(text)
+    """Text that goes into a cell: no character a workbook cannot hold (control characters,
+    U+FFFE, U+FFFF, surrogates), and at most a quarter of what a cell holds (labels share cells
+    with units and notes)."""
+    from .xlsx import NOT_IN_XML
+    bad = NOT_IN_XML.search(text)
     if bad:
-        raise InputError(field, f"contains the control character U+{ord(bad.group()):04X}, "
+        kind = "control character" if bad.group() < " " else "character"
+        raise InputError(field, f"contains the {kind} U+{ord(bad.group()):04X}, "
                                 "which a workbook cannot hold")
     if len(text) > CELL_TEXT_MAX // 4:
         raise InputError(field, f"is {len(text):,} characters long (at most "

@@ -638,7 +638,7 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
     row += 1
     cells: dict[str, dict] = {}
 
-    def put(key: str, label: str, formula: str, unit: str = "", kind: str = "number") -> str:
+    def add(key: str, label: str, formula: str, unit: str = "", kind: str = "number") -> str:
         nonlocal row
         _text(ws, f"A{row}", label)
         _wrap_across(ws, row, "A", "B", label)
@@ -655,14 +655,14 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         return f"$C${row - 1}"
 
     w = rng("closes")
-    put("assembles_all", "assembles at every angle of the sweep",
+    add("assembles_all", "assembles at every angle of the sweep",
         f'=IF(SUM({w})=ROWS({w}),"yes","no")', kind="text")
-    put("not_closing", "angles where the loop cannot close", f"=ROWS({w})-SUM({w})")
+    add("not_closing", "angles where the loop cannot close", f"=ROWS({w})-SUM({w})")
     for k in range(1, GAPS_SHOWN + 1):
-        put(f"gap{k}_from", f"gap {k}: cannot close from",
+        add(f"gap{k}_from", f"gap {k}: cannot close from",
             f'=IFERROR(SMALL({rng("gap_from")},{k}),"{DASH}")', t.mechanism.input_unit,
             "number_or_dash")
-        put(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"{DASH}")',
+        add(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"{DASH}")',
             t.mechanism.input_unit, "number_or_dash")
 
     def extremes(prefix: str, what: str, column: str, unit: str, convert: str = "") -> None:
@@ -670,7 +670,7 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         for suffix, fn, word in (("min", MIN_OF, "smallest"), ("max", MAX_OF, "largest")):
             value = f"{AGGREGATE}({fn},{SKIP_ERRORS},{column})"
             value = f"{convert}({value})" if convert else value
-            put(f"{prefix}_{suffix}", f"{word} {what}",
+            add(f"{prefix}_{suffix}", f"{word} {what}",
                 f'=IF(COUNT({column})=0,"{DASH}",{value})', unit, "number_or_dash")
 
     if model.output:
@@ -681,7 +681,7 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         extremes(summary_prefix("mu", i), f"transmission angle {model.get(key).symbol}",
                  rng(key), DEG, convert="DEGREES")
     for i, loop in enumerate(model.fourbars, start=1):
-        _fourbar_summary(put, loop, summary_prefix("", i), Resolver(model, names, {}))
+        _fourbar_summary(add, loop, summary_prefix("", i), Resolver(model, names, {}))
     return cells
 
 
@@ -725,16 +725,16 @@ def _wrap_across(ws, row: int, first: str, last: str, text: str) -> None:
                                         LINE_HEIGHT * len(lines))
 
 
-def _fourbar_summary(put, fb, n: str, resolve) -> None:
+def _fourbar_summary(add, fb, n: str, resolve) -> None:
     what = f"four-bar loop {fb.name}"
-    g = put(f"fb{n}_ground", f"{what}: ground link", "=" + render(fb.ground, resolve), LENGTH)
-    c = put(f"fb{n}_crank", f"{what}: input crank", "=" + render(fb.crank, resolve), LENGTH)
-    k = put(f"fb{n}_coupler", f"{what}: coupler", "=" + render(fb.coupler, resolve), LENGTH)
-    r = put(f"fb{n}_rocker", f"{what}: output link", "=" + render(fb.rocker, resolve), LENGTH)
+    g = add(f"fb{n}_ground", f"{what}: ground link", "=" + render(fb.ground, resolve), LENGTH)
+    c = add(f"fb{n}_crank", f"{what}: input crank", "=" + render(fb.crank, resolve), LENGTH)
+    k = add(f"fb{n}_coupler", f"{what}: coupler", "=" + render(fb.coupler, resolve), LENGTH)
+    r = add(f"fb{n}_rocker", f"{what}: output link", "=" + render(fb.rocker, resolve), LENGTH)
     links = f"{g},{c},{k},{r}"
     shortest, longest = f"MIN({links})", f"MAX({links})"
     others = f"({g}+{c}+{k}+{r}-{shortest}-{longest})"
-    put(f"grashof{n}", f"{what}: Grashof class",
+    add(f"grashof{n}", f"{what}: Grashof class",
         f'=IF({shortest}+{longest}>{others}*(1+1E-12),"non-Grashof: triple rocker",'
         f'IF({shortest}+{longest}>={others}*(1-1E-12),"change point",'
         f'IF({shortest}={g},"Grashof: double crank",IF({shortest}={c},"Grashof: crank-rocker",'
@@ -744,9 +744,9 @@ def _fourbar_summary(put, fb, n: str, resolve) -> None:
         cosine = f"({g}^2+{c}^2-{length}^2)/(2*{g}*{c})"
         lo = f"MOD(DEGREES({ground_angle}-ACOS({cosine})),360)"
         hi = f"MOD(DEGREES({ground_angle}+ACOS({cosine})),360)"
-        put(f"limit{n}_{name}_1", f"{what}: input limit angle, coupler and output link {name}",
+        add(f"limit{n}_{name}_1", f"{what}: input limit angle, coupler and output link {name}",
             f'=IFERROR(MIN({lo},{hi}),"none")', DEG, "number_or_none")
-        put(f"limit{n}_{name}_2", "… and the other one",
+        add(f"limit{n}_{name}_2", "… and the other one",
             f'=IFERROR(MAX({lo},{hi}),"none")', DEG, "number_or_none")
 
 

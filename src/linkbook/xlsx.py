@@ -22,7 +22,7 @@ from pathlib import PurePosixPath
 from xml.etree.ElementTree import iterparse
 
 __all__ = ["Unsupported", "read", "coordinate_to_tuple", "column_index", "column_letter",
-           "xml_text", "xml_attribute"]
+           "xml_text", "xml_attribute", "NOT_IN_XML"]
 
 MAIN = "{http://schemas.openxmlformats.org/spreadsheetml/2006/main}"
 REL = "{http://schemas.openxmlformats.org/officeDocument/2006/relationships}"
@@ -254,6 +254,11 @@ def column_letter(col: int) -> str:
         found = _LETTERS[col] = out
     return found
 
+
+# Characters no XML 1.0 document can hold, escaped or not: the C0 controls but tab, LF and CR
+# (openpyxl's ILLEGAL_CHARACTERS_RE), surrogates (Python text from undecodable bytes), U+FFFE and
+# U+FFFF. openpyxl refuses them when a cell is set or saved; a cell written here must too.
+NOT_IN_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
 
 # XML escapes of our own: xml.sax.saxutils imports urllib.request (and with it http, ssl and
 # email), a fifth of the start-up of a build.
