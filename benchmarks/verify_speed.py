@@ -12,6 +12,7 @@ and peak memory of that process):
 and prints a table with ratios against ExcelModel and against the reference.
 
 Then, side by side in the same run, the whole-process wall time (medians of --runs runs) of
+  build      `python -m linkbook build NAME ...` (the case's book, written again)
   verify     `python -m linkbook verify BOOK`
   office     LibreOffice's headless recalculation (the soffice process linkbook.office runs)
   ironcalc   `python -c "import ironcalc; load_from_xlsx(BOOK).evaluate()"` (if the optional
@@ -156,7 +157,10 @@ def whole_process(name: str, args: list[str], book: Path, runs: int, office: boo
                   ironcalc: bool) -> dict[str, float]:
     """Medians of `runs` whole-process wall times, the tools interleaved run by run."""
     times: dict[str, list[float]] = {}
+    rebuilt = book.with_name(f"{book.stem}-rebuilt.xlsx")
     for _ in range(runs):
+        times.setdefault("build", []).append(
+            wall([sys.executable, "-m", "linkbook", "build", name, *args, "-o", str(rebuilt)]))
         times.setdefault("verify", []).append(
             wall([sys.executable, "-m", "linkbook", "verify", str(book)]))
         if ironcalc:
@@ -269,7 +273,7 @@ def print_table(results: dict) -> None:
 
 
 def print_whole(results: dict, runs: int) -> None:
-    tools = ("verify", "office", "ironcalc", "excelmodel")
+    tools = ("build", "verify", "office", "ironcalc", "excelmodel")
     print(f"\nWhole process, wall seconds, medians of {runs} runs (ExcelModel: one run)")
     print(f"{'case':21} " + "".join(f"{t:>11}" for t in tools)
           + f"{'office/verify':>15}{'verify/ironcalc':>17}{'excelmodel/verify':>19}")
