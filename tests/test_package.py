@@ -141,23 +141,33 @@ def test_table_cells_are_openpyxl_cells(tmp_path):
             (expected.value, expected.data_type, fmt)
 
 
-def test_what_it_does_not_write_is_refused(tmp_path):
+def _commented(cell, value):
+    cell.value = value
+    cell.comment = Comment("a comment", "me")
+
+
+def _linked(cell, value):
+    cell.hyperlink = "https://example.org"
+    cell.value = value
+
+
+@pytest.mark.parametrize("attach,value", [(_commented, "noted"), (_commented, "=A1"),
+                                          (_linked, None)],
+                         ids=["comment on text", "comment on a formula", "link, empty cell"])
+def test_comments_and_hyperlinks_are_refused(attach, value):
     wb = openpyxl.Workbook()
-    wb.active["A1"] = "noted"
-    wb.active["A1"].comment = Comment("a comment", "me")
-    with pytest.raises(ValueError, match="Sheet!A1: comments"):
-        with package.cells_held_back(wb):
-            pass
-    wb = openpyxl.Workbook()
-    wb.active["B2"] = "=A1"
-    wb.active["B2"].comment = Comment("on a formula", "me")
-    with pytest.raises(ValueError, match="Sheet!B2: comments"):
-        with package.cells_held_back(wb):
-            pass
-    wb = openpyxl.Workbook()
-    wb.active["C3"].hyperlink = "https://example.org"
-    wb.active["C3"].value = None                        # a link on an empty cell
+    attach(wb.active["C3"], value)
     with pytest.raises(ValueError, match="Sheet!C3: comments and hyperlinks"):
+        with package.cells_held_back(wb):
+            pass
+
+
+def test_sheets_with_tables_are_refused():
+    from openpyxl.worksheet.table import Table
+    wb = openpyxl.Workbook()
+    wb.active["A1"], wb.active["B1"], wb.active["A2"] = "x", "y", 1
+    wb.active.add_table(Table(displayName="T", ref="A1:B2"))
+    with pytest.raises(ValueError, match="Sheet: sheets with tables"):
         with package.cells_held_back(wb):
             pass
 
