@@ -192,7 +192,6 @@ def _register(names, func) -> None:
 _register(("AGGREGATE", "_XLFN.AGGREGATE"), wrap_func(_aggregate))
 
 
-
 def _cell_token():
     """The input by which formulas gives a host-reading function (ROW, CELL) its cell; imported
     where needed, as formulas.cell imports the parser."""

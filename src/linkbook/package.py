@@ -302,9 +302,9 @@ def _sheet_cells(ws, strings: "_SharedStrings") -> _SheetCells:
     by_row: dict[int, list] = {}
     for (row, col), cell in sorted(ws._cells.items()):
         by_row.setdefault(row, []).append(cell)
-    for row in ws.row_dimensions.keys() - by_row.keys():
-        by_row[row] = []
     dims = ws.row_dimensions
+    for row in dims.keys() - by_row.keys():
+        by_row[row] = []
     style_ids = _StyleIds(ws.parent._cell_styles)
     chunks, pending = [], []
     for row in sorted(by_row):
@@ -312,8 +312,7 @@ def _sheet_cells(ws, strings: "_SharedStrings") -> _SheetCells:
         items = [f'<row r="{row}"{attrs}>']
         for cell in by_row[row]:
             if cell.comment is not None or cell.hyperlink is not None:
-                raise ValueError(f"{ws.title}!{cell.coordinate}: comments and hyperlinks are "
-                                 f"not written here")
+                raise ValueError(f"{_where(cell)}: comments and hyperlinks are not written here")
             style = style_ids.attribute(cell._style)
             value = cell._value
             if value is None and not style:
@@ -337,8 +336,8 @@ def _sheet_cells(ws, strings: "_SharedStrings") -> _SheetCells:
     return _SheetCells(ws.calculate_dimension(), chunks)
 
 
-# What the formula of the fast path needs escaped, or refused (NOT_IN_XML's characters).
-_NEEDS_ESCAPE = re.compile("[&<>\r\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+# What the formula of the fast path needs escaped (_TEXT's characters), or refused (NOT_IN_XML's).
+_NEEDS_ESCAPE = re.compile(f"[&<>\r]|{NOT_IN_XML.pattern}")
 
 
 def _refuse_what_xml_cannot_hold(cell, text: str) -> None:
@@ -346,8 +345,12 @@ def _refuse_what_xml_cannot_hold(cell, text: str) -> None:
     they would make the part unreadable."""
     bad = NOT_IN_XML.search(text)
     if bad:
-        raise ValueError(f"{cell.parent.title}!{cell.coordinate}: the character "
-                         f"U+{ord(bad.group()):04X} cannot be written to a workbook")
+        raise ValueError(f"{_where(cell)}: the character U+{ord(bad.group()):04X} cannot be "
+                         f"written to a workbook")
+
+
+def _where(cell) -> str:
+    return f"{cell.parent.title}!{cell.coordinate}"
 
 
 class _StyleIds:
@@ -371,13 +374,12 @@ class _StyleIds:
 
 def _cell_xml(cell, ref: str, strings: "_SharedStrings") -> str:
     """A cell other than a formula, after its `<c r=".." s=".."` (not yet closed)."""
-    where = f"{cell.parent.title}!{cell.coordinate}"
     kind, value = cell.data_type, cell._value
     if kind == "f":
-        raise ValueError(f"{where}: array and data-table formulas are not written here")
+        raise ValueError(f"{_where(cell)}: array and data-table formulas are not written here")
     if kind == "s":
         if not isinstance(value, str):
-            raise ValueError(f"{where}: rich text is not written here")
+            raise ValueError(f"{_where(cell)}: rich text is not written here")
         if value == "":
             return f'{ref} t="inlineStr"></c>'
         _refuse_what_xml_cannot_hold(cell, value)
@@ -385,7 +387,7 @@ def _cell_xml(cell, ref: str, strings: "_SharedStrings") -> str:
         body = f"<t{space}>{value.translate(_TEXT)}</t>".encode("ascii", "xmlcharrefreplace")
         return f'{ref} t="s"><v>{strings.add(body)}</v></c>'
     if kind not in ("n", "b", "e"):
-        raise ValueError(f"{where}: cells of type {kind!r} are not written here")
+        raise ValueError(f"{_where(cell)}: cells of type {kind!r} are not written here")
     if value is None:
         return f'{ref} t="{kind}"></c>'
     text = safe_string(value)                 # numbers as %.16g, as openpyxl writes them

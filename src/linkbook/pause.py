@@ -6,10 +6,10 @@ walks the young ones, every few of those walks the older ones as well: a quarter
 four-bar's build and of its verify went to finding cycles that are not there (measured: build
 3.1 s -> 2.3 s, whole process; verify 5.2 s -> 3.9 s after the imports, medians of 5).
 Reference counting frees memory as usual meanwhile (the peak is the same); cycles made during
-the call are collected once the collector resumes. The collector is a
-process-wide switch: it is left off if it was off, and back on when the call returns or raises.
-It is paused per book, not for a whole command: `build --all` or a verify of many books collects
-between them (paused across them, garbage cycles would add up book after book).
+the call are collected once the collector resumes. The collector is a process-wide switch: it is
+left off if it was off, and back on when the call returns or raises. It is paused per book, not
+for a whole command: `build --all` or a verify of many books collects between them (paused
+across them, garbage cycles would add up book after book).
 """
 from __future__ import annotations
 
