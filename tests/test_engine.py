@@ -502,18 +502,21 @@ def test_numeric_forms_give_formulas_own_bits_and_types():
 
 
 def test_verifying_a_book_imports_no_scipy(tmp_path):
-    """`formulas`' statistics module imports scipy at its top; linkbook imports that module with
-    scipy standing in (issue 14: about a second of every verify's start-up), so a book that
-    uses no function needing scipy never imports it, and one that does still gets it."""
+    """`formulas`' statistics module imports scipy at its top, and its math module numpy.random;
+    linkbook imports those modules with scipy and numpy.random standing in (issue 14: about a
+    second, and 15 ms, of every verify's start-up), so a book that uses no function needing them
+    never imports them, and one that does still gets them."""
     import subprocess
     import sys
     from linkbook import builder, templates
     book = tmp_path / "fourbar.xlsx"
     builder.build_file(templates.load("fourbar"), book)
     code = ("import sys, linkbook; r = linkbook.verify(sys.argv[1]); "
-            "print(r.status, 'scipy' in sys.modules); "
+            "print(r.status, 'scipy' in sys.modules, 'numpy.random' in sys.modules); "
             "from formulas.functions import get_functions; "
-            "print(round(get_functions()['KURT'](1, 2, 3, 4, 7), 6), 'scipy' in sys.modules)")
+            "print(round(get_functions()['KURT'](1, 2, 3, 4, 7), 6), 'scipy' in sys.modules); "
+            "rand = get_functions()['RAND']['function']; x = float(rand(False)); "
+            "print(0 <= x < 1, 'numpy.random' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code, str(book)], capture_output=True,
                          text=True, check=True).stdout.split()
-    assert out == ["0", "False", "1.128515", "True"], out
+    assert out == ["0", "False", "False", "1.128515", "True", "True", "True"], out

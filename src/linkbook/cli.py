@@ -6,7 +6,13 @@ import os
 import sys
 from pathlib import Path
 
-from . import __version__, templates
+# One BLAS thread for the command. OpenBLAS starts a thread per core when numpy is first imported,
+# which cost 0.07-0.12 s of CPU on every command here (2 cores), and nothing linkbook computes
+# is a matrix product big enough to share out. Set before anything imports numpy; a user's own
+# setting wins.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from . import __version__, templates  # noqa: E402 (after the setting above)
 from .templates import InputError
 
 EPILOG = """examples:

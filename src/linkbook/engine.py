@@ -132,12 +132,13 @@ class _OnUse:
         return self._real()(*args, **kwargs)
 
 
-def _import_statistics_without_scipy() -> None:
+def _import_function_modules_lightly() -> None:
     """`formulas` gets any function (COS as much as MAX) through get_functions(), which imports
     all its function modules; its statistics module imports scipy at its top (about a second
-    of start-up, ahead of any book's first formula) for functions no linkbook book uses. It is
-    imported here with scipy standing in: the same functions, and scipy imported for real the
-    first time one of them needs it."""
+    of start-up, ahead of any book's first formula) for functions no linkbook book uses, and its
+    math module reads numpy.random (RAND) at its top, which imports numpy.random (about 15 ms).
+    They are imported here with scipy and numpy.random standing in: the same functions, and the
+    real module imported the first time one of them needs it."""
     import sys
     import types
     name = "formulas.functions.stat"
@@ -149,14 +150,26 @@ def _import_statistics_without_scipy() -> None:
     interpolate = types.ModuleType("scipy.interpolate")
     interpolate.interp1d = _OnUse("scipy.interpolate", "interp1d")
     sys.modules["scipy"], sys.modules["scipy.interpolate"] = scipy, interpolate
+    random_stands_in = "numpy.random" not in sys.modules
+    if random_stands_in:
+        random = types.ModuleType("numpy.random")
+
+        def rand(*args):        # a function, so that functools.wraps finds its name
+            import numpy.random
+            return numpy.random.rand(*args)
+        random.rand = rand
+        np.random = random
     try:
         import importlib
         importlib.import_module(name)
+        importlib.import_module("formulas.functions.math")
     finally:
         del sys.modules["scipy"], sys.modules["scipy.interpolate"]
+        if random_stands_in:
+            del np.random       # numpy's own lazy attribute again
 
 
-_import_statistics_without_scipy()
+_import_function_modules_lightly()
 
 
 def _aggregate(function_num, options, ref, *k):
