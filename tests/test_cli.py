@@ -1,6 +1,7 @@
 """The command line: list, build, and bad input that exits 2 with one line and writes nothing."""
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 
@@ -15,6 +16,7 @@ ENV_PATH = str(ROOT / "src")
 def run(*args, cwd=None):
     import os
     env = dict(os.environ, PYTHONPATH=ENV_PATH)
+    env.pop("PYTHONUNBUFFERED", None)   # stdout block-buffered into a pipe, as users have it
     return subprocess.run([sys.executable, "-m", "linkbook", *args], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=300)
 
@@ -35,6 +37,24 @@ def test_help_teaches(tmp_path):
     out = run("build", "--help")
     assert out.returncode == 0
     assert "--set a2=40" in out.stdout and "--branch" in out.stdout
+
+
+def test_the_process_ends_with_mains_status_and_all_its_output(tmp_path):
+    """`python -m linkbook` ends the process with os._exit after main() (cli.run): the status
+    is main's, 0, 1 or 2, and nothing printed is lost with stdout a pipe (block-buffered)."""
+    book = tmp_path / "fb.xlsx"
+    assert run("build", "fourbar", "-o", str(book)).returncode == 0
+    wb = openpyxl.load_workbook(book)
+    wb["Sweep"]["H20"].value += "*1.001"
+    wb.save(book)
+    missing = tmp_path / "missing.xlsx"
+    out = run("verify", str(book), str(book), str(missing))
+    assert out.returncode == 2, out.stderr
+    assert out.stdout.count("DISAGREES") == 2 and out.stdout.rstrip().endswith(
+        "3 books: 0 agree, 2 disagree, 1 cannot be verified"), out.stdout[-300:]
+    assert "missing.xlsx" in out.stderr
+    out = run("verify", "--json", str(book))
+    assert out.returncode == 1 and json.loads(out.stdout)["status"] == 1
 
 
 def test_build_writes_a_workbook_with_defined_names(tmp_path):
