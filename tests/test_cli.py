@@ -57,6 +57,18 @@ def test_the_process_ends_with_mains_status_and_all_its_output(tmp_path):
     assert out.returncode == 1 and json.loads(out.stdout)["status"] == 1
 
 
+def test_the_process_ends_cleanly_without_stdout_and_under_a_profiler():
+    import os
+    env = dict(os.environ, PYTHONPATH=ENV_PATH)
+    closed = subprocess.run(f'"{sys.executable}" -m linkbook list >&-', shell=True, env=env,
+                            capture_output=True, text=True, timeout=300)
+    assert closed.returncode == 0 and closed.stderr == "", closed.stderr
+    # a profiler reports after the command returns: the exit is then Python's own
+    profiled = subprocess.run([sys.executable, "-m", "cProfile", "-m", "linkbook", "list"],
+                              env=env, capture_output=True, text=True, timeout=300)
+    assert profiled.returncode == 0 and "function calls" in profiled.stdout, profiled.stderr
+
+
 def test_build_writes_a_workbook_with_defined_names(tmp_path):
     target = tmp_path / "fb.xlsx"
     out = run("build", "fourbar", "--set", "a2=40", "--branch", "crossed", "-o", str(target))

@@ -134,9 +134,18 @@ def run() -> None:
     By then everything a command makes is closed (files written and renamed into place,
     LibreOffice waited for); what Python's own exit would add is freeing the book's hundreds of
     thousands of objects one by one and tearing down every module: 30-60 ms of a 0.3-0.5 s build
-    or verify, measured here. Callers of main() (the tests, the API) keep a normal return."""
+    or verify, measured here. The exit handlers still run (openpyxl removes its temporary files
+    after a failed save, coverage saves its data), and under a profiler or tracer, which reports
+    after we return, the exit is Python's own. Callers of main() (the tests, the API) keep a
+    normal return."""
+    import atexit
     status = main()
+    if sys.getprofile() is not None or sys.gettrace() is not None:
+        raise SystemExit(status)
+    atexit._run_exitfuncs()
     for stream in (sys.stdout, sys.stderr):
+        if stream is None:          # started with the stream closed
+            continue
         try:
             stream.flush()
         except BrokenPipeError:     # the reader stopped early, as in main()

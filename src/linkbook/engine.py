@@ -150,23 +150,24 @@ def _import_function_modules_lightly() -> None:
     interpolate = types.ModuleType("scipy.interpolate")
     interpolate.interp1d = _OnUse("scipy.interpolate", "interp1d")
     sys.modules["scipy"], sys.modules["scipy.interpolate"] = scipy, interpolate
-    random_stands_in = "numpy.random" not in sys.modules
-    if random_stands_in:
-        random = types.ModuleType("numpy.random")
+    random_stand_in = None
+    if "numpy.random" not in sys.modules:      # numpy 2 imports it on first use, 1.26 at once
+        random_stand_in = types.ModuleType("numpy.random")
 
         def rand(*args):        # a function, so that functools.wraps finds its name
             import numpy.random
             return numpy.random.rand(*args)
-        random.rand = rand
-        np.random = random
+        random_stand_in.rand = rand
+        np.random = random_stand_in
     try:
         import importlib
         importlib.import_module(name)
         importlib.import_module("formulas.functions.math")
     finally:
         del sys.modules["scipy"], sys.modules["scipy.interpolate"]
-        if random_stands_in:
-            del np.random       # numpy's own lazy attribute again
+        if random_stand_in is not None and np.__dict__.get("random") is random_stand_in:
+            del np.random       # numpy's own lazy attribute again (unless the real module
+                                # was imported meanwhile and took its place)
 
 
 _import_function_modules_lightly()
