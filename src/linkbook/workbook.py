@@ -221,9 +221,9 @@ _HEAD_STYLES: "weakref.WeakKeyDictionary[Workbook, object]" = weakref.WeakKeyDic
 
 
 def _head_style(ws):
-    """The headers' style, made once per book: openpyxl finds each of a cell's four style parts
-    in the book's lists by hashing it, a tenth of a small book's layout time when done for
-    every header."""
+    """The headers' style, made once per book (each header cell gets a copy): openpyxl finds
+    each of a cell's four style parts in the book's lists by hashing it, done for every header
+    a seventh of the garage door's layout time."""
     style = _HEAD_STYLES.get(ws.parent)
     if style is None:
         probe = Cell(ws)
