@@ -149,10 +149,14 @@ def run() -> None:
         try:
             stream.flush()
         except BrokenPipeError:     # the reader stopped early, as in main()
-            os.dup2(os.open(os.devnull, os.O_WRONLY), stream.fileno())
+            _to_devnull(stream)
         except (OSError, ValueError):
             pass
     os._exit(status)
+
+
+def _to_devnull(stream) -> None:
+    os.dup2(os.open(os.devnull, os.O_WRONLY), stream.fileno())
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -166,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:
         # The reader stopped early (`linkbook list | head`): not an error. Point stdout at
         # /dev/null so that Python's own flush at exit does not complain either.
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        _to_devnull(sys.stdout)
         return 0
     except Exception as exc:
         # A bug of ours, not the user's input: still one line, never a traceback.

@@ -118,10 +118,14 @@ def _text(ws, cell: str, value: str, font: Font | None = None) -> None:
         c.font = font
 
 
-def table_style(ws, number_format: str):
-    """The style of a table cell with `number_format`, for `put`."""
+def table_style(ws, number_format: str | None = None, **parts):
+    """The style of a cell with `number_format` and the style `parts` (font, fill, border,
+    alignment), for `put`."""
     probe = Cell(ws)
-    probe.number_format = number_format
+    if number_format is not None:
+        probe.number_format = number_format
+    for name, part in parts.items():
+        setattr(probe, name, part)
     return probe._style
 
 
@@ -211,10 +215,8 @@ def _fit_labels(ws, row: int, letters, heads: int | None = None) -> None:
 def _head(ws, row: int, col: int, value: str) -> None:
     """A column header: bold, centred and wrapped, in a shaded box; text even if it starts
     with '='."""
-    c = Cell(ws, row=row, column=col, style_array=_head_style(ws))
-    c.value = value
-    c.data_type = "s"
-    ws._cells[row, col] = c
+    put(ws, row, col, value, _head_style(ws))
+    ws._cells[row, col].data_type = "s"
 
 
 _HEAD_STYLES: "weakref.WeakKeyDictionary[Workbook, object]" = weakref.WeakKeyDictionary()
@@ -226,10 +228,9 @@ def _head_style(ws):
     a seventh of the garage door's layout time."""
     style = _HEAD_STYLES.get(ws.parent)
     if style is None:
-        probe = Cell(ws)
-        probe.font, probe.fill, probe.border = BOLD, HEAD_FILL, BOX
-        probe.alignment = Alignment(horizontal="center", vertical="center", wrap_text=True)
-        style = _HEAD_STYLES[ws.parent] = probe._style
+        style = _HEAD_STYLES[ws.parent] = table_style(
+            ws, font=BOLD, fill=HEAD_FILL, border=BOX,
+            alignment=Alignment(horizontal="center", vertical="center", wrap_text=True))
     return style
 
 
