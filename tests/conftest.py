@@ -15,13 +15,13 @@ from linkbook import builder, engine, templates  # noqa: E402
 from linkbook.verifier import check_book  # noqa: E402
 
 
+PUBLISHED = ROOT / "tests" / "data" / "published.toml"
+
+
+@lru_cache(maxsize=None)
 def published() -> dict:
-    """../shared/reference/published.toml: the numbers the sources printed."""
-    for base in (ROOT.parent / "shared", ROOT / "shared"):
-        path = base / "reference" / "published.toml"
-        if path.is_file():
-            return tomllib.loads(path.read_text(encoding="utf-8"))
-    pytest.fail("shared/reference/published.toml not found beside the repository")
+    """tests/data/published.toml: the numbers the sources printed (each entry names its source)."""
+    return tomllib.loads(PUBLISHED.read_text(encoding="utf-8"))
 
 
 def template(name: str, sets=(), step=None, branch=None) -> templates.Template:

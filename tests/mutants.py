@@ -6,7 +6,7 @@ caught by `linkbook verify` (on the bundled books and on books aimed at it) and 
     python tests/mutants.py --no-tests      # verify only (a minute a mutant)
 
 Each mutant is one text substitution in a copy of the repository (src/, templates/, tests/ and
-docs/, with ../shared beside it). "verify" is caught when a build fails or any verify exits
+docs/; nothing beside it). "verify" is caught when a build fails or any verify exits
 non-zero; "tests" when the fast test files fail. The table at the end is the closing note's.
 """
 from __future__ import annotations
@@ -93,10 +93,6 @@ def copy_repository(dest: Path) -> Path:
     for part in ("src", "templates", "tests", "docs"):
         shutil.copytree(ROOT / part, repo / part,
                         ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
-    for base in (ROOT.parent / "shared", ROOT / "shared"):
-        if base.is_dir():
-            os.symlink(base, dest / "shared")
-            break
     return repo
 
 

@@ -2,7 +2,7 @@
 eight mechanisms as the bundled templates describe them.
 
 The solver is checked against what it must honour, never against numbers it produced itself:
-the published values of the seeds (shared/reference/published.toml), the loop-closure equations of
+the published values of the sources (tests/data/published.toml), the loop-closure equations of
 docs/mechanisms.md rebuilt from the returned keys, the geometric branch invariants, exact
 triangle-inequality tests for non-assembly, and the closed-form quick-return ratio.
 """
@@ -51,12 +51,8 @@ PUMP_S1 = (20.0, 50.0, 100.0, 150.0, 200.0, 250.0)
 
 
 def _published() -> dict:
-    """published.toml lives in shared/, beside the repo (or inside it in some layouts)."""
-    for root in (REPO.parent, REPO):
-        path = root / "shared" / "reference" / "published.toml"
-        if path.is_file():
-            return tomllib.loads(path.read_text(encoding="utf-8"))
-    pytest.fail("shared/reference/published.toml not found beside the repository")
+    """tests/data/published.toml: the numbers the sources printed, kept inside the repository."""
+    return tomllib.loads((REPO / "tests" / "data" / "published.toml").read_text(encoding="utf-8"))
 
 
 @pytest.fixture(scope="module")
