@@ -264,9 +264,16 @@ class _SheetCells:
         m = re.search(rb"<sheetData(?:/>|>.*?</sheetData>)", part, re.S)
         if m is None:
             raise ValueError("a worksheet part without <sheetData>")
-        head = re.sub(rb'<dimension ref="[^"]*"/>',
-                      f'<dimension ref="{self.dimension}"/>'.encode(), part[:m.start()], count=1)
+        # openpyxl wrote the dimension of the emptied sheet (A1:A1): `<dimension ref=".."/>`
+        # through lxml, `<dimension ref=".." />` through its own XML writer
+        head, found = _DIMENSION.subn(f'<dimension ref="{self.dimension}"/>'.encode(),
+                                      part[:m.start()], count=1)
+        if not found:
+            raise ValueError("a worksheet part without <dimension>")
         return head + b"<sheetData>", b"</sheetData>" + part[m.end():]
+
+
+_DIMENSION = re.compile(rb'<dimension ref="[^"]*"\s*/>')
 
 
 @dataclass
