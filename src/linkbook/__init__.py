@@ -41,7 +41,8 @@ def build(template: str | Path, output: str | Path | None = None, *, sets=(), st
 
 def verify(path: str | Path, engine: str = "vector"):
     """Every formula cell of the workbook at `path` against the independent reference; the
-    Report (verifier.Report). `engine`: "vector" (default), "formulas" or "libreoffice"."""
+    Report (verifier.Report). `engine`: "vector" (default), "formulas", "libreoffice" or
+    "gnumeric"."""
     from .verifier import verify as run
     return run(Path(path), engine)
 

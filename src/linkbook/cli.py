@@ -88,9 +88,11 @@ def _parser() -> argparse.ArgumentParser:
                                    "2 the file cannot be verified (one line says why and where).")
     v.add_argument("books", nargs="+", metavar="BOOK.xlsx",
                    help="one or more workbooks; the exit status is the worst of theirs")
-    v.add_argument("--engine", choices=("vector", "formulas", "libreoffice"), default="vector",
+    v.add_argument("--engine", choices=("vector", "formulas", "libreoffice", "gnumeric"),
+                   default="vector",
                    help="vector (default, fast: one compiled formula per column shape), formulas "
-                        "(the full ExcelModel, slow), libreoffice (recalculate in soffice)")
+                        "(the full ExcelModel, slow), libreoffice (recalculate in soffice), "
+                        "gnumeric (recalculate in Gnumeric's ssconvert)")
     v.add_argument("--json", action="store_true", help="print the report as JSON")
 
     a = sub.add_parser("animate", help="write a GIF (or MP4) of the mechanism moving through its "

@@ -1,15 +1,19 @@
-"""LibreOffice, headless: the real spreadsheet application as a checker and a printer.
+"""LibreOffice and Gnumeric, headless: real spreadsheet applications as checkers, and
+LibreOffice as a printer.
 
-Every call runs `soffice` with a private, freshly made profile (two jobs sharing one profile lose
-output) whose settings force a full recalculation on load: LibreOffice would otherwise keep
-whatever values a file caches, or none. soffice exits 0 even when it fails, so each call checks
-that the file it asked for exists. Temporary folders are always removed.
+A recalculation is one mechanism for both applications: the application loads the book, computes
+every formula and saves an .xlsx into a scratch folder, whose values are then read back. LibreOffice
+(`soffice`) runs with a private, freshly made profile (two jobs sharing one profile lose output)
+whose settings force a full recalculation on load: it would otherwise keep whatever values a file
+caches, or none. Gnumeric (`ssconvert --recalc`) recalculates every cell when told to. Both exit 0
+even when they fail, so each call checks that the file it asked for exists. Temporary folders are
+always removed.
 
 Errors: a formula's cached error comes back from openpyxl (data_only) as the plain string of its
 code with data_type 'e' ('#N/A', '#NUM!', '#DIV/0!', '#VALUE!', '#NAME?', ...).
 `recalculated_values` wraps those in `CellError`, a str subclass, so an error is never taken for a
 text result. LibreOffice differs from Excel on a few: SQRT(-1) is #VALUE! (Excel #NUM!),
-ATAN2(0, 0) is 0 (Excel #DIV/0!).
+ATAN2(0, 0) is 0 (Excel #DIV/0!). Gnumeric writes its error values with Excel's codes.
 """
 from __future__ import annotations
 
@@ -30,6 +34,11 @@ ERROR_CODES = frozenset({"#NULL!", "#DIV/0!", "#VALUE!", "#REF!", "#NAME?", "#NU
 INSTALL_HINT = ("LibreOffice is needed for this (the `soffice` command was not found). "
                 "Install it, e.g. on Debian/Ubuntu: apt-get install -y --no-install-recommends "
                 "libreoffice-calc-nogui; for PNG previews also poppler-utils (pdftoppm).")
+GNUMERIC_HINT = ("Gnumeric is needed for this (the `ssconvert` command was not found). "
+                 "Install it, e.g. on Debian/Ubuntu: apt-get install -y --no-install-recommends "
+                 "gnumeric.")
+# the applications a book can be recalculated in (verify's engines of the same names)
+APPLICATIONS = ("libreoffice", "gnumeric")
 
 # Recalculation modes 0 = always, 1 = never, 2 = ask: "always" for files from Excel (OOXML) and
 # from LibreOffice (ODF). Written into the private profile before soffice first starts.
@@ -85,6 +94,17 @@ def _require_soffice() -> str:
     return exe
 
 
+def ssconvert_path() -> str | None:
+    return shutil.which("ssconvert")
+
+
+def _require_ssconvert() -> str:
+    exe = ssconvert_path()
+    if exe is None:
+        raise OfficeUnavailable(GNUMERIC_HINT)
+    return exe
+
+
 @contextmanager
 def _profile():
     """A fresh LibreOffice user profile that recalculates every file on load."""
@@ -98,24 +118,46 @@ def _profile():
 def _convert(path: Path, outdir: Path, target: str, suffix: str) -> Path:
     """soffice --convert-to TARGET into a scratch folder, then move the result into outdir."""
     exe = _require_soffice()
+    with _profile() as profile:
+        return _made_by("LibreOffice", path, outdir, suffix, lambda source, scratch: [
+            exe, f"-env:UserInstallation={profile}", "--headless", "--norestore",
+            "--nolockcheck", "--calc", "--convert-to", target, "--outdir", str(scratch),
+            str(source)])
+
+
+def _gnumeric_recalculate(path: Path, outdir: Path) -> Path:
+    """ssconvert --recalc: every formula computed by Gnumeric, saved as .xlsx (Excel 2007+)."""
+    exe = _require_ssconvert()
+    return _made_by("Gnumeric", path, outdir, ".xlsx", lambda source, scratch: [
+        exe, "--recalc", "--export-type=Gnumeric_Excel:xlsx2", str(source),
+        str(scratch / (source.stem + ".xlsx"))])
+
+
+def _made_by(application: str, path: Path, outdir: Path, suffix: str, command) -> Path:
+    """Run `command(source, scratch folder)`, which writes STEM+suffix into the scratch folder,
+    and move that file into outdir."""
     path = Path(path).resolve()
     if not path.is_file():
         raise FileNotFoundError(path)
     outdir = Path(outdir)
     out = outdir / (path.stem + suffix)
-    if out.resolve() == path:               # LibreOffice's copy is not the file we wrote
+    if out.resolve() == path:               # the application's copy is not the file we wrote
         raise ValueError(f"{out} would replace its own source: choose another outdir")
     outdir.mkdir(parents=True, exist_ok=True)
-    with _profile() as profile, tempfile.TemporaryDirectory(prefix="linkbook-out-") as scratch:
-        code, detail = _run([exe, f"-env:UserInstallation={profile}", "--headless",
-                             "--norestore", "--nolockcheck", "--calc", "--convert-to", target,
-                             "--outdir", scratch, str(path)], f"converting {path.name}")
+    with tempfile.TemporaryDirectory(prefix="linkbook-out-") as scratch:
+        code, detail = _run(command(path, Path(scratch)), f"converting {path.name}")
         made = Path(scratch, out.name)
         if not made.is_file() or made.stat().st_size == 0:
-            raise OfficeFailed(f"LibreOffice could not convert {path.name} to {suffix} "
-                               f"(exit {code}){': ' + detail if detail else ''}")
+            raise OfficeFailed(f"{application} could not convert {path.name} to {suffix} "
+                               f"(exit {code}){': ' + _last_line(detail) if detail else ''}")
         shutil.move(str(made), out)
     return out
+
+
+def _last_line(detail: str) -> str:
+    """An application's last words: Gnumeric prints a warning per element it does not know
+    before the one that says why it failed."""
+    return detail.strip().splitlines()[-1].strip() if detail.strip() else ""
 
 
 def _run(cmd: list[str], what: str) -> tuple[int, str]:
@@ -133,8 +175,13 @@ def _run(cmd: list[str], what: str) -> tuple[int, str]:
     return proc.returncode, (stderr or stdout).strip()
 
 
-def recalculate(path, outdir) -> Path:
-    """Load in LibreOffice with a full recalculation and save as .xlsx into outdir."""
+def recalculate(path, outdir, application: str = "libreoffice") -> Path:
+    """Load in the application (one of APPLICATIONS) with a full recalculation and save as
+    .xlsx into outdir."""
+    if application == "gnumeric":
+        return _gnumeric_recalculate(Path(path), Path(outdir))
+    if application != "libreoffice":
+        raise ValueError(f"no application {application!r}: one of {', '.join(APPLICATIONS)}")
     return _convert(Path(path), Path(outdir), XLSX_FILTER, ".xlsx")
 
 
@@ -146,8 +193,13 @@ def to_pdf(path, outdir) -> Path:
 # ---------------------------------------------------------------- reading values back
 def read_values(path) -> dict[tuple[str, str], object]:
     """(sheet title, 'B7') -> the cached value of every non-empty cell of an .xlsx file."""
+    import warnings
     import openpyxl
-    wb = openpyxl.load_workbook(path, data_only=True, read_only=True)
+    with warnings.catch_warnings():
+        # about the application's copy, not the book: Gnumeric writes no default cell style
+        # and a print area of several ranges as ERROR("..."), which openpyxl reports
+        warnings.simplefilter("ignore", UserWarning)
+        wb = openpyxl.load_workbook(path, data_only=True, read_only=True)
     try:
         values = {}
         for ws in wb.worksheets:
@@ -174,11 +226,12 @@ def _value(cell):
     return cell.value
 
 
-def recalculated_values(path) -> dict[tuple[str, str], object]:
-    """Every cell's value after LibreOffice has recalculated a copy: numbers as float, errors
-    as CellError, text as str ('' for a formula whose result is empty text), booleans as bool."""
+def recalculated_values(path, application: str = "libreoffice") -> dict[tuple[str, str], object]:
+    """Every cell's value after the application (LibreOffice or Gnumeric) has recalculated a
+    copy: numbers as float, errors as CellError, text as str ('' for a formula whose result is
+    empty text), booleans as bool."""
     with tempfile.TemporaryDirectory(prefix="linkbook-recalc-") as tmp:
-        return read_values(recalculate(path, tmp))
+        return read_values(recalculate(path, tmp, application))
 
 
 # ---------------------------------------------------------------- page setup

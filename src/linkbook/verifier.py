@@ -34,6 +34,7 @@ TOLERANCE_RULE = {
                 "dead centre its base bound / sine² (sine: between a loop's constraint "
                 "gradients)",
     "libreoffice": "1e-9·max(|x|, the unit's bound): it keeps 15 digits",
+    "gnumeric": "as libreoffice: 1e-9·max(|x|, the unit's bound)",
 }
 
 
@@ -914,12 +915,13 @@ def verify(path: Path, engine: str = "vector") -> Report:
             # excel_model_constants): judged with the relative bound, as LibreOffice is
             values = engines.evaluate_formulas_model(path)
             relative = True
-        elif engine == "libreoffice":
-            from . import office
-            values = office.recalculated_values(path)
-            is_error, error_code, relative = office.is_error, office.error_code, True
         else:
-            raise UnusableFile(f"unknown engine {engine!r}")
+            # a real application (LibreOffice, Gnumeric) recalculates a copy: judged alike
+            from . import office
+            if engine not in office.APPLICATIONS:
+                raise UnusableFile(f"unknown engine {engine!r}")
+            values = office.recalculated_values(path, engine)
+            is_error, error_code, relative = office.is_error, office.error_code, True
     except engines.EngineError as exc:
         raise UnusableFile(f"{path}: {exc}") from None
     try:
