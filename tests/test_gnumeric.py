@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import json
 import os
+import re
+import shutil
+import subprocess
 import sys
 import zipfile
 from pathlib import Path
@@ -25,6 +28,23 @@ from linkbook.cli import main  # noqa: E402
 
 BUNDLED = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")      # cannot turn fully: #N/A rows
+# What Gnumeric 1.12 says on loading a bundled book, each an application difference that the
+# README describes: Excel's own form of a print area of several ranges, and of print titles
+# with both rows and columns ('Sweep'!$3:$4,'Sweep'!$A:$A), which Gnumeric cannot hold in a
+# name; the footer of a different first page (Gnumeric reads only the odd header and footer);
+# the charts, which openpyxl anchors at one cell and Gnumeric 1.12.55 reads only from a
+# two-cell anchor.
+KNOWN_WARNINGS = (
+    re.compile(r"At [A-Z]+\d+: '('[^']+'!\$[A-Z]*\$?\d*(:\$[A-Z]*\$?\d*)?,?)+' Multiple "
+               r"expressions are not supported in this context"),
+    re.compile(r"Unexpected element 'firstFooter' in state : "),
+    re.compile(r"\tworksheet -> headerFooter"),
+    re.compile(r"Unexpected element 'a:graphic' in state : "),
+    re.compile(r"\twsDr -> oneCellAnchor -> graphicFrame"),
+    re.compile(r"[^!:]+(![A-Z]+\d+)? : Dropping missing object"),
+)
+
+
 def require_ssconvert() -> None:
     """Skip without Gnumeric, but fail under CI, which must have it."""
     if office.ssconvert_path():
@@ -182,3 +202,15 @@ def test_gnumeric_recalculates_every_bundled_book_like_the_reference(name, tmp_p
                      f"all downstream of {', '.join(report['likely_causes'])}")
     assert status == 0, report["likely_causes"][:6]
 
+
+@pytest.mark.gnumeric
+@pytest.mark.parametrize("name", BUNDLED)
+def test_gnumeric_reads_every_bundled_book_with_only_the_known_warnings(name, tmp_path):
+    require_ssconvert()
+    path = _book(name, tmp_path)
+    run = subprocess.run([office.ssconvert_path(), str(path), str(tmp_path / "first.csv")],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0 and (tmp_path / "first.csv").is_file(), run.stderr
+    unknown = [line for line in (run.stderr + run.stdout).splitlines()
+               if line.strip() and not any(w.fullmatch(line) for w in KNOWN_WARNINGS)]
+    assert not unknown, unknown

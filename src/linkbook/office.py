@@ -280,6 +280,18 @@ def apply_print_setup(wb, fit_to_width: tuple[str, ...] = ()) -> None:
         _column_page_areas(ws, sheet, col_breaks)
         ws.oddFooter.center.text = "&A, page &P of &N"
         ws.oddFooter.center.size = 8
+        _leave_out_empty_headers(ws)
+
+
+def _leave_out_empty_headers(ws) -> None:
+    """No element for a header or footer that prints nothing (openpyxl writes all six, empty
+    or not): an absent one means the same to Excel and LibreOffice, and Gnumeric, which reads
+    only the odd ones, warns on each other element it finds."""
+    items = ws.HeaderFooter
+    for name in ("oddHeader", "oddFooter", "evenHeader", "evenFooter", "firstHeader",
+                 "firstFooter"):
+        if not getattr(items, name):
+            setattr(items, name, None)
 
 
 SPARE_COLUMNS = 3

@@ -68,6 +68,8 @@ def build(t: Template) -> Built:
     (set_degree_windows moves it)."""
     model = t.mechanism.build()
     wb = Workbook()
+    wb.security = None      # openpyxl's default writes an empty <workbookProtection/>: it
+                            # protects nothing, and Gnumeric does not know the element
     ws_mech = wb.active
     ws_mech.title = MECH
     ws_sweep = wb.create_sheet(SWEEP)
