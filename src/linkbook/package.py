@@ -6,6 +6,7 @@ One streaming copy of the zip does all of it:
   Excel moves into a new shared-strings part the first time it saves);
 - the children of each `<font>` in styles.xml are put in the schema's order (openpyxl writes the
   default font's `color` after `family`);
+- drawings and charts declare their namespaces on the root element (see namespaces_on_root);
 - form controls (controls.py) are added to the sheets that have them;
 - with `values`, every formula cell gets its cached value (cached.py);
 - with `cells` (from `cells_held_back`), every sheet's `<sheetData>` is written here: openpyxl
@@ -99,6 +100,8 @@ def finish(path_in, path_out, *, values: dict | None = None,
                                                           "sharedStrings.xml")])
                     elif name == "xl/styles.xml" and tidy:
                         data = fonts_in_order(data)
+                    elif tidy and _DRAWING_PART.fullmatch(name):
+                        data = namespaces_on_root(data)
                     elif name == "xl/workbook.xml" and values is not None:
                         data = cached.full_calc_on_load(data)
                     elif (owner := _rels_owner(name)) in rels_added:
@@ -467,6 +470,32 @@ def _content_types(xml: bytes, with_controls: list[SheetControls], sst: bool) ->
         add.append(f'<Override PartName="/{SST_PART}" ContentType="{SST_TYPE}"/>')
     end = xml.rfind(b"</Types>")
     return xml[:end] + "".join(add).encode() + xml[end:]
+
+
+# Drawings and charts: openpyxl through lxml declares the DrawingML prefixes (a:, c:, r:) on
+# the elements that use them, through its own writer on the root element. Gnumeric 1.12 reads a
+# drawing's chart only in the second form (in the first it drops every chart, measured).
+_DRAWING_PART = re.compile(r"xl/(drawings|charts)/[^/]+\.xml")
+_START_TAG = re.compile(rb"<[A-Za-z][^>]*>")
+_PREFIX_DECLARATION = re.compile(rb'\s+xmlns:([A-Za-z_][\w.-]*)="([^"]*)"')
+
+
+def namespaces_on_root(xml: bytes) -> bytes:
+    """The part with every prefixed namespace declared once, on its root element (unchanged
+    if a prefix stands for two namespaces in it)."""
+    found: dict[bytes, bytes] = {}
+    for tag in _START_TAG.finditer(xml):
+        for name, uri in _PREFIX_DECLARATION.findall(tag.group()):
+            if found.setdefault(name, uri) != uri:
+                return xml
+    root = _START_TAG.search(xml)
+    if root is None or not found:
+        return xml
+    declarations = b"".join(b' xmlns:%s="%s"' % item for item in found.items())
+    bare = _START_TAG.sub(lambda m: _PREFIX_DECLARATION.sub(b"", m.group()), xml[root.start():])
+    end = bare.index(b">")
+    end -= bare[end - 1:end] == b"/"
+    return xml[:root.start()] + bare[:end] + declarations + bare[end:]
 
 
 def fonts_in_order(styles: bytes) -> bytes:
