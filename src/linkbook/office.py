@@ -13,7 +13,9 @@ Errors: a formula's cached error comes back from openpyxl (data_only) as the pla
 code with data_type 'e' ('#N/A', '#NUM!', '#DIV/0!', '#VALUE!', '#NAME?', ...).
 `recalculated_values` wraps those in `CellError`, a str subclass, so an error is never taken for a
 text result. LibreOffice differs from Excel on a few: SQRT(-1) is #VALUE! (Excel #NUM!),
-ATAN2(0, 0) is 0 (Excel #DIV/0!). Gnumeric writes its error values with Excel's codes.
+ATAN2(0, 0) is 0 (Excel #DIV/0!). Gnumeric writes its error values with Excel's codes, and gives
+Excel's answer on both; Debian's Gnumeric 1.12.55 computes in long double and writes 21 digits
+(1/3 is 0.333333333333333333342), read back here as the nearest double.
 """
 from __future__ import annotations
 
