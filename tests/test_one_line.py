@@ -293,10 +293,17 @@ def test_a_sheet_renamed_only_in_case_is_named(tmp_path, capsys, book, sheet):
     assert "KeyError" not in line
 
 
-def test_a_sheet_openpyxl_cannot_parse_is_one_line(tmp_path, capsys, book):
-    """openpyxl's message on broken XML runs over three lines: it is joined into one."""
-    path = tmp_path / "broken.xlsx"
-    path.write_bytes(_rewritten(book, "xl/worksheets/sheet2.xml",
-                                lambda xml: xml.replace("<sheetData>", "<sheetData><<", 1)))
+def test_openpyxls_three_line_message_is_one_line(tmp_path, capsys, book):
+    """openpyxl's message on a cell it cannot read (a number written 0x10) runs over three
+    lines ("... Please see the exception for more details."): it is joined into one, as the
+    command, animate and preview see it."""
+    from linkbook.safety import UnsafeFile, load_workbook_safely
+    path = tmp_path / "hex.xlsx"
+    path.write_bytes(_rewritten(book, "xl/worksheets/sheet1.xml", lambda xml: re.sub(
+        r'(<c r="C8"[^>]*><v>)[^<]*(</v>)', lambda m: m[1] + "0x10" + m[2], xml)))
+    with pytest.raises(UnsafeFile) as caught:
+        load_workbook_safely(path)
+    said = str(caught.value)
+    assert "\n" not in said and "Please see the exception" in said, said
     code, lines = _run(["verify", path], capsys)
-    _one_error_line(code, lines, f"{path}: cannot be read as a workbook")
+    _one_error_line(code, lines, str(path))
