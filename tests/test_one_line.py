@@ -6,6 +6,7 @@ byte-order mark, a 400-digit integer, a chart with nothing to plot, a sheet rena
 """
 from __future__ import annotations
 
+import contextlib
 import errno
 import io
 import json
@@ -180,6 +181,8 @@ def test_a_folder_where_a_file_belongs_and_a_file_where_a_folder_belongs(tmp_pat
     _one_error_line(code, lines, "--outdir: ", "notes.txt' is a file, not a folder")
     code, lines = _run(["build", "fourbar", "-o", tmp_path / "notes.txt" / "x.xlsx"], capsys)
     _one_error_line(code, lines, "-o: ", "notes.txt' is a file, not a folder")
+    code, lines = _run(["verify", tmp_path / "book.xlsx"], capsys)
+    _one_error_line(code, lines, f"{tmp_path / 'book.xlsx'}: a folder, not a workbook")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["book.xlsx", "notes.txt", "plain"]
 
 
@@ -307,3 +310,41 @@ def test_openpyxls_three_line_message_is_one_line(tmp_path, capsys, book):
     assert "\n" not in said and "Please see the exception" in said, said
     code, lines = _run(["verify", path], capsys)
     _one_error_line(code, lines, str(path))
+
+
+def test_a_signal_while_libreoffice_runs_ends_it_too(tmp_path):
+    """LibreOffice runs in a session of its own (so that a time-out can end soffice.bin, the
+    launcher's child): Ctrl-C reaches only us, and we end its whole process group."""
+    from linkbook import office
+    pids = tmp_path / "pids"
+    script = f"sleep 120 & echo $$ $! > {pids}; wait"
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+    before = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 1.0)
+        with pytest.raises(KeyboardInterrupt):
+            office._run(["sh", "-c", script], "sleeping")
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, before)
+    left = [pid for pid in map(int, pids.read_text().split()) if _running(pid)]
+    for pid in left:                      # a failure of this test leaves nothing running
+        with contextlib.suppress(ProcessLookupError):
+            os.kill(pid, signal.SIGKILL)
+    assert not left
+
+
+def _running(pid: int) -> bool:
+    """Alive, not a zombie (an orphan is reaped by whoever adopts it, when it gets to it)."""
+    import time
+    for _ in range(50):
+        try:
+            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        except FileNotFoundError:
+            return False
+        if state in ("Z", "X"):
+            return False
+        time.sleep(0.1)
+    return True

@@ -172,8 +172,9 @@ def test_an_input_edited_outside_the_domain_cannot_be_verified(fourbar, tmp_path
                                                                 value):
     def edit(wb, meta):
         wb["Mechanism"][meta["inputs"]["a2"]["cell"]] = value
-    code, last = _verify(_edited(fourbar, tmp_path / "edited.xlsx", edit), capsys)
-    assert code == 2 and last.startswith("linkbook: error: input a2"), last
+    path = _edited(fourbar, tmp_path / "edited.xlsx", edit)
+    code, last = _verify(path, capsys)
+    assert code == 2 and last.startswith(f"linkbook: error: {path}: input a2"), last
 
 
 @pytest.mark.parametrize("factor", [1e-3, 1e-5, 1e3, 1e5])

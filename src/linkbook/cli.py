@@ -27,7 +27,8 @@ EPILOG = """examples:
   linkbook animate fourbar.xlsx                 # fourbar.gif: the mechanism moving
 
 KEY in --set is the parameter's symbol as `linkbook list -v` shows it (a2, gamma3, ...).
-Lengths are in the template's unit, angles in degrees. Exit status: 0 done, 2 bad input."""
+Lengths are in the template's unit, angles in degrees. Exit status: 0 done, 2 bad input or a
+file system that refuses the write, 130 and 143 stopped by Ctrl-C and SIGTERM."""
 
 
 VERIFY_OUTPUT = """output:
@@ -39,7 +40,8 @@ VERIFY_OUTPUT = """output:
   (the likely causes first: differing cells that read no other differing cell). A book that
   cannot be verified at all ends in one line on stderr, `linkbook: error: ...` (exit 2).
   Several books end with a count of each verdict.
-  -v adds the table of every check; -q leaves out the books that agree and the count.
+  -v adds the table of every check; -q leaves out the books that agree (and the count, when
+  every book agrees: then nothing is printed).
 
   --json prints a list with one object per book, always with the same keys: book, mechanism,
   engine, linkbook (the version), status (0, 1 or 2), ok, error (null, or why the book cannot

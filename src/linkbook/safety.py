@@ -22,6 +22,8 @@ class UnsafeFile(Exception):
 
 def check_zip(path: Path) -> None:
     path = Path(path)
+    if path.is_dir():
+        raise UnsafeFile(f"{path}: a folder, not a workbook")
     if not path.is_file():
         raise UnsafeFile(f"{path}: no such file")
     if not zipfile.is_zipfile(path):
