@@ -265,8 +265,9 @@ def _main(argv: list[str] | None) -> int:
 
 
 def _error(exc: Exception) -> None:
-    """The one line a failure ends with, on stderr."""
-    print(f"linkbook: error: {_one_line(exc)}", file=sys.stderr)
+    """The one line a failure ends with, on stderr: whole (it names the field and the value),
+    its line breaks, if any, joined."""
+    print(f"linkbook: error: {' '.join(str(exc).split())}", file=sys.stderr)
 
 
 def _verify(args) -> int:
@@ -277,7 +278,7 @@ def _verify(args) -> int:
         report = verify(book, args.engine)
         reports.append(report)
         if report.error is not None:
-            print(f"linkbook: error: {report.error}", file=sys.stderr)
+            _error(report.error)
         elif not args.json and not (args.quiet and report.ok):
             _print_report(report, args.verbose)
             if len(args.books) > 1:
