@@ -56,7 +56,10 @@ def verify(path: str | Path, engine: str = "vector"):
     try:
         return run(Path(path), engine)
     except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:
-        return Report(str(path), None, engine, [], error=" ".join(str(exc).split()))
+        said = " ".join(str(exc).split())
+        if not said.startswith(f"{path}: "):    # among many books, each line names its own
+            said = f"{path}: {said}"
+        return Report(str(path), None, engine, [], error=said)
 
 
 def __dir__() -> list[str]:

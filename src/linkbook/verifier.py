@@ -908,8 +908,6 @@ def verify(path: Path, engine: str = "vector") -> Report:
     meta = _build_record(path, wb)
     try:
         params = inputs_of(wb, meta)    # first: an input no number holds is named, not computed
-    except UnusableFile as exc:
-        raise UnusableFile(f"{path}: {exc}") from None
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
         raise UnusableFile(_record_mismatch(path, exc)) from None
     from . import engine as engines
