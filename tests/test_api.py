@@ -113,3 +113,22 @@ def test_the_garbage_collector_is_paused_only_during_a_call(tmp_path):
         assert seen[-1] is False and not gc.isenabled()
     finally:
         gc.enable()
+
+
+def test_a_refused_write_raises_cannot_write_naming_the_target(tmp_path, monkeypatch):
+    """A full disk is the environment's doing: CannotWrite, an OSError with the original errno,
+    one line naming the target (not the hidden temporary file); nothing left behind."""
+    import errno
+    import os
+
+    from linkbook import package
+
+    def full(src, dst, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(dst))
+    monkeypatch.setattr(package, "finish", full)
+    target = tmp_path / "sc.xlsx"
+    with pytest.raises(linkbook.CannotWrite) as caught:
+        linkbook.build("slider-crank", target, step=30)
+    assert caught.value.errno == errno.ENOSPC and isinstance(caught.value, OSError)
+    assert str(caught.value) == f"cannot write {target}: the disk is full"
+    assert list(tmp_path.iterdir()) == []
