@@ -296,6 +296,15 @@ def test_a_sheet_renamed_only_in_case_is_named(tmp_path, capsys, book, sheet):
     assert "KeyError" not in line
 
 
+def test_the_sheet_of_the_inputs_deleted_is_named(tmp_path, capsys, book):
+    wb = openpyxl.load_workbook(io.BytesIO(book))
+    del wb["Mechanism"]
+    wb.save(tmp_path / "no-inputs.xlsx")
+    code, lines = _run(["verify", tmp_path / "no-inputs.xlsx"], capsys)
+    line = _one_error_line(code, lines, "the sheet 'Mechanism' (the inputs) is missing")
+    assert "KeyError" not in line
+
+
 def test_openpyxls_three_line_message_is_one_line(tmp_path, capsys, book):
     """openpyxl's message on a cell it cannot read (a number written 0x10) runs over three
     lines ("... Please see the exception for more details."): it is joined into one, as the

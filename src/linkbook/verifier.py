@@ -946,8 +946,8 @@ def _record_mismatch(path: Path, exc: Exception) -> str:
 
 
 def _build_record(path: Path, wb) -> dict:
-    """The book's build record, with every sheet it names present; UnusableFile saying which
-    part is missing or damaged otherwise."""
+    """The book's build record; UnusableFile saying what is wrong when it is missing or damaged,
+    or when a sheet it names was renamed in case only."""
     if layout.META not in wb.sheetnames:
         raise UnusableFile(f"{path}: not a linkbook workbook (no build record sheet)")
     try:
@@ -959,10 +959,13 @@ def _build_record(path: Path, wb) -> dict:
                            f"not the JSON object of format {layout.FORMAT_VERSION} linkbook "
                            "writes")
     for sheet in sorted(_sheets_named(meta) - set(wb.sheetnames)):
-        alike = [s for s in wb.sheetnames if s.casefold() == sheet.casefold()]
-        hint = (f" (the book has {alike[0]!r}: the record names sheets exactly, so rename it "
-                f"back)" if alike else "")
-        raise UnusableFile(f"{path}: the sheet {sheet!r} is missing{hint}")
+        # a sheet deleted is judged by the cells that read it; one renamed in case only, and
+        # the sheet of the inputs, are named here
+        for alike in (s for s in wb.sheetnames if s.casefold() == sheet.casefold()):
+            raise UnusableFile(f"{path}: the sheet {sheet!r} is missing (the book has "
+                               f"{alike!r}: the record names sheets exactly, so rename it back)")
+        if sheet == layout.MECH:
+            raise UnusableFile(f"{path}: the sheet {sheet!r} (the inputs) is missing")
     return meta
 
 
