@@ -36,8 +36,46 @@ def test_bad_input_raises_one_line_errors(tmp_path):
     with pytest.raises(linkbook.InputError):
         linkbook.build("fourbar", tmp_path / "x.txt")
     (tmp_path / "not.xlsx").write_bytes(b"no zip")
-    with pytest.raises(linkbook.UnusableFile):
-        linkbook.verify(tmp_path / "not.xlsx")
+    report = linkbook.verify(tmp_path / "not.xlsx")
+    assert report.status == 2 and not report.ok and "not a zip" in report.error
+    assert "\n" not in report.error
+
+
+API_MISTAKES = [
+    # (what, build's arguments, the start of the one line it raises)
+    ("sets as one text", dict(sets="a2=40"), "sets: must be a list of KEY=VALUE texts"),
+    ("an assignment without =", dict(sets=["a2"]), "sets: expects KEY=VALUE (got 'a2')"),
+    ("an assignment that is not text", dict(sets=[("a2", 40)]), "sets: expects KEY=VALUE"),
+    ("a bad value", dict(sets=["a2=-1"]), "sets a2: must be a positive length"),
+    ("an unknown key", dict(sets=["a9=1"]), "sets a9: unknown parameter"),
+    ("a bad step", dict(step="x"), "step: must be a number"),
+    ("a bad branch", dict(branch="sideways"), "branch: must be open or crossed"),
+    ("a bad unit", dict(unit="furlong"), "unit: must be one of"),
+    ("a missing folder", dict(output="out/fourbar.xlsx"), "output: folder 'out' does not exist"),
+    ("a folder for the file", dict(output="."), "output: '.' is a folder"),
+]
+
+
+@pytest.mark.parametrize("what,kwargs,starts", API_MISTAKES, ids=[m[0] for m in API_MISTAKES])
+def test_the_api_names_its_own_arguments_never_a_flag(tmp_path, monkeypatch, what, kwargs,
+                                                      starts):
+    """The API's messages name build's arguments (sets, step, output), not the command line's
+    flags (--set, -o), and no file is left behind."""
+    monkeypatch.chdir(tmp_path)
+    kwargs.setdefault("output", "fourbar.xlsx")
+    with pytest.raises(linkbook.InputError) as caught:
+        linkbook.build("fourbar", **kwargs)
+    text = str(caught.value)
+    assert text.startswith(starts) and "--" not in text and "\n" not in text, text
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_error_types_are_part_of_the_module():
+    """dir(linkbook) and __all__ show the exceptions the API raises (they load on first use)."""
+    for name in ("InputError", "UnusableFile", "CannotWrite"):
+        assert name in dir(linkbook) and name in linkbook.__all__
+        assert issubclass(getattr(linkbook, name), Exception)
+    assert issubclass(linkbook.CannotWrite, OSError)
 
 
 def test_aggregate_is_known_even_when_formulas_made_its_table_first(tmp_path):
@@ -75,3 +113,22 @@ def test_the_garbage_collector_is_paused_only_during_a_call(tmp_path):
         assert seen[-1] is False and not gc.isenabled()
     finally:
         gc.enable()
+
+
+def test_a_refused_write_raises_cannot_write_naming_the_target(tmp_path, monkeypatch):
+    """A full disk is the environment's doing: CannotWrite, an OSError with the original errno,
+    one line naming the target (not the hidden temporary file); nothing left behind."""
+    import errno
+    import os
+
+    from linkbook import package
+
+    def full(src, dst, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(dst))
+    monkeypatch.setattr(package, "finish", full)
+    target = tmp_path / "sc.xlsx"
+    with pytest.raises(linkbook.CannotWrite) as caught:
+        linkbook.build("slider-crank", target, step=30)
+    assert caught.value.errno == errno.ENOSPC and isinstance(caught.value, OSError)
+    assert str(caught.value) == f"cannot write {target}: the disk is full"
+    assert list(tmp_path.iterdir()) == []

@@ -148,7 +148,7 @@ def test_one_broken_formula_is_marked_as_the_likely_cause(fourbar, tmp_path, cap
     assert out[-1].startswith(f"DISAGREES: {len(differing)} cells differ, likely cause {cause};")
     assert len(differing) > 1                     # the Motion cells of that row read it
     assert cli.main(["verify", "--json", str(path)]) == 1
-    data = json.loads(capsys.readouterr().out)
+    [data] = json.loads(capsys.readouterr().out)
     assert data["likely_causes"] == [cause] and data["mismatches"] == len(differing)
 
 
@@ -172,8 +172,9 @@ def test_an_input_edited_outside_the_domain_cannot_be_verified(fourbar, tmp_path
                                                                 value):
     def edit(wb, meta):
         wb["Mechanism"][meta["inputs"]["a2"]["cell"]] = value
-    code, last = _verify(_edited(fourbar, tmp_path / "edited.xlsx", edit), capsys)
-    assert code == 2 and last.startswith("linkbook: error: input a2"), last
+    path = _edited(fourbar, tmp_path / "edited.xlsx", edit)
+    code, last = _verify(path, capsys)
+    assert code == 2 and last.startswith(f"linkbook: error: {path}: input a2"), last
 
 
 @pytest.mark.parametrize("factor", [1e-3, 1e-5, 1e3, 1e5])
@@ -278,7 +279,7 @@ def test_json_says_what_was_judged_and_how(fourbar, capsys):
 
     from linkbook import __version__
     assert cli.main(["verify", str(fourbar), "--json"]) == 0
-    report = json.loads(capsys.readouterr().out)
+    [report] = json.loads(capsys.readouterr().out)
     assert report["linkbook"] == __version__ and report["mismatches"] == 0
     assert report["cells"] == report["formula_cells"] > 3000
     assert report["inputs"]["a2"] == 35.0 and report["tolerance"]["S"] == pytest.approx(434.0)

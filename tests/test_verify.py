@@ -72,7 +72,7 @@ def _verify(*args, capsys):
 def test_verify_passes_a_fresh_book(tmp_path, capsys):
     path = tmp_path / "fb.xlsx"
     assert main(["build", "fourbar", "-o", str(path)]) == 0
-    code, out, _ = _verify(path, capsys=capsys)
+    code, out, _ = _verify(path, "-v", capsys=capsys)
     assert code == 0, out
     assert "all agree" in out and "theta13" in out
 
@@ -90,7 +90,7 @@ def test_verify_finds_a_tampered_formula_and_names_the_cell(tmp_path, capsys):
     assert code == 1
     assert "Sweep!H20" in out and "DISAGREES" in out
     code, out, _ = _verify(path, "--json", capsys=capsys)
-    report = json.loads(out)
+    [report] = json.loads(out)
     assert code == 1 and not report["ok"]
     bad = [m for c in report["checks"] for m in c["mismatches"]]
     assert {(m["sheet"], m["cell"]) for m in bad} >= {("Sweep", "H20")}

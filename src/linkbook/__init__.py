@@ -9,32 +9,38 @@ The Python API is these two calls (the command line does the same)::
     report.status        # 0 every formula cell agrees, 1 a cell differs, 2 some cannot be judged
     report.differing, report.causes, report.cells, report.formula_cells, report.inputs
 
-Bad input raises `linkbook.InputError` (build) or `linkbook.UnusableFile` (verify), each with a
-one-line message naming the field or the cell.
+Bad input to build raises `linkbook.InputError` (a one-line message naming the argument: `sets`,
+`step`, `output`, ...), a file system that refuses the write `linkbook.CannotWrite` (an OSError).
+verify never raises for the book it is given: one it cannot verify at all (not a workbook,
+damaged, not linkbook's) gives a report of status 2 whose `error` is the one-line reason.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
 __version__ = "0.1.0"
-__all__ = ["build", "verify", "InputError", "UnusableFile", "__version__"]
+__all__ = ["build", "verify", "InputError", "UnusableFile", "CannotWrite", "__version__"]
 
 
 def build(template: str | Path, output: str | Path | None = None, *, sets=(), step=None,
           branch: str | None = None, unit: str | None = None, values: bool = False) -> Path:
-    """Build one workbook: `template` a bundled name ("fourbar") or a .toml file; `sets` like
-    the command line's --set ("a2=45"); `step` the sweep step; `branch` "open" or "crossed";
-    `unit` the length unit (mm, cm, m, in, ft; the template's lengths converted to it);
-    `values` stores computed values too. Returns the path written (default: <name>.xlsx here).
+    """Build one workbook: `template` a bundled name ("fourbar") or a .toml file; `sets` a list
+    like the command line's --set (["a2=45"]); `step` the sweep step; `branch` "open" or
+    "crossed"; `unit` the length unit (mm, cm, m, in, ft; the template's lengths converted to
+    it); `values` stores computed values too. Returns the path written (default: <name>.xlsx
+    here); `output`'s folder must exist. Raises InputError or CannotWrite with one line.
     """
     from . import builder, templates
+    from .files import check_output
+    if isinstance(sets, str):
+        raise templates.InputError("sets", f'must be a list of KEY=VALUE texts, such as '
+                                           f'["a2=45"] (got the text {sets!r})')
     t = templates.load(str(template))
     if unit is not None:
-        t = templates.with_unit(t, unit)
-    t = templates.with_overrides(t, list(sets), step, branch)
-    path = Path(output) if output is not None else Path(f"{t.name}.xlsx")
-    if path.suffix.lower() != ".xlsx":
-        raise templates.InputError("output", f"must name an .xlsx file (got {str(path)!r})")
+        t = templates.with_unit(t, unit, templates.ARGUMENTS["unit"])
+    t = templates.with_overrides(t, list(sets), step, branch, templates.ARGUMENTS)
+    path = check_output(Path(output) if output is not None else Path(f"{t.name}.xlsx"),
+                        "output", (".xlsx",))
     builder.build_file(t, path, values)
     return path
 
@@ -42,9 +48,24 @@ def build(template: str | Path, output: str | Path | None = None, *, sets=(), st
 def verify(path: str | Path, engine: str = "vector"):
     """Every formula cell of the workbook at `path` against the independent reference; the
     Report (verifier.Report). `engine`: "vector" (default), "formulas", "libreoffice" or
-    "gnumeric"."""
-    from .verifier import verify as run
-    return run(Path(path), engine)
+    "gnumeric".
+    A book that cannot be verified at all gives a Report of status 2 with the reason in
+    `error` (the line the command prints), so that a status is always there to act on."""
+    from .office import OfficeFailed, OfficeUnavailable
+    from .safety import UnsafeFile
+    from .verifier import Report, UnusableFile, verify as run
+    try:
+        return run(Path(path), engine)
+    except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:
+        said = " ".join(str(exc).split())
+        if not said.startswith(f"{path}: "):    # among many books, each line names its own
+            said = f"{path}: {said}"
+        return Report(str(path), None, engine, [], error=said)
+
+
+def __dir__() -> list[str]:
+    # the error types are loaded on first use (__getattr__) but belong to the API all along
+    return sorted(set(globals()) | set(__all__))
 
 
 def __getattr__(name: str):
@@ -55,4 +76,7 @@ def __getattr__(name: str):
     if name == "UnusableFile":
         from .verifier import UnusableFile
         return UnusableFile
+    if name == "CannotWrite":
+        from .files import CannotWrite
+        return CannotWrite
     raise AttributeError(f"module 'linkbook' has no attribute {name!r}")

@@ -27,7 +27,27 @@ EPILOG = """examples:
   linkbook animate fourbar.xlsx                 # fourbar.gif: the mechanism moving
 
 KEY in --set is the parameter's symbol as `linkbook list -v` shows it (a2, gamma3, ...).
-Lengths are in the template's unit, angles in degrees. Exit status: 0 done, 2 bad input."""
+Lengths are in the template's unit, angles in degrees. Exit status: 0 done, 2 bad input or a
+file system that refuses the write, 130 and 143 stopped by Ctrl-C and SIGTERM."""
+
+
+VERIFY_OUTPUT = """output:
+  For each book, a line naming it, its mechanism and the engine, and its verdict line:
+    all agree: N of N formula cells compared, max |Δ| ...
+    DISAGREES: K cells differ, likely cause Sweep!E5:E77; ...     (exit 1)
+    CANNOT JUDGE K formula cells ...: Mechanism!Z3; ...            (exit 2)
+  Where cells differ, the checks that failed and up to 5 of each one's cells come between
+  (the likely causes first: differing cells that read no other differing cell). A book that
+  cannot be verified at all ends in one line on stderr, `linkbook: error: ...` (exit 2).
+  Several books end with a count of each verdict.
+  -v adds the table of every check; -q leaves out the books that agree (and the count, when
+  every book agrees: then nothing is printed).
+
+  --json prints a list with one object per book, always with the same keys: book, mechanism,
+  engine, linkbook (the version), status (0, 1 or 2), ok, error (null, or why the book cannot
+  be verified), cells, formula_cells, mismatches (how many cells differ), likely_causes and
+  unjudged (cell ranges in the book's sheet order, a run down a column as one range:
+  "Sweep!E5:E77"), max_abs_diff, inputs, tolerance, checks."""
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -85,7 +105,8 @@ def _parser() -> argparse.ArgumentParser:
                                    "#N/A exactly where the loop cannot close. A formula cell the "
                                    "book's build record does not describe is named, not passed. "
                                    "Exit status: 0 every formula cell agrees, 1 a cell disagrees, "
-                                   "2 the file cannot be verified (one line says why and where).")
+                                   "2 the file cannot be verified (one line says why and where).",
+                       epilog=VERIFY_OUTPUT, formatter_class=argparse.RawDescriptionHelpFormatter)
     v.add_argument("books", nargs="+", metavar="BOOK.xlsx",
                    help="one or more workbooks; the exit status is the worst of theirs")
     v.add_argument("--engine", choices=("vector", "formulas", "libreoffice", "gnumeric"),
@@ -93,7 +114,15 @@ def _parser() -> argparse.ArgumentParser:
                    help="vector (default, fast: one compiled formula per column shape), formulas "
                         "(the full ExcelModel, slow), libreoffice (recalculate in soffice), "
                         "gnumeric (recalculate in Gnumeric's ssconvert)")
-    v.add_argument("--json", action="store_true", help="print the report as JSON")
+    v.add_argument("--json", action="store_true",
+                   help="print the reports as JSON: a list, one object per book (see below)")
+    amount = v.add_mutually_exclusive_group()
+    amount.add_argument("-q", "--quiet", action="store_true",
+                        help="print only the books that do not agree (the exit status says the "
+                             "rest)")
+    amount.add_argument("-v", "--verbose", action="store_true",
+                        help="also print every check: each column or block compared, its cells, "
+                             "max |Δ| and #N/A agreement")
 
     a = sub.add_parser("animate", help="write a GIF (or MP4) of the mechanism moving through its "
                                        "sweep",
@@ -161,10 +190,19 @@ def _to_devnull(stream) -> None:
     os.dup2(os.open(os.devnull, os.O_WRONLY), stream.fileno())
 
 
+class Terminated(BaseException):
+    """SIGTERM, raised where the process is (as Ctrl-C raises KeyboardInterrupt), so that what
+    is half-done is undone on the way out (a temporary file removed, LibreOffice stopped). A
+    BaseException, as KeyboardInterrupt is: no `except Exception` may swallow it."""
+
+
+STOPPED = {KeyboardInterrupt: ("Ctrl-C (SIGINT)", 130), Terminated: ("SIGTERM", 143)}
+
+
 def main(argv: list[str] | None = None) -> int:
     import warnings
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _sigterm_raises():
             # numpy's overflow warnings on extreme inputs would only repeat what the answer
             # says, and no user should see a line of our source code
             warnings.simplefilter("ignore")
@@ -174,6 +212,11 @@ def main(argv: list[str] | None = None) -> int:
         # /dev/null so that Python's own flush at exit does not complain either.
         _to_devnull(sys.stdout)
         return 0
+    except (KeyboardInterrupt, Terminated) as exc:
+        # the shell's convention: 128 + the signal's number
+        what, status = STOPPED[type(exc)]
+        print(f"linkbook: stopped by {what}; no file is left half-written", file=sys.stderr)
+        return status
     except Exception as exc:
         # A bug of ours, not the user's input: still one line, never a traceback.
         print(f"linkbook: internal error: {type(exc).__name__}: {_one_line(exc)} (please "
@@ -181,7 +224,30 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
 
+class _sigterm_raises:
+    """SIGTERM raises Terminated while a command runs (from the main thread only, where Python
+    runs signal handlers); the handler before it is put back afterwards."""
+
+    def __enter__(self):
+        import signal
+        import threading
+        self.before = None
+        if threading.current_thread() is threading.main_thread():
+            self.before = signal.signal(signal.SIGTERM, _raise_terminated)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        import signal
+        if self.before is not None:
+            signal.signal(signal.SIGTERM, self.before)
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated()
+
+
 def _main(argv: list[str] | None) -> int:
+    from .files import CannotWrite
     args = _parser().parse_args(argv)
     try:
         if args.command == "list":
@@ -194,54 +260,75 @@ def _main(argv: list[str] | None) -> int:
             return _preview(args)
         if args.command == "animate":
             return _animate(args)
-    except InputError as exc:
-        print(f"linkbook: error: {exc}", file=sys.stderr)
+    except (InputError, CannotWrite) as exc:
+        _error(exc)
         return 2
     return 0
 
 
+def _error(exc: Exception) -> None:
+    """The one line a failure ends with, on stderr: whole (it names the field and the value),
+    its line breaks, if any, joined."""
+    print(f"linkbook: error: {' '.join(str(exc).split())}", file=sys.stderr)
+
+
 def _verify(args) -> int:
     import json
-    statuses, reports = [], []
+    from . import verify
+    reports = []
     for book in args.books:
-        status, report = _verify_one(book, args.engine, quiet=args.json)
-        statuses.append(status)
+        report = verify(book, args.engine)
         reports.append(report)
-        if not args.json and len(args.books) > 1:
-            print()
+        if report.error is not None:
+            _error(report.error)
+        elif not args.json and not (args.quiet and report.ok):
+            _print_report(report, args.verbose)
+            if len(args.books) > 1:
+                print()
+    statuses = [r.status for r in reports]
     if args.json:
-        print(json.dumps(reports[0] if len(reports) == 1 else reports, indent=2))
-    elif len(args.books) > 1:
+        print(json.dumps([_as_data(r) for r in reports], indent=2))
+    elif len(args.books) > 1 and not (args.quiet and max(statuses) == 0):
         counts = [statuses.count(k) for k in (0, 1, 2)]
         print(f"{len(args.books)} books: {counts[0]} agree, {counts[1]} disagree, "
               f"{counts[2]} cannot be verified")
     return max(statuses)
 
 
-def _verify_one(book: str, engine: str, quiet: bool) -> tuple[int, dict]:
-    """(exit status, the report as data) of one book; the text report is printed unless
-    `quiet`, an error line always."""
+def _as_data(report) -> dict:
+    """One book's report as data: the same keys whether or not it could be verified."""
     from . import __version__
-    from .office import OfficeFailed, OfficeUnavailable
-    from .safety import UnsafeFile
-    from .verifier import TOLERANCE_RULE, UnusableFile, verify
-    try:
-        report = verify(Path(book), engine)
-    except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:
-        print(f"linkbook: error: {exc}", file=sys.stderr)
-        return 2, {"book": book, "status": 2, "error": str(exc), "linkbook": __version__}
-    if not quiet:
-        _print_report(report)
-    return report.status, {
+    from .verifier import TOLERANCE_RULE
+    usable = report.error is None
+    return {
         "book": report.path, "mechanism": report.mechanism, "engine": report.engine,
-        "linkbook": __version__, "ok": report.ok, "status": report.status,
+        "linkbook": __version__, "status": report.status, "ok": report.ok,
+        "error": report.error,
         "cells": report.cells, "formula_cells": report.formula_cells,
         "mismatches": report.differing,
-        "likely_causes": [f"{s}!{c}" for s, c in sorted(report.causes)],
-        "unjudged": [f"{s}!{c}" for s, c in report.unjudged],
-        "max_abs_diff": report.max_abs, "inputs": report.inputs,
-        "tolerance": {**TOLERANCE_RULE, "S": report.size},
+        "likely_causes": _ranges(report, report.causes),
+        "unjudged": _ranges(report, report.unjudged),
+        "max_abs_diff": report.max_abs if usable else None, "inputs": report.inputs,
+        "tolerance": {**TOLERANCE_RULE, "S": report.size} if usable else None,
         "checks": [c.as_dict() for c in report.checks]}
+
+
+def _in_book_order(report, cells) -> list[tuple[str, str]]:
+    """(sheet, cell) pairs by the sheet's place among the book's tabs, then column, then row,
+    numerically (E9 before E10)."""
+    from .xlsx import coordinate_to_tuple
+    place = {name: i for i, name in enumerate(report.sheets)}
+
+    def order(key):
+        row, col = coordinate_to_tuple(key[1])
+        return place.get(key[0], len(place)), key[0], col, row
+    return sorted(cells, key=order)
+
+
+def _ranges(report, cells) -> list[str]:
+    """Cells as ranges in book order, a run of rows down one column as one: Sweep!E5:E77."""
+    from .verifier import cell_runs
+    return cell_runs(_in_book_order(report, cells))
 
 
 def _one_line(exc: Exception) -> str:
@@ -249,11 +336,16 @@ def _one_line(exc: Exception) -> str:
     return text if len(text) <= 300 else text[:297] + "..."
 
 
-def _print_report(report) -> None:
-    from .verifier import cell_order, cell_ranges
+def _print_report(report, verbose: bool = False) -> None:
+    """A header line, the checks (every one with `verbose`, else those that failed) with a few
+    of their differing cells, and the verdict line."""
+    from .verifier import cell_ranges
     print(f"{report.path}: {report.mechanism}, engine {report.engine}")
-    print(f"{'block':12} {'column':20} {'cells':>6} {'max |Δ|':>10} {'#N/A agree':>11}  verdict")
-    for c in report.checks:
+    shown = [c for c in report.checks if verbose or not c.ok]
+    if shown:
+        print(f"{'block':12} {'column':20} {'cells':>6} {'max |Δ|':>10} {'#N/A agree':>11}  "
+              "verdict")
+    for c in shown:
         verdict = "ok" if c.ok else f"{len(c.mismatches)} DIFFER"
         print(f"{c.block:12} {c.name:20} {c.cells:6d} {c.max_abs:10.2e} "
               f"{f'{c.na_agree}/{c.na_expected}':>11}  {verdict}")
@@ -266,12 +358,13 @@ def _print_report(report) -> None:
                   + ("   <- likely cause (reads no differing cell)" if cause else ""))
     compared = f"{report.cells} of {report.formula_cells} formula cells compared"
     if report.disagrees:
-        causes = cell_ranges(sorted(report.causes, key=cell_order))
+        causes = cell_ranges(_in_book_order(report, report.causes))
         print(f"DISAGREES: {report.differing} cells differ, likely cause {causes}; {compared}, "
               f"max |Δ| {report.max_abs:.2e}")
     elif report.unjudged:
         print(f"CANNOT JUDGE {len(report.unjudged)} formula cells (the build record does not "
-              f"say what they hold): {cell_ranges(report.unjudged)}; {compared}")
+              f"say what they hold): {cell_ranges(_in_book_order(report, report.unjudged))}; "
+              f"{compared}")
     else:
         print(f"all agree: {compared}, max |Δ| {report.max_abs:.2e}")
 
@@ -334,13 +427,14 @@ def _animate(args) -> int:
 
 
 def _preview(args) -> int:
+    from .files import ensure_folder
     from .office import OfficeUnavailable, preview
     from .safety import UnsafeFile, check_zip
     book = Path(args.book)
     try:
         check_zip(book)
-        outdir = Path(args.outdir) if args.outdir else book.with_name(book.stem + "_preview")
-        outdir.mkdir(parents=True, exist_ok=True)
+        outdir = ensure_folder(Path(args.outdir) if args.outdir
+                               else book.with_name(book.stem + "_preview"), "--outdir")
         for png in preview(book, outdir):
             print(f"wrote {png}")
     except (UnsafeFile, OfficeUnavailable) as exc:
@@ -366,8 +460,8 @@ def _build(args) -> int:
                 or args.unit:
             raise InputError("--all", "builds the bundled templates as they are; give no "
                                       "template, -o, --set, --step, --branch or --unit with it")
-        outdir = Path(args.outdir or "output")
-        outdir.mkdir(parents=True, exist_ok=True)
+        from .files import ensure_folder
+        outdir = ensure_folder(Path(args.outdir or "output"), "--outdir")
         from .builder import build_file
         for path in templates.bundled():
             t = templates.load(str(path))
@@ -383,11 +477,8 @@ def _build(args) -> int:
     if args.unit:
         t = templates.with_unit(t, args.unit)
     t = templates.with_overrides(t, args.assignments, args.step, args.branch)
-    out = Path(args.output or f"{t.name}.xlsx")
-    if out.suffix.lower() != ".xlsx":
-        raise InputError("-o", f"must name an .xlsx file (got {str(out)!r})")
-    if not out.parent.is_dir():
-        raise InputError("-o", f"folder {str(out.parent)!r} does not exist")
+    from .files import check_output
+    out = check_output(Path(args.output or f"{t.name}.xlsx"), "-o", (".xlsx",))
     from .builder import build_file
     build_file(t, out, args.values)
     print(f"wrote {out}")

@@ -966,8 +966,10 @@ class Compiler:
             c = _table(where, c)
             _keys(where, c, *CHART_KEYS)
             ys = c["y"] if isinstance(c["y"], list) else [c["y"]]
+            if not ys:
+                raise DescriptionError(f"{where}.y", "must name at least one column to plot")
             for k in [c["x"], *ys]:
-                if k not in symbol_of:
+                if not isinstance(k, str) or k not in symbol_of:
                     raise DescriptionError(where, f"{k!r} is not a column; columns are "
                                                   f"{', '.join(symbol_of)}")
             x_title = c.get("x_title", symbol_of[c["x"]])

@@ -174,6 +174,11 @@ def _run(cmd: list[str], what: str) -> tuple[int, str]:
         proc.communicate()
         raise OfficeFailed(f"{Path(cmd[0]).name} did not finish {what} within {TIMEOUT_S} s") \
             from None
+    except BaseException:
+        # Ctrl-C or SIGTERM reached only us (the command has a session of its own): end it too
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        raise
     return proc.returncode, (stderr or stdout).strip()
 
 

@@ -22,6 +22,8 @@ class UnsafeFile(Exception):
 
 def check_zip(path: Path) -> None:
     path = Path(path)
+    if path.is_dir():
+        raise UnsafeFile(f"{path}: a folder, not a workbook")
     if not path.is_file():
         raise UnsafeFile(f"{path}: no such file")
     if not zipfile.is_zipfile(path):
@@ -59,8 +61,10 @@ def load_workbook_safely(path: Path, data_only: bool = False):
     try:
         return openpyxl.load_workbook(path, data_only=data_only)
     except Exception as exc:  # openpyxl raises many kinds on a damaged file
+        # its messages run over several lines ("... Please see the exception ..."): one line
+        said = " ".join(str(exc).split())
         raise UnsafeFile(f"{path}: cannot be read as a workbook ({type(exc).__name__}: "
-                         f"{exc})") from None
+                         f"{said})") from None
 
 
 def read_workbook_safely(path: Path):

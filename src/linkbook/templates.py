@@ -42,6 +42,12 @@ class InputError(Exception):
         self.field = field
 
 
+# What a message calls each override: the command line's flags, or the Python API's arguments
+# (linkbook.build(sets=..., step=..., branch=..., unit=...)).
+FLAGS = {"set": "--set", "step": "--step", "branch": "--branch", "unit": "--unit"}
+ARGUMENTS = {"set": "sets", "step": "step", "branch": "branch", "unit": "unit"}
+
+
 @dataclass(frozen=True)
 class Parameter:
     symbol: str
@@ -126,6 +132,9 @@ def parse_number(field: str, text: object) -> float:
         value = float(text)  # type: ignore[arg-type]
     except (TypeError, ValueError):
         raise InputError(field, f"must be a number (got {text!r})") from None
+    except OverflowError:       # an integer with hundreds of digits
+        raise InputError(field, f"must be a finite number (got an integer of "
+                                f"{len(str(abs(text)))} digits)") from None
     if not math.isfinite(value):
         raise InputError(field, f"must be a finite number (got {text!r})")
     return value
@@ -202,9 +211,12 @@ def find(name_or_path: str) -> Path:
 def load(name_or_path: str) -> Template:
     path = find(name_or_path)
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        # utf-8-sig: Windows editors start a UTF-8 file with a byte-order mark
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except tomllib.TOMLDecodeError as exc:
         raise InputError(path.name, f"is not valid TOML ({exc})") from None
+    except RecursionError:
+        raise InputError(path.name, "nests tables or arrays too deeply to be read") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise InputError(path.name, f"cannot be read ({exc})") from None
     return from_data(path.stem, data, origin=path.name)
@@ -359,15 +371,16 @@ def _length_literals(description: dict) -> list[str]:
     return found
 
 
-def with_unit(t: "Template", unit: str) -> "Template":
+def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template":
     """The same mechanism with lengths in `unit`: every length and offset parameter, a linear
-    actuator's sweep, position and rates, and length grid values converted."""
-    check_length_unit("--unit", unit)
+    actuator's sweep, position and rates, and length grid values converted. `flag`: what the
+    messages call the unit's setting."""
+    check_length_unit(flag, unit)
     if unit == t.length_unit:
         return t
     literal = _length_literals(t.mechanism.description or {})
     if literal:
-        raise InputError("--unit", f"the template writes a length as a number at "
+        raise InputError(flag, f"the template writes a length as a number at "
                                    f"mechanism.{literal[0]}; give it a parameter to convert it")
     factor = LENGTH_UNITS[t.length_unit] / LENGTH_UNITS[unit]
     linear_rates = set(MOTION_SYMBOLS[LENGTH_KIND])
@@ -490,26 +503,29 @@ def check_sweep(t: Template) -> None:
 
 
 # ---------------------------------------------------------------- command-line overrides
-def parse_assignment(text: str) -> tuple[str, str]:
+def parse_assignment(text: str, flag: str = FLAGS["set"]) -> tuple[str, str]:
+    if not isinstance(text, str):
+        raise InputError(flag, f"expects KEY=VALUE texts (got {text!r})")
     key, sep, value = text.partition("=")
     if not sep or not key.strip():
-        raise InputError("--set", f"expects KEY=VALUE (got {text!r})")
+        raise InputError(flag, f"expects KEY=VALUE (got {text!r})")
     return key.strip(), value.strip()
 
 
 def with_overrides(t: Template, assignments: list[str] = (), step: float | None = None,
-                   branch: str | None = None) -> Template:
-    """The template with --set KEY=VALUE, --step and --branch applied and checked."""
+                   branch: str | None = None, names: dict[str, str] = FLAGS) -> Template:
+    """The template with --set KEY=VALUE, --step and --branch applied and checked; `names`
+    says what the messages call them (FLAGS or ARGUMENTS)."""
     values = {p.symbol: p for p in t.parameters}
     grid_values = t.grid_values
     for text in assignments:
-        key, raw = parse_assignment(text)
+        key, raw = parse_assignment(text, names["set"])
         if key not in values:
             hint = difflib.get_close_matches(key, list(values), n=1)
             more = f"; did you mean {hint[0]}?" if hint else f"; known: {', '.join(values)}"
-            raise InputError(f"--set {key}", f"unknown parameter{more}")
+            raise InputError(f"{names['set']} {key}", f"unknown parameter{more}")
         p = values[key]
-        field = f"--set {key}"
+        field = f"{names['set']} {key}"
         if t.mechanism.grid and key == t.mechanism.grid[0]:
             grid_values = parse_list(field, p.kind, raw)
             values[key] = replace(p, value=grid_values[0])
@@ -517,13 +533,13 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
             values[key] = replace(p, value=check_value(field, p.kind, raw))
     if branch is not None:
         if "branch" not in values:
-            raise InputError("--branch", f"{t.name} has no assembly branch to choose")
+            raise InputError(names["branch"], f"{t.name} has no assembly branch to choose")
         if branch not in BRANCH_WORDS:
-            raise InputError("--branch", f"must be open or crossed (got {branch!r})")
+            raise InputError(names["branch"], f"must be open or crossed (got {branch!r})")
         values["branch"] = replace(values["branch"], value=BRANCH_WORDS[branch])
     sweep = t.sweep
     if step is not None:
-        sweep = replace(sweep, step=parse_number("--step", step))
+        sweep = replace(sweep, step=parse_number(names["step"], step))
     out = replace(t, parameters=tuple(values[s] for s in values), sweep=sweep,
                   grid_values=grid_values)
     check_sweep(out)

@@ -108,6 +108,8 @@ class Report:
     inputs: dict[str, float] = field(default_factory=dict)          # as read from the book
     size: float = 0.0                         # S, the mechanism's size
     causes: set[tuple[str, str]] = field(default_factory=set)   # differing cells reading none
+    sheets: list[str] = field(default_factory=list)  # the book's sheets in its tab order
+    error: str | None = None        # why the book cannot be verified at all (status 2)
 
     @property
     def disagrees(self) -> bool:
@@ -115,12 +117,14 @@ class Report:
 
     @property
     def ok(self) -> bool:
-        return not self.disagrees and not self.unjudged
+        return not self.disagrees and not self.unjudged and self.error is None
 
     @property
     def status(self) -> int:
         """The exit status: 0 every formula cell agrees, 1 a cell disagrees, 2 some formula
-        cells cannot be judged (and none disagrees)."""
+        cells cannot be judged (and none disagrees), or the book cannot be verified at all."""
+        if self.error is not None:
+            return 2
         return 1 if self.disagrees else 2 if self.unjudged else 0
 
     @property
@@ -902,9 +906,11 @@ def verify(path: Path, engine: str = "vector") -> Report:
         wb = read_workbook_safely(path)
     except UnsafeFile as exc:
         raise UnusableFile(str(exc)) from None
-    meta = layout.read_meta(wb)
-    if meta is None or meta.get("format") != layout.FORMAT_VERSION:
-        raise UnusableFile(f"{path}: not a linkbook workbook (no build record sheet)")
+    meta = _build_record(path, wb)
+    try:
+        params = inputs_of(wb, meta)    # first: an input no number holds is named, not computed
+    except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
+        raise UnusableFile(_record_mismatch(path, exc)) from None
     from . import engine as engines
     is_error, error_code, relative = engines.is_error, engines.error_code, False
     try:
@@ -926,15 +932,57 @@ def verify(path: Path, engine: str = "vector") -> Report:
         raise UnusableFile(f"{path}: {exc}") from None
     try:
         checks = check_book(wb, meta, values, is_error, error_code, relative=relative)
+        formulas = formula_cells(wb)
+        judged = set().union(*(c.judged for c in checks))
+        return Report(str(path), meta["mechanism"], engine, checks, len(formulas),
+                      sorted(formulas - judged, key=cell_order), params,
+                      mechanism_size(meta, params), likely_causes(wb, checks),
+                      list(wb.sheetnames))
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
-        raise UnusableFile(f"{path}: the build record (sheet {layout.META}) does not match the "
-                           f"workbook ({type(exc).__name__}: {exc})") from None
-    formulas = formula_cells(wb)
-    judged = set().union(*(c.judged for c in checks))
-    params = inputs_of(wb, meta)
-    return Report(str(path), meta["mechanism"], engine, checks, len(formulas),
-                  sorted(formulas - judged, key=cell_order), params,
-                  mechanism_size(meta, params), likely_causes(wb, checks))
+        raise UnusableFile(_record_mismatch(path, exc)) from None
+
+
+def _record_mismatch(path: Path, exc: Exception) -> str:
+    return (f"{path}: the build record (sheet {layout.META}) does not match the workbook "
+            f"({type(exc).__name__}: {exc})")
+
+
+def _build_record(path: Path, wb) -> dict:
+    """The book's build record; UnusableFile saying what is wrong when it is missing or damaged,
+    or when a sheet it names was renamed in case only."""
+    if layout.META not in wb.sheetnames:
+        raise UnusableFile(f"{path}: not a linkbook workbook (no build record sheet)")
+    try:
+        meta = layout.read_meta(wb)
+    except RecursionError:
+        meta = None
+    if not isinstance(meta, dict) or meta.get("format") != layout.FORMAT_VERSION:
+        raise UnusableFile(f"{path}: the build record (sheet {layout.META}) is damaged: it is "
+                           f"not the JSON object of format {layout.FORMAT_VERSION} linkbook "
+                           "writes")
+    for sheet in sorted(_sheets_named(meta) - set(wb.sheetnames)):
+        # a sheet deleted is judged by the cells that read it; one renamed in case only, and
+        # the sheet of the inputs, are named here
+        for alike in (s for s in wb.sheetnames if s.casefold() == sheet.casefold()):
+            raise UnusableFile(f"{path}: the sheet {sheet!r} is missing (the book has "
+                               f"{alike!r}: the record names sheets exactly, so rename it back)")
+        if sheet == layout.MECH:
+            raise UnusableFile(f"{path}: the sheet {sheet!r} (the inputs) is missing")
+    return meta
+
+
+def _sheets_named(meta: dict) -> set[str]:
+    """The Mechanism sheet and every sheet the record names (any "sheet" entry, at any depth)."""
+    named, todo = {layout.MECH}, [meta]
+    while todo:
+        item = todo.pop()
+        if isinstance(item, dict):
+            if isinstance(item.get("sheet"), str):
+                named.add(item["sheet"])
+            todo.extend(item.values())
+        elif isinstance(item, list):
+            todo.extend(item)
+    return named
 
 
 def likely_causes(wb, checks: list[Check]) -> set[tuple[str, str]]:
@@ -978,6 +1026,16 @@ def cell_order(key: tuple[str, str]) -> tuple:
 def cell_ranges(cells: list[tuple[str, str]], most: int = 6) -> str:
     """'Sweep!F5:F77, Mechanism!I9' for sorted (sheet, cell) pairs: runs down a column joined;
     after `most` runs, how many more."""
+    runs = cell_runs(cells)
+    text = runs[:most]
+    if len(runs) > most:
+        text.append(f"and {len(runs) - most} more ranges")
+    return ", ".join(text)
+
+
+def cell_runs(cells: list[tuple[str, str]]) -> list[str]:
+    """['Sweep!F5:F77', 'Mechanism!I9'] for sorted (sheet, cell) pairs: each run of rows down
+    one column as one range."""
     from .xlsx import column_letter, coordinate_to_tuple
     runs: list[list] = []
     for sheet, cell in cells:
@@ -988,7 +1046,4 @@ def cell_ranges(cells: list[tuple[str, str]], most: int = 6) -> str:
             last[3] = row
         else:
             runs.append([sheet, col, row, row])
-    text = [f"{s}!{c}{a}" if a == b else f"{s}!{c}{a}:{c}{b}" for s, c, a, b in runs[:most]]
-    if len(runs) > most:
-        text.append(f"and {len(runs) - most} more ranges")
-    return ", ".join(text)
+    return [f"{s}!{c}{a}" if a == b else f"{s}!{c}{a}:{c}{b}" for s, c, a, b in runs]

@@ -1,0 +1,73 @@
+"""The README's Python examples run as written: each ```python block of README.md, in a fresh
+folder, in a process of its own (the CI block with books that agree, disagree and cannot be
+verified), and the messages it quotes are the ones the API raises."""
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import openpyxl
+import pytest
+
+from conftest import ROOT, template
+from linkbook import builder
+
+README = (ROOT / "README.md").read_text(encoding="utf-8")
+BLOCKS = re.findall(r"```python\n(.*?)```", README, flags=re.S)
+
+
+def _run_block(code: str, cwd: Path) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
+    return subprocess.run([sys.executable, "-c", code], cwd=cwd, env=env, capture_output=True,
+                          text=True, timeout=300)
+
+
+def _block_with(text: str) -> str:
+    [block] = [b for b in BLOCKS if text in b]
+    return block
+
+
+def test_the_readme_has_the_api_and_the_ci_blocks():
+    assert len(BLOCKS) == 2, BLOCKS
+
+
+def test_the_api_example_runs_as_written(tmp_path):
+    done = _run_block(_block_with("linkbook.build("), tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fourbar.xlsx"]
+
+
+@pytest.fixture(scope="module")
+def good_book(tmp_path_factory) -> bytes:
+    path = tmp_path_factory.mktemp("good") / "fourbar.xlsx"
+    builder.build_file(template("fourbar", step=30.0), path)
+    return path.read_bytes()
+
+
+@pytest.mark.parametrize("others,status", [((), 0), (("disagrees",), 1),
+                                           (("disagrees", "junk"), 2), (("junk",), 2)])
+def test_the_ci_example_exits_with_the_worst_status(tmp_path, good_book, others, status):
+    books = tmp_path / "books"
+    books.mkdir()
+    (books / "good.xlsx").write_bytes(good_book)
+    if "disagrees" in others:
+        (books / "edited.xlsx").write_bytes(good_book)
+        wb = openpyxl.load_workbook(books / "edited.xlsx")
+        wb["Sweep"]["H10"].value += "*1.001"
+        wb.save(books / "edited.xlsx")
+    if "junk" in others:
+        (books / "junk.xlsx").write_text("not a workbook")
+    done = _run_block(_block_with("sys.exit("), tmp_path)
+    assert done.returncode == status and "Traceback" not in done.stderr, done.stderr
+
+
+def test_the_messages_the_readme_quotes_are_the_apis(tmp_path, monkeypatch):
+    import linkbook
+    monkeypatch.chdir(tmp_path)
+    for kwargs in (dict(sets=["a2=-1"]), dict(output="out/fourbar.xlsx")):
+        with pytest.raises(linkbook.InputError) as caught:
+            linkbook.build("fourbar", **kwargs)
+        assert f"`{caught.value}`" in README, str(caught.value)
