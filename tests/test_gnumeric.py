@@ -73,8 +73,8 @@ def test_verify_without_ssconvert_is_one_line(monkeypatch, tmp_path, capsys):
     assert main(["verify", str(book), "--engine", "gnumeric"]) == 2
     out, err = capsys.readouterr()
     assert out == "" and err.count("\n") == 1, err
-    assert err.startswith("linkbook: error: Gnumeric is needed for this (the `ssconvert` "
-                          "command was not found)")
+    assert err.startswith(f"linkbook: error: {book}: Gnumeric is needed for this (the "
+                          "`ssconvert` command was not found)")
 
 
 def test_silent_ssconvert_failure_is_an_error(monkeypatch, tmp_path):
@@ -189,7 +189,7 @@ def test_gnumeric_recalculates_every_bundled_book_like_the_reference(name, tmp_p
     require_ssconvert()
     path = _book(name, tmp_path)
     status = main(["verify", str(path), "--engine", "gnumeric", "--json"])
-    report = json.loads(capsys.readouterr().out)
+    [report] = json.loads(capsys.readouterr().out)
     assert report["engine"] == "gnumeric" and report["status"] == status
     assert report["formula_cells"] == report["cells"] > 0 and not report["unjudged"]
     if status == 1 and report["likely_causes"] \
