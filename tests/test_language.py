@@ -15,6 +15,8 @@ from conftest import ROOT, checks_of, formula_cells
 from linkbook import builder, engine, templates
 from linkbook.templates import InputError
 
+SCHEMA = ROOT / "src" / "linkbook" / "mechanism.schema.json"
+
 
 def fourbar_data() -> dict:
     return tomllib.loads((templates.TEMPLATE_DIR / "fourbar.toml").read_text(encoding="utf-8"))
@@ -66,7 +68,7 @@ BAD = [
     ("an unknown symbol", _step("B", "p_length", "a3*k9"), ["(dyad B).p_length",
                                                              "unknown symbol 'k9'"]),
     ("a missing key", _step("B", "q_length", _DELETE), ["(dyad B).q_length", "is missing"]),
-    ("an unknown key", _step("B", "lenght", 3), ["(dyad B).lenght", "is not a key here"]),
+    ("an unknown key", _step("B", "lenght", 3), ["(dyad B): unknown key 'lenght'"]),
     ("a duplicate point", _add_step({"type": "crank", "point": "A", "pivot": "A0",
                                      "length": "a2"}), ["point 'A' is defined twice"]),
     ("a duplicate column key", _step("C", "columns", {"x": {"key": "xA"}}),
@@ -110,7 +112,7 @@ BAD = [
      ["(slider S).through", "must be a fixed point"]),
     ("an input of an unknown kind", _set("mechanism.input", {"key": "theta12", "symbol": "θ",
                                                              "kind": "force"}),
-     ["input.kind", "must be angle", "length"]),
+     ["input.kind", "must be angle", "length", "(got 'force')"]),
     ("a crank turned by a length input", _set("mechanism.input", {"key": "s", "symbol": "s",
                                                                   "kind": "length"}),
      ["(crank A).type", "a crank turns with an angle input"]),
@@ -199,8 +201,8 @@ def test_expression_means_what_the_doc_says(formula, expected):
 
 
 def test_every_template_fits_the_json_schema():
-    jsonschema = pytest.importorskip("jsonschema")
-    schema = json.loads((ROOT / "docs" / "mechanism.schema.json").read_text(encoding="utf-8"))
+    import jsonschema
+    schema = json.loads(SCHEMA.read_text(encoding="utf-8"))
     jsonschema.Draft7Validator.check_schema(schema)
     texts = {path.name: path.read_text(encoding="utf-8") for path in templates.bundled()}
     for name, text in {**texts, "EVERY_OPTION": EVERY_OPTION}.items():
@@ -209,6 +211,26 @@ def test_every_template_fits_the_json_schema():
     broken = fourbar_data()
     step(broken, "B")["branch"] = 3
     assert list(jsonschema.Draft7Validator(schema).iter_errors(broken))
+
+
+def test_the_docs_copy_of_the_schema_is_the_packaged_one():
+    """Editors read docs/mechanism.schema.json; build checks with the one inside the package."""
+    docs = (ROOT / "docs" / "mechanism.schema.json").read_bytes()
+    assert docs == SCHEMA.read_bytes(), ("docs/mechanism.schema.json has drifted: copy "
+                                         "src/linkbook/mechanism.schema.json over it")
+
+
+def test_the_compiler_knows_the_keys_the_schema_allows():
+    """One source of truth: the semantic checks take each step's keys from the schema, so a key
+    the schema allows is one the compiler reads, and no other."""
+    from linkbook import language
+    steps = json.loads(SCHEMA.read_text(encoding="utf-8"))["properties"]["mechanism"][
+        "properties"]["steps"]["items"]
+    for rule in steps["allOf"]:
+        kind = rule["if"]["properties"]["type"]["const"]
+        required, optional = language.STEP_KEYS[kind]
+        assert required | optional | language.COMMON_KEYS == set(rule["then"]["properties"])
+        assert required | {"type"} == set(rule["then"]["required"])
 
 
 def test_a_new_step_in_a_copied_template_needs_no_python():

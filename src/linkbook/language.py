@@ -15,6 +15,7 @@ from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, O
                          RATE_KIND, Mechanism, on_loop)
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Chart, FourBarLoop, Joint, Model,
                     Quantity, _one_group, references)
+from .schema import keys_of, schema, step_schemas
 from .steps import Sym, acos_or_na, input_angle, offset_slide, polar, slider, triangle
 
 KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND)
@@ -229,23 +230,14 @@ def polar_columns(n: str, a: str, b: str, degrees: bool = False) -> list[Column]
             Column("phi", f"phi_{n}", f"ϕ_{n}", f"angle of {a}→{b}", RAD, degrees)]
 
 
-STEP_KEYS = {
-    "crank": ({"point", "pivot", "length"}, {"phase"}),
-    "dyad": ({"point", "p", "q", "p_length", "q_length", "branch"}, set()),
-    "slider": ({"point", "p", "length", "through", "branch"}, {"direction", "along"}),
-    "slide": ({"point", "p", "pivot", "offset", "branch"}, set()),
-    "point": ({"point", "frame"}, {"local", "distances", "side", "distance", "angle"}),
-    "slot": ({"point", "slot_through", "slot_frame", "through"},
-             {"slot_angle", "direction"}),
-    "vector": ({"from", "to", "key"}, set()),
-    "distance": ({"between", "key"}, {"symbol", "label"}),
-    "expression": ({"key", "formula"}, {"symbol", "label", "unit", "shown", "time_ratio_of"}),
-}
-UNITS = {"length": LENGTH, "rad": RAD, "-": "-"}
+# The keys each part of a description may have: the schema's (one source of truth)
 COMMON_KEYS = {"type", "columns"}
-MECHANISM_KEYS = ({"input", "ground", "steps", "links"},
-                  {"trace", "output", "transmission", "columns", "charts"})
-CHART_KEYS = ({"title", "x", "y"}, {"x_title", "y_title", "equal_axes"})
+STEP_KEYS = {kind: tuple(keys - COMMON_KEYS for keys in keys_of(part))
+             for kind, part in step_schemas().items()}
+UNITS = {"length": LENGTH, "rad": RAD, "-": "-"}
+_MECHANISM = schema()["properties"]["mechanism"]
+MECHANISM_KEYS = keys_of(_MECHANISM)
+CHART_KEYS = keys_of(_MECHANISM["properties"]["charts"]["items"])
 
 
 def _table(field: str, value: object) -> dict:

@@ -245,6 +245,7 @@ def check_text(field: str, text: str) -> str:
 
 
 def from_data(name: str, data: dict, origin: str = "template") -> Template:
+    check_schema(data, origin)
     mech = _mechanism(name, data, origin)
     length_unit = check_length_unit(f"{origin}: length_unit", _need(data, "length_unit", origin))
     table = _need(data, "parameters", origin, dict)
@@ -304,6 +305,16 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         stroke_step=stroke_step)
     check_sweep(template)
     return template
+
+
+def check_schema(data: dict, origin: str) -> None:
+    """The template against the schema of what a template may contain, before the semantic
+    checks: an unknown key, a wrong type or a missing key, one line naming the field."""
+    from .schema import problem
+    found = problem(data)
+    if found:
+        field, message = found
+        raise InputError(f"{origin}: {field}" if field else origin, message)
 
 
 # The length units a book may have, in metres: one per mechanism (the template's length_unit).
