@@ -188,7 +188,7 @@ def find(name_or_path: str) -> Path:
     path = Path(name_or_path)
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
-            raise InputError("template", f"no such file {name_or_path!r}")
+            raise InputError("template", f"no such file {name_or_path!r}{_bundled_hint(path)}")
         return path
     candidate = TEMPLATE_DIR / f"{name_or_path}.toml"
     if candidate.is_file():
@@ -197,6 +197,34 @@ def find(name_or_path: str) -> Path:
     hint = difflib.get_close_matches(name_or_path, names, n=1)
     more = f"; did you mean {hint[0]!r}?" if hint else f"; known: {', '.join(names)}"
     raise InputError("template", f"unknown template {name_or_path!r}{more}")
+
+
+def _bundled_hint(path: Path) -> str:
+    """A missing file named like a bundled template: the name alone builds that one."""
+    if (TEMPLATE_DIR / f"{path.stem}.toml").is_file():
+        return (f"; the bundled template is `{path.stem}` (no .toml), and `linkbook new "
+                f"{path.stem} {path.name}` copies it here to edit")
+    return ""
+
+
+def copy_bundled(name: str, out: Path) -> Path:
+    """A bundled template copied to `out`, a new .toml file (never over an existing one)."""
+    source = TEMPLATE_DIR / f"{name}.toml"
+    if not source.is_file():
+        find(name)                  # the unknown-template error, with its suggestion
+    if out.suffix != ".toml":
+        raise InputError("new", f"the copy must be a .toml file (got {str(out)!r})")
+    if not out.parent.is_dir():
+        raise InputError("new", f"folder {str(out.parent)!r} does not exist")
+    try:
+        with open(out, "x", encoding="utf-8") as f:
+            f.write(source.read_text(encoding="utf-8"))
+    except FileExistsError:
+        raise InputError(str(out), "exists already; linkbook new never overwrites a "
+                                   "file") from None
+    except OSError as exc:
+        raise InputError(str(out), f"cannot be written ({exc.strerror or exc})") from None
+    return out
 
 
 def load(name_or_path: str) -> Template:
@@ -303,7 +331,7 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         description=_optional_text(data, "description", origin), mechanism=mech, length_unit=length_unit,
         parameters=tuple(params), sweep=sweep, position=position, grid_values=grid_values,
         stroke_step=stroke_step)
-    check_sweep(template)
+    check_sweep(template, f"{origin}: ")
     return template
 
 
@@ -465,9 +493,10 @@ def _check_unique_names(params: list[Parameter], origin: str) -> None:
                              f"{p.name!r} is already the name of {other}")
 
 
-def check_sweep(t: Template) -> None:
+def check_sweep(t: Template, where: str = "", step_field: str = "sweep.step") -> None:
     """Positive step, start < stop, and tables inside Excel's limits — before any work; and
-    lengths that fit one book (check_lengths_together)."""
+    lengths that fit one book (check_lengths_together). `where` names the template file
+    ("mine.toml: "), `step_field` where the step came from (the file's sweep.step, --step)."""
     values = t.values()
     if t.mechanism.grid:
         values = {**values, **{f"{t.mechanism.grid[0]}[{i}]": v
@@ -476,28 +505,30 @@ def check_sweep(t: Template) -> None:
     if t.mechanism.grid:
         kinds.update({f"{t.mechanism.grid[0]}[{i}]": kinds[t.mechanism.grid[0]]
                       for i in range(len(t.grid_values))})
-    check_lengths_together(values, kinds, "parameters.")
+    check_lengths_together(values, kinds, f"{where}parameters.")
     s = t.sweep
     unit = "degrees" if t.mechanism.input_is_angle else t.length_unit
     if s.step <= 0:
-        raise InputError("step", f"must be a positive {t.mechanism.input_word} in {unit} "
-                                 f"(got {s.step:g})")
+        raise InputError(f"{where}{step_field}", f"must be a positive {t.mechanism.input_word} "
+                                                 f"in {unit} (got {s.step:g})")
     if s.stop <= s.start:
-        raise InputError("sweep", f"stop must be greater than start (got {s.start:g}..{s.stop:g})")
+        raise InputError(f"{where}sweep", f"stop must be greater than start (got "
+                                          f"{s.start:g}..{s.stop:g})")
     rows = (s.stop - s.start) / s.step + 2
     if rows > EXCEL_MAX_ROWS - 10:
-        raise InputError("step", f"{s.step:g} {unit} gives {rows:,.0f} rows; Excel allows "
+        raise InputError(f"{where}{step_field}", f"{s.step:g} {unit} gives {rows:,.0f} rows; Excel allows "
                                  f"{EXCEL_MAX_ROWS:,} per sheet")
     if t.mechanism.grid:
         if t.stroke_step <= 0:
-            raise InputError("grid.stroke_step", f"must be positive (got {t.stroke_step:g})")
+            raise InputError(f"{where}grid.stroke_step", f"must be positive (got "
+                                                         f"{t.stroke_step:g})")
         if len(t.grid_values) + 1 > EXCEL_MAX_COLUMNS:
-            raise InputError(t.mechanism.grid[0], f"{len(t.grid_values):,} grid columns; Excel "
-                                                  f"allows {EXCEL_MAX_COLUMNS:,}")
+            raise InputError(f"{where}grid.values", f"{len(t.grid_values):,} grid columns; Excel "
+                                                          f"allows {EXCEL_MAX_COLUMNS:,}")
         fine_rows = 360 / t.stroke_step + 1
         if fine_rows > EXCEL_MAX_ROWS - 10:
-            raise InputError("grid.stroke_step", f"gives {fine_rows:,.0f} rows; Excel allows "
-                                                 f"{EXCEL_MAX_ROWS:,}")
+            raise InputError(f"{where}grid.stroke_step", f"gives {fine_rows:,.0f} rows; Excel "
+                                                         f"allows {EXCEL_MAX_ROWS:,}")
 
 
 # ---------------------------------------------------------------- command-line overrides
@@ -537,5 +568,5 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
         sweep = replace(sweep, step=parse_number("--step", step))
     out = replace(t, parameters=tuple(values[s] for s in values), sweep=sweep,
                   grid_values=grid_values)
-    check_sweep(out)
+    check_sweep(out, step_field="--step" if step is not None else "sweep.step")
     return out
