@@ -95,6 +95,9 @@ TOML_CASES = [
      "(triad B).type: must be one of crank, dyad, slider"),
     ("a sweep key misspelt", FOURBAR_TOML.replace('step = 5', 'stpe = 5'),
      "mine.toml: sweep: unknown key 'stpe' (did you mean 'step'?)"),
+    ("an actuator's length swept through zero", (ROOT / "templates" / "boom-cylinder.toml")
+     .read_text(encoding="utf-8").replace("start = 600", "start = -10"),
+     "mine.toml: sweep.start: a linear actuator's length must be positive (got -10 mm)"),
     ("parameter not a table", FOURBAR_TOML.replace(
         'a1 = { label = "ground link |A0B0|", unit = "mm", value = 70.0 }', "a1 = 70"), "a1"),
 ]

@@ -436,3 +436,47 @@ def test_a_bad_step_of_a_length_sweep_says_its_unit():
     with pytest.raises(InputError) as caught:
         templates.with_overrides(templates.load("boom-cylinder"), step="-5")
     assert "positive length in mm" in str(caught.value)
+
+
+GARAGE_TOML = (templates.TEMPLATE_DIR / "garage-door.toml").read_text(encoding="utf-8")
+
+
+def test_a_length_that_comes_out_negative_is_refused_at_build(tmp_path, capsys):
+    """|CD| = a6 − 200 is −50 mm with the template's a6 = 150: the loop cannot be assembled
+    (the reference says so), so build refuses with one line naming the step's field."""
+    from linkbook.cli import main
+    (tmp_path / "mine.toml").write_text(
+        GARAGE_TOML.replace('p_length = "a6"', 'p_length = "a6 - 200"'), encoding="utf-8")
+    code = main(["build", str(tmp_path / "mine.toml"), "-o", str(tmp_path / "mine.xlsx")])
+    err = capsys.readouterr().err
+    assert code == 2 and err == ("linkbook: error: mine.toml: mechanism.steps[3] (dyad C)."
+                                 "p_length: 'a6 - 200' = -50 mm with these parameters; a length "
+                                 "must be positive\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.toml"]
+    for raw, shown in (("a1 - a1", "0 mm"), ("SQRT(a1 - 200)", "not a number")):
+        data = tomllib.loads(GARAGE_TOML)
+        step(data, "D")["length"] = raw
+        with pytest.raises(InputError, match=f"(crank D).length: '{raw}' = {shown}".replace(
+                "(", r"\(").replace(")", r"\)")):
+            templates.from_data("bad", data, origin="bad.toml")
+
+
+def test_a_length_made_negative_in_the_book_is_na_where_the_reference_says_so(tmp_path):
+    """The same length, positive in the template (a6 = 350: |CD| = 150) and then made −50 by
+    editing a6 in the book: the cells of the dyad C are #N/A, and verify agrees with the
+    reference, which cannot assemble that loop either."""
+    import openpyxl
+    import linkbook
+    text = GARAGE_TOML.replace('p_length = "a6"', 'p_length = "a6 - 200"').replace(
+        "value = 150.0", "value = 350.0")
+    (tmp_path / "mine.toml").write_text(text, encoding="utf-8")
+    book = linkbook.build(str(tmp_path / "mine.toml"), tmp_path / "mine.xlsx")
+    assert linkbook.verify(book).status == 0
+    wb = openpyxl.load_workbook(book)
+    sheet, cell = wb.defined_names["a_6"].attr_text.replace("$", "").split("!")
+    wb[sheet.strip("'")][cell].value = 150.0
+    wb.save(book)
+    report = linkbook.verify(book)
+    assert report.status == 0, report.differing
+    closing = next(c for c in report.checks if c.name == "xC")
+    assert closing.na_expected == closing.cells > 0

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import ast
 import keyword
+import math
+import operator
 import re
 from dataclasses import dataclass
 
@@ -121,6 +123,76 @@ def _emit(field: str, node: ast.AST, symbols: set[str]) -> Expr:
         return Expr(f"{name}({args})")
     raise DescriptionError(field, "may hold only numbers, symbols, + - * / ^, comparisons, "
                                   "parentheses and " + ", ".join(FUNCTIONS))
+
+
+class _NotANumber(Exception):
+    """An expression's value is an error (#N/A, a domain error, a division by zero)."""
+
+
+def value_of(raw: object, values: dict[str, float]) -> float | None:
+    """The number an expression of parameters stands for with these values: NaN where its
+    value is an error, None where it names something else (the swept input, a column). The
+    grammar is expression()'s; the arithmetic Excel's."""
+    if not isinstance(raw, str):
+        return float(raw)
+    try:
+        return _value(ast.parse(raw.replace("^", "**"), mode="eval").body, values)
+    except _NotANumber:
+        return math.nan
+    except KeyError:
+        return None
+
+
+def _value(node: ast.AST, values: dict[str, float]) -> float:
+    if isinstance(node, ast.Constant):
+        return float(node.value)
+    if isinstance(node, ast.Name):
+        return values[node.id]
+    if isinstance(node, ast.UnaryOp):
+        inner = _value(node.operand, values)
+        return -inner if isinstance(node.op, ast.USub) else inner
+    if isinstance(node, ast.BinOp):
+        a, b = _value(node.left, values), _value(node.right, values)
+        return _checked(lambda: _ARITHMETIC[type(node.op)](a, b))
+    if isinstance(node, ast.Compare):
+        a, b = _value(node.left, values), _value(node.comparators[0], values)
+        return float(_ORDER[type(node.ops[0])](a, b))
+    name = node.func.id.upper()
+    if name == "IF":
+        test = _value(node.args[0], values)
+        return _value(node.args[1 if test else 2], values)
+    if name == "IFERROR":
+        try:
+            return _value(node.args[0], values)
+        except _NotANumber:
+            return _value(node.args[1], values)
+    args = [_value(a, values) for a in node.args]
+    return _checked(lambda: _EXCEL[name](*args))
+
+
+def _checked(compute) -> float:
+    try:
+        result = float(compute())
+    except (ValueError, ZeroDivisionError, OverflowError, TypeError):   # TypeError: complex
+        raise _NotANumber from None
+    if not math.isfinite(result):
+        raise _NotANumber
+    return result
+
+
+def _not_available() -> float:
+    raise _NotANumber
+
+
+_ARITHMETIC = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+               ast.Div: operator.truediv, ast.Pow: operator.pow}
+_ORDER = {ast.Gt: operator.gt, ast.GtE: operator.ge, ast.Lt: operator.lt, ast.LtE: operator.le,
+          ast.Eq: operator.eq, ast.NotEq: operator.ne}
+_EXCEL = {"SQRT": math.sqrt, "ABS": abs, "SIN": math.sin, "COS": math.cos, "TAN": math.tan,
+          "ASIN": math.asin, "ACOS": math.acos, "ATAN": math.atan,
+          "ATAN2": lambda x, y: math.atan2(y, x), "RADIANS": math.radians,
+          "DEGREES": math.degrees, "PI": lambda: math.pi, "MIN": min, "MAX": max,
+          "NA": _not_available}
 
 
 def radians(angle: Expr) -> Expr:
@@ -279,6 +351,7 @@ class Compiler:
         self.input_kind = ANGLE_KIND
         self.swept: set[str] = set()     # the input key, where it is a length expressions use
         self.records: list[dict] = []    # per step what it placed, for motion.py
+        self.lengths: list[tuple[str, object]] = []   # (field, expression) of every length
         self.traced = ""
         self.field = f"{origin}: mechanism"
         self.data = _table(self.field, data)
@@ -337,6 +410,22 @@ class Compiler:
         if e.text.startswith("{") and e.text.endswith("}") and inner in self.symbols:
             return inner
         self.model.add(Quantity(f"_{hint}", hint, LENGTH, e.text, ALIAS))
+        return f"_{hint}"
+
+    def length_operand(self, field: str, hint: str, e: Expr, raw: object) -> str:
+        """A key standing for a length the loop is closed with. The template's value must be
+        positive (checked at build: `self.lengths`); in the book, where the inputs make it zero
+        or negative the loop cannot be assembled and the cells that use it are #N/A, as the
+        reference says (a length parameter itself needs no guard: its cell refuses a
+        non-positive value, and so does the swept input's)."""
+        self.lengths.append((field, raw))
+        inner = e.text[1:-1]
+        bare = e.text.startswith("{") and e.text.endswith("}")
+        if "{" not in e.text or bare and (self.kinds.get(inner) == LENGTH_KIND
+                                          or inner in self.swept):
+            return self.operand(hint, e)
+        guarded = f"IF({e.at_least(SUM)}>0,{e.text},NA())"
+        self.model.add(Quantity(f"_{hint}", hint, LENGTH, guarded, ALIAS))
         return f"_{hint}"
 
     def columns(self, field: str, step: dict, defaults: list[Column]) -> dict[str, Sym]:
@@ -499,6 +588,7 @@ class Compiler:
                                                     "q_length")
         pivot = self.known_point(f"{field}.pivot", s["pivot"], name)
         length = self.expr(f"{field}.length", s["length"])
+        self.lengths.append((f"{field}.length", s["length"]))
         phase = self.expr(f"{field}.phase", s.get("phase", 0))
         angle = key(self.input_key) if phase.zero else \
             Expr(f"{{{self.input_key}}}+{radians(phase).text}", SUM)
@@ -538,8 +628,8 @@ class Compiler:
         (px, py), (qx, qy) = self.points[p], self.points[q]
         polar(self.model, minus(px, qx).text, minus(py, qy).text,
               cols["xs"], cols["ys"], cols["s"], cols["phi"])
-        p_key = self.operand(f"p_length_{n}", p_len)
-        q_key = self.operand(f"q_length_{n}", q_len)
+        p_key = self.length_operand(f"{field}.p_length", f"p_length_{n}", p_len, s["p_length"])
+        q_key = self.length_operand(f"{field}.q_length", f"q_length_{n}", q_len, s["q_length"])
         # angle(P→R) from μ, or from the angle at P when μ is hidden and that angle is shown.
         use_p = not cols["mu"].shown and cols["p_interior"].shown
         triangle(self.model, side=cols["s"].key, angle=cols["phi"].key, p=p_key, q=q_key,
@@ -588,7 +678,7 @@ class Compiler:
             Column("y", f"y{n}", f"y{n}", f"y of {n}", LENGTH)])
         (px, py), (tx, ty) = self.points[p], self.points[through]
         dx, dy = minus(px, tx), minus(py, ty)
-        length_key = self.operand(f"length_{n}", length)
+        length_key = self.length_operand(f"{field}.length", f"length_{n}", length, s["length"])
         pos = cols["s"].key
         if along:
             angle = self.angle_of(*along)
@@ -696,8 +786,9 @@ class Compiler:
                 db = self.expr(f"{field}.distances[1]", pair[1])
                 side = self.branch(f"{field}.side", s.get("side", 1))
                 ab = self.length_of(a, b)
-                k_ab, k_a, k_b = (self.operand(f"{h}_{n}", e) for h, e in
-                                  (("frame_length", ab), ("distance_a", da), ("distance_b", db)))
+                k_ab = self.operand(f"frame_length_{n}", ab)
+                k_a, k_b = (self.length_operand(f"{field}.distances[{i}]", f"{h}_{n}", e, pair[i])
+                            for i, (h, e) in enumerate((("distance_a", da), ("distance_b", db))))
                 g = cols["gamma"]
                 gamma = acos_or_na(f"({{{k_ab}}}^2+{{{k_a}}}^2-{{{k_b}}}^2)"
                                    f"/(2*{{{k_ab}}}*{{{k_a}}})")
@@ -709,6 +800,7 @@ class Compiler:
                 d = da.at_least(PRODUCT)
             else:
                 da = self.expr(f"{field}.distance", s["distance"])
+                self.lengths.append((f"{field}.distance", s["distance"]))
                 offset = self.expr(f"{field}.angle", s.get("angle", 0))
                 angle = base.text if offset.zero else plus(base, radians(offset).text)
                 t = cols["theta"]
@@ -1019,7 +1111,7 @@ def compile_mechanism(name: str, data: dict, kinds: dict[str, str], origin: str,
         if out not in {q.key for q in model.of_role(COLUMN)}:
             raise DescriptionError(f"{origin}: grid.output", f"{out!r} is not a shown column")
     return Mechanism(name, dict(c.kinds), c.input_key, c.input_symbol, lambda: model, grid,
-                     description=data, input_kind=c.input_kind)
+                     description=data, input_kind=c.input_kind, lengths=tuple(c.lengths))
 
 
 def from_record(meta: dict) -> Mechanism:

@@ -493,6 +493,22 @@ def _check_unique_names(params: list[Parameter], origin: str) -> None:
                              f"{p.name!r} is already the name of {other}")
 
 
+def check_step_lengths(t: Template) -> None:
+    """Every length a step takes (a side, a rod, a crank), evaluated with the book's values,
+    must be positive: the loop cannot be assembled with a zero or negative one, and a book
+    built so would be #N/A all through. A length of the swept input is checked by the sweep."""
+    from .language import value_of
+    values = t.values()
+    for field, raw in t.mechanism.lengths:
+        value = value_of(raw, values)
+        if value is None or value > 0:
+            continue
+        shown = "not a number" if math.isnan(value) else f"{value:g} {t.length_unit}"
+        given = "" if not isinstance(raw, str) else f"{raw!r} = "
+        raise InputError(field, f"{given}{shown} with these parameters; a length must be "
+                                "positive")
+
+
 def check_sweep(t: Template, where: str = "", step_field: str = "sweep.step") -> None:
     """Positive step, start < stop, and tables inside Excel's limits — before any work; and
     lengths that fit one book (check_lengths_together). `where` names the template file
@@ -506,11 +522,15 @@ def check_sweep(t: Template, where: str = "", step_field: str = "sweep.step") ->
         kinds.update({f"{t.mechanism.grid[0]}[{i}]": kinds[t.mechanism.grid[0]]
                       for i in range(len(t.grid_values))})
     check_lengths_together(values, kinds, f"{where}parameters.")
+    check_step_lengths(t)
     s = t.sweep
     unit = "degrees" if t.mechanism.input_is_angle else t.length_unit
     if s.step <= 0:
         raise InputError(f"{where}{step_field}", f"must be a positive {t.mechanism.input_word} "
                                                  f"in {unit} (got {s.step:g})")
+    if not t.mechanism.input_is_angle and s.start <= 0:
+        raise InputError(f"{where}sweep.start", f"a linear actuator's length must be positive "
+                                                f"(got {s.start:g} {unit})")
     if s.stop <= s.start:
         raise InputError(f"{where}sweep", f"stop must be greater than start (got "
                                           f"{s.start:g}..{s.stop:g})")
