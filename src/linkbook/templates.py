@@ -366,48 +366,17 @@ def parameter_unit(mech: Mechanism, symbol: str, kind: str, length_unit: str) ->
     return "-"
 
 
-# Keys of the mechanism language whose numbers are lengths (ground points too): a number
-# written there cannot follow --unit, which converts parameters.
-_LENGTH_KEYS = ("length", "p_length", "q_length", "local", "distances", "distance", "offset")
-_NUMBER = re.compile(r"(?<![\w.])(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-
-
-def _length_literals(description: dict) -> list[str]:
-    """Where the description writes a non-zero length as a number, not a parameter."""
-    found = []
-
-    def numbers(value) -> bool:
-        if isinstance(value, bool):
-            return False
-        if isinstance(value, (int, float)):
-            return value != 0
-        if isinstance(value, str):
-            return any(float(m) != 0 for m in _NUMBER.findall(value))
-        if isinstance(value, list):
-            return any(numbers(v) for v in value)
-        return False
-    for name, xy in (description.get("ground") or {}).items():
-        if numbers(xy):
-            found.append(f"ground.{name}")
-    for i, step in enumerate(description.get("steps") or []):
-        if isinstance(step, dict):
-            found += [f"steps[{i}].{k}" for k in _LENGTH_KEYS if numbers(step.get(k))]
-            if step.get("type") == "expression" and step.get("unit") == "length" \
-                    and numbers(step.get("formula")):
-                found.append(f"steps[{i}].formula")
-    return found
-
-
 def with_unit(t: "Template", unit: str) -> "Template":
     """The same mechanism with lengths in `unit`: every length and offset parameter, a linear
     actuator's sweep, position and rates, and length grid values converted."""
     check_length_unit("--unit", unit)
     if unit == t.length_unit:
         return t
-    literal = _length_literals(t.mechanism.description or {})
-    if literal:
-        raise InputError("--unit", f"the template writes a length as a number at "
-                                   f"mechanism.{literal[0]}; give it a parameter to convert it")
+    from .language import unconvertible
+    found = unconvertible(t.mechanism, t.mechanism.build())
+    if found:
+        field, why = found
+        raise InputError("--unit", f"{field}: {why}")
     factor = LENGTH_UNITS[t.length_unit] / LENGTH_UNITS[unit]
     linear_rates = set(MOTION_SYMBOLS[LENGTH_KIND])
     params = []
