@@ -480,3 +480,51 @@ def test_a_length_made_negative_in_the_book_is_na_where_the_reference_says_so(tm
     assert report.status == 0, report.differing
     closing = next(c for c in report.checks if c.name == "xC")
     assert closing.na_expected == closing.cells > 0
+
+
+def _runs(angles, closes) -> list[tuple[float, float]]:
+    runs = []
+    for i, (angle, ok) in enumerate(zip(angles, closes)):
+        if ok:
+            continue
+        if runs and not closes[i - 1]:
+            runs[-1] = (runs[-1][0], angle)
+        else:
+            runs.append((angle, angle))
+    return runs
+
+
+@pytest.mark.parametrize("door", [10.0, 1.0])
+def test_a_loop_that_cannot_close_is_named_with_where_at_build(tmp_path, capsys, door):
+    """|CD| = 10 mm: the garage door's dyad C closes over part of the turn only (|CD| = 1 mm:
+    nowhere). Build still writes the book (exit 0) and says, in one line on stderr, which step
+    fails and over which angles — the angles where the independent reference cannot assemble
+    the mechanism."""
+    import numpy as np
+    from linkbook import generic
+    from linkbook.cli import main
+    path = tmp_path / "door.toml"
+    path.write_text(GARAGE_TOML.replace("value = 150.0", f"value = {door}"), encoding="utf-8")
+    t = templates.load(str(path))
+    angles = t.sweep.angles()
+    closes = generic.solve(t.mechanism.description, t.values(), np.array(angles))["assembled"]
+    assert not closes.all()
+    runs = _runs(angles, closes)
+    if closes.any():
+        spans = ", ".join(f"from {a:g}° to {b:g}°" for a, b in runs)
+        where = f"for θ12 {spans} ({int((~closes).sum())} of {len(angles)} rows)"
+    else:
+        where = f"at any θ12 of the sweep ({angles[0]:g}° to {angles[-1]:g}°)"
+    for command in (["build", str(path), "-o", str(tmp_path / "door.xlsx")],
+                    ["check", str(path)]):
+        assert main(command) == 0
+        err = capsys.readouterr().err
+        assert err == (f"linkbook: warning: door.toml: mechanism.steps[3] (dyad C): the loop "
+                       f"cannot close {where}; every cell that depends on it is #N/A there\n")
+    assert (tmp_path / "door.xlsx").is_file()
+
+
+def test_a_mechanism_that_closes_everywhere_builds_without_a_warning(tmp_path, capsys):
+    from linkbook.cli import main
+    assert main(["build", "garage-door", "-o", str(tmp_path / "door.xlsx")]) == 0
+    assert capsys.readouterr().err == ""

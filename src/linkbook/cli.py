@@ -387,10 +387,20 @@ def _new(args) -> int:
 
 
 def _check(args) -> int:
+    from .builder import make
     t = templates.load(args.template)
+    built, _ = make(t, values_needed=False)
+    _warn(built)
     print(f"{args.template}: ok ({len(t.mechanism.description['steps'])} steps, "
           f"{len(t.parameters)} parameters)")
     return 0
+
+
+def _warn(built) -> None:
+    """What the user should know about a book that is not an error (a loop that cannot close
+    over part of the sweep): one line each on stderr."""
+    for line in built.warnings:
+        print(f"linkbook: warning: {line}", file=sys.stderr)
 
 
 def _build(args) -> int:
@@ -405,7 +415,7 @@ def _build(args) -> int:
         for path in templates.bundled():
             t = templates.load(str(path))
             out = outdir / f"{t.name}.xlsx"
-            build_file(t, out, args.values)
+            _warn(build_file(t, out, args.values))
             print(f"wrote {out}")
         return 0
     if not args.template:
@@ -422,7 +432,7 @@ def _build(args) -> int:
     if not out.parent.is_dir():
         raise InputError("-o", f"folder {str(out.parent)!r} does not exist")
     from .builder import build_file
-    build_file(t, out, args.values)
+    _warn(build_file(t, out, args.values))
     print(f"wrote {out}")
     return 0
 

@@ -1077,6 +1077,7 @@ class Compiler:
         for name in order:
             if cols[name].shown:
                 self.model.closes += (cols[name].key,)
+                self.model.loop_steps += (field,)
                 return
         raise DescriptionError(f"{field}.columns", f"a loop step must show one of "
                                                    f"{', '.join(order)}")

@@ -61,6 +61,7 @@ class Built:
     workbook: Workbook
     model: Model
     meta: dict = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)   # for the builder's user, not the book
 
 
 def build(t: Template) -> Built:
