@@ -524,6 +524,27 @@ def test_a_loop_that_cannot_close_is_named_with_where_at_build(tmp_path, capsys,
     assert (tmp_path / "door.xlsx").is_file()
 
 
+@pytest.mark.parametrize("door, expected", [(10.0, None), (150.0, "—")])
+def test_the_summary_names_the_first_loop_step_that_cannot_close(door, expected):
+    """The geometry summary's live cell names the first loop step (in order) that cannot close
+    somewhere in the sweep: the first step whose point the reference cannot place on some row;
+    a dash where every loop closes."""
+    import numpy as np
+    from linkbook import generic
+    t = templates.from_data("door", tomllib.loads(GARAGE_TOML.replace(
+        "value = 150.0", f"value = {door}")))
+    ref = generic.solve(t.mechanism.description, t.values(), np.array(t.sweep.angles()))
+    if expected is None:
+        loops = [s for s in t.mechanism.description["steps"]
+                 if s["type"] in ("dyad", "slider", "slide", "slot")]
+        expected = next(f"{s['type']} {s['point']}" for s in loops
+                        if not np.isfinite(ref["points"][s["point"]][0]).all())
+    b, values = builder.make(t)
+    cell = b.meta["summary"]["failing_step"]["cell"]
+    assert values[("Mechanism", cell)] == expected
+    assert not [m for c in checks_of(b, values) for m in c.mismatches]
+
+
 def test_a_mechanism_that_closes_everywhere_builds_without_a_warning(tmp_path, capsys):
     from linkbook.cli import main
     assert main(["build", "garage-door", "-o", str(tmp_path / "door.xlsx")]) == 0

@@ -66,7 +66,7 @@ def closure_warnings(built: workbook.Built, t: Template, values: dict) -> list[s
     sweep, model = built.meta["sweep"], built.model
     r0, r1 = sweep["rows"]
     inputs = t.sweep.angles()
-    for key, step in zip(model.closes, model.loop_steps):
+    for key, (step, _) in zip(model.closes, model.loop_steps):
         letter = sweep["columns"][key]
         failing = [inputs[r - r0] for r in range(r0, r1 + 1)
                    if not isinstance(values.get((sweep["sheet"], f"{letter}{r}")), float)]

@@ -715,6 +715,7 @@ class Compiler:
                                                     f"(got {kind!r})")
         label = step.get("point") or step.get("key")
         field = f"{self.field}.steps[{i}] ({kind} {label})" if isinstance(label, str) else field
+        self.step_name = f"{kind} {label}"
         required, optional = STEP_KEYS[kind]
         _keys(field, step, required, optional | COMMON_KEYS)
         if "point" in step:
@@ -1077,7 +1078,7 @@ class Compiler:
         for name in order:
             if cols[name].shown:
                 self.model.closes += (cols[name].key,)
-                self.model.loop_steps += (field,)
+                self.model.loop_steps += ((field, self.step_name),)
                 return
         raise DescriptionError(f"{field}.columns", f"a loop step must show one of "
                                                    f"{', '.join(order)}")

@@ -743,6 +743,10 @@ def _summary_expected(model, solver, params, ref, closes, starts, ends) -> dict:
     out: dict[str, object] = {
         "assembles_all": "yes" if closes.all() else "no",
         "not_closing": float((~closes).sum()),
+        # the first loop step, in order, where the reference finds no assembly on some row
+        "failing_step": next((name for key, (_, name) in zip(model.closes, model.loop_steps)
+                              if not np.isfinite(np.asarray(ref[key], dtype=float)).all()),
+                             DASH),
     }
     gap_starts = sorted(x for x in starts if x != DASH)
     gap_ends = sorted(x for x in ends if x != DASH)

@@ -674,9 +674,14 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         return f"$C${row - 1}"
 
     w = rng("closes")
-    add("assembles_all", "assembles at every angle of the sweep",
+    word = t.mechanism.input_word
+    add("assembles_all", f"assembles at every {word} of the sweep",
         f'=IF(SUM({w})=ROWS({w}),"yes","no")', kind="text")
-    add("not_closing", "angles where the loop cannot close", f"=ROWS({w})-SUM({w})")
+    add("not_closing", f"{word}s where the loop cannot close", f"=ROWS({w})-SUM({w})")
+    first_failing = f'"{DASH}"'
+    for key, (_, name) in reversed(list(zip(model.closes, model.loop_steps))):
+        first_failing = f'IF(COUNT({rng(key)})<ROWS({rng(key)}),"{name}",{first_failing})'
+    add("failing_step", "first loop step that cannot close", "=" + first_failing, kind="text")
     for k in range(1, GAPS_SHOWN + 1):
         add(f"gap{k}_from", f"gap {k}: cannot close from",
             f'=IFERROR(SMALL({rng("gap_from")},{k}),"{DASH}")', t.mechanism.input_unit,
