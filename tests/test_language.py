@@ -100,6 +100,10 @@ BAD = [
     ("a fixed point that is not a pair", _set("mechanism.ground.B0", ["a1"]),
      ["ground.B0", "must be [x, y]"]),
     ("a trace of a fixed point", _set("mechanism.trace", "A0"), ["trace", "moving point"]),
+    ("an output that is no column", _set("mechanism.output", "theta9"),
+     ["mechanism.output", "'theta9' is not a shown column of a length or an angle"]),
+    ("an angle output without its degree view", _set("mechanism.output", "psi"),
+     ["mechanism.output", "the angle 'psi' needs its degree view (degrees = true)"]),
     ("an unknown parameter kind", _set("parameters.a1.kind", "distance"),
      ["parameters.a1.kind", "must be one of"]),
     ("an input without a symbol", _set("mechanism.input", {"key": "theta12"}),
@@ -549,3 +553,27 @@ def test_a_mechanism_that_closes_everywhere_builds_without_a_warning(tmp_path, c
     from linkbook.cli import main
     assert main(["build", "garage-door", "-o", str(tmp_path / "door.xlsx")]) == 0
     assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("b0", ['["a1", 0]', '[0, "a1"]'])
+def test_an_angle_output_gives_its_range_and_swing_in_degrees(b0):
+    """A rocker's swing is a four-bar's design number: output = "theta14" gives the summary
+    its smallest and largest value and the swing, in degrees, in the degree view's window
+    (with the ground turned 90°, the rocker swings across 180°: still one piece). Expected
+    values: the reference's rocker angle, unwrapped."""
+    import numpy as np
+    from linkbook import generic
+    data = fourbar_data()
+    data["mechanism"]["output"] = "theta14"
+    data["mechanism"]["ground"]["B0"] = json.loads(b0)
+    t = templates.from_data("rocker", data)
+    ref = generic.solve(t.mechanism.description, t.values(), np.array(t.sweep.angles()))
+    (bx, by), (ox, oy) = ref["points"]["B"], ref["points"]["B0"]
+    rocker = np.degrees(np.unwrap(np.arctan2(by - oy, bx - ox)))    # angle of B0→B
+    b, values = builder.make(t)
+    got = {k: values[("Mechanism", b.meta["summary"][f"output_{k}"]["cell"])]
+           for k in ("min", "max", "swing")}
+    assert got["swing"] == pytest.approx(np.ptp(rocker), abs=1e-9)
+    assert (got["min"] - rocker.min()) % 360 == pytest.approx(0, abs=1e-9)
+    assert got["max"] - got["min"] == pytest.approx(np.ptp(rocker), abs=1e-9)
+    assert not [m for c in checks_of(b, values) for m in c.mismatches]

@@ -1113,13 +1113,17 @@ class Compiler:
             m.path = (x, y)
             self.traced = t
         if "output" in d:
-            if not isinstance(d["output"], str) or d["output"] not in shown \
-                    or shown[d["output"]].unit != LENGTH:
-                # the summary's smallest and largest value: a length has one; an angle only
-                # within a window of its own
-                raise DescriptionError(f"{self.field}.output", f"{d['output']!r} is not a shown "
-                                                               "column of a length")
-            m.output = d["output"]
+            out = d["output"]
+            q = shown.get(out) if isinstance(out, str) else None
+            if q is None or q.unit not in (LENGTH, RAD):
+                raise DescriptionError(f"{self.field}.output", f"{out!r} is not a shown column "
+                                                               "of a length or an angle")
+            if q.unit == RAD and not q.in_degrees:
+                # its smallest and largest value are read in its degree view, whose window
+                # keeps the swing in one piece
+                raise DescriptionError(f"{self.field}.output", f"the angle {out!r} needs its "
+                                                               "degree view (degrees = true)")
+            m.output = out
         m.transmissions = self.transmissions(d.get("transmission"), shown)
         m.fourbars = self.fourbar_loops()
         if "columns" in d:
