@@ -480,7 +480,8 @@ def check_step_lengths(t: Template) -> None:
 
 def check_sweep(t: Template, where: str = "", step_field: str = "sweep.step") -> None:
     """Positive step, start < stop, and tables inside Excel's limits — before any work; and
-    lengths that fit one book (check_lengths_together). `where` names the template file
+    lengths that fit one book (check_lengths_together), each step's length positive
+    (check_step_lengths). Called after every change to a template. `where` names the template file
     ("mine.toml: "), `step_field` where the step came from (the file's sweep.step, --step)."""
     values = t.values()
     if t.mechanism.grid:
@@ -505,15 +506,15 @@ def check_sweep(t: Template, where: str = "", step_field: str = "sweep.step") ->
                                           f"{s.start:g}..{s.stop:g})")
     rows = (s.stop - s.start) / s.step + 2
     if rows > EXCEL_MAX_ROWS - 10:
-        raise InputError(f"{where}{step_field}", f"{s.step:g} {unit} gives {rows:,.0f} rows; Excel allows "
-                                 f"{EXCEL_MAX_ROWS:,} per sheet")
+        raise InputError(f"{where}{step_field}", f"{s.step:g} {unit} gives {rows:,.0f} rows; "
+                                                 f"Excel allows {EXCEL_MAX_ROWS:,} per sheet")
     if t.mechanism.grid:
         if t.stroke_step <= 0:
             raise InputError(f"{where}grid.stroke_step", f"must be positive (got "
                                                          f"{t.stroke_step:g})")
         if len(t.grid_values) + 1 > EXCEL_MAX_COLUMNS:
-            raise InputError(f"{where}grid.values", f"{len(t.grid_values):,} grid columns; Excel "
-                                                          f"allows {EXCEL_MAX_COLUMNS:,}")
+            raise InputError(f"{where}grid.values", f"{len(t.grid_values):,} grid columns; "
+                                                    f"Excel allows {EXCEL_MAX_COLUMNS:,}")
         fine_rows = 360 / t.stroke_step + 1
         if fine_rows > EXCEL_MAX_ROWS - 10:
             raise InputError(f"{where}grid.stroke_step", f"gives {fine_rows:,.0f} rows; Excel "
