@@ -93,6 +93,12 @@ TOML_CASES = [
      "'type'?)"),
     ("a step of an unknown type", FOURBAR_TOML.replace('type = "dyad"', 'type = "triad"'),
      "(triad B).type: must be one of crank, dyad, slider"),
+    ("a symbol that is no identifier", FOURBAR_TOML.replace("a2 = {", "2a = {"),
+     "mine.toml: parameters.2a: is not a symbol: letters, digits and _, starting with a letter"),
+    ("a link of one point", FOURBAR_TOML.replace('links = [["A0", "A"]', 'links = [["A0"]'),
+     "mine.toml: mechanism.links[0]: must have at least 2 entries (got ['A0'])"),
+    ("a chart's curve that is no column key", FOURBAR_TOML.replace('y = ["yC"]', 'y = [["yC"]]'),
+     "mine.toml: mechanism.charts[1].y[0]: must be text (got ['yC'])"),
     ("a sweep key misspelt", FOURBAR_TOML.replace('step = 5', 'stpe = 5'),
      "mine.toml: sweep: unknown key 'stpe' (did you mean 'step'?)"),
     ("an actuator's length swept through zero", (ROOT / "templates" / "boom-cylinder.toml")

@@ -68,9 +68,9 @@ def _describe(error, data: dict) -> tuple[str, str]:
         near = difflib.get_close_matches(missing, [k for k in got if isinstance(k, str)], n=1)
         hint = f" ({near[0]!r} is not a key: did you mean {missing!r}?)" if near else ""
         return _join(field, missing), f"is missing{hint}"
-    if kind == "propertyNames":
-        return field, (f"{error.instance!r} is not a symbol: letters, digits and _, starting "
-                       "with a letter")
+    if "propertyNames" in error.schema_path:       # a key of the table, not a value
+        return _join(field, str(got)), ("is not a symbol: letters, digits and _, starting "
+                                        "with a letter")
     described = part.get("description")
     if kind == "type":
         types = [want] if isinstance(want, str) else want
@@ -83,7 +83,7 @@ def _describe(error, data: dict) -> tuple[str, str]:
     if kind == "exclusiveMinimum":
         return field, f"must be greater than {want} (got {got!r})"
     if kind == "minItems" and not described:
-        return field, f"must list at least {want} (got {got!r})"
+        return field, f"must have at least {want} entries (got {got!r})"
     if described:
         return field, f"must be {described} (got {got!r})"
     return field, error.message
