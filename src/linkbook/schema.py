@@ -15,9 +15,6 @@ SCHEMA_PATH = Path(__file__).resolve().parent / "mechanism.schema.json"
 # What a reader calls each JSON type
 _TYPE_WORDS = {"object": "a table", "array": "a list", "string": "text", "number": "a number",
                "integer": "a whole number", "boolean": "true or false"}
-# The order problems are reported in: an unknown key first (a misspelling explains the "missing"
-# key and the wrong type that follow from it), a missing key last.
-_FIRST, _LAST = ("additionalProperties",), ("required",)
 
 
 @cache
@@ -48,9 +45,8 @@ def problem(data: dict) -> tuple[str, str] | None:
     errors = list(_validator().iter_errors(data))
     if not errors:
         return None
-    rank = {name: i for i, name in enumerate(_FIRST)}
-    first = min(errors, key=lambda e: rank.get(e.validator, len(_FIRST) + (e.validator in _LAST)))
-    return _describe(first, data)
+    # a missing key last: a misspelt key, reported as unknown with its suggestion, explains it
+    return _describe(min(errors, key=lambda e: e.validator == "required"), data)
 
 
 def _describe(error, data: dict) -> tuple[str, str]:
