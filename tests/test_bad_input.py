@@ -41,7 +41,7 @@ COMMAND_LINE = [
 TOML_CASES = [
     ("TOML that does not parse", "mechanism = \n", "not valid TOML"),
     ("mechanism missing", FOURBAR_TOML.replace("[mechanism]", "[mechanisms]"),
-     "mechanism.ground: is missing"),
+     "mine.toml: unknown key 'mechanisms' (did you mean 'mechanism'?)"),
     ("unknown mechanism", 'mechanism = "fivebar"\n' + FOURBAR_TOML[:FOURBAR_TOML.index(
         "[mechanism]")], "fivebar"),
     ("title missing", FOURBAR_TOML.replace('title = ', 'xtitle = '), "title"),
@@ -53,7 +53,12 @@ TOML_CASES = [
      "label: contains the character U+FFFF"),
     ("sweep missing", FOURBAR_TOML.replace("[sweep]", "[sweeps]"), "sweep"),
     ("sweep step is text", FOURBAR_TOML.replace("step = 5", 'step = "5"'), "step"),
-    ("sweep runs backwards", FOURBAR_TOML.replace("stop = 360", "stop = -10"), "stop"),
+    ("sweep runs backwards", FOURBAR_TOML.replace("stop = 360", "stop = -10"),
+     "mine.toml: sweep: stop must be greater than start"),
+    ("sweep step zero", FOURBAR_TOML.replace("step = 5", "step = 0"),
+     "mine.toml: sweep.step: must be a positive angle"),
+    ("sweep step beyond Excel's rows", FOURBAR_TOML.replace("step = 5", "step = 0.0001"),
+     "mine.toml: sweep.step: 0.0001 degrees gives 3,600,002 rows"),
     ("parameter missing", FOURBAR_TOML.replace('c3 = {', 'zz = {'), "zz"),
     ("parameter value missing",
      FOURBAR_TOML.replace(', value = 84.1 }', ' }'), "parameters.c3.value"),
@@ -69,6 +74,36 @@ TOML_CASES = [
      "name"),
     ("two parameters, one name", FOURBAR_TOML.replace('name = "Branch"', 'name = "a_1"'),
      "already"),
+    # what the schema (src/linkbook/mechanism.schema.json) refuses, before the semantic checks
+    ("a misspelt required key of a step", FOURBAR_TOML.replace('p_length = "a3"',
+                                                               'p_lenght = "a3"'),
+     "mine.toml: mechanism.steps[1] (dyad B): unknown key 'p_lenght' (did you mean "
+     "'p_length'?)"),
+    ("a misspelt kind of a parameter", FOURBAR_TOML.replace('kind = "branch"', 'knid = "branch"'),
+     "mine.toml: parameters.branch: unknown key 'knid' (did you mean 'kind'?)"),
+    ("an unknown key of a parameter", FOURBAR_TOML.replace('a2 = { label', 'a2 = { note = "", '
+                                                                          'label'),
+     "mine.toml: parameters.a2: unknown key 'note'; known: kind, label, name, unit, value"),
+    ("an unknown top-level key", "comment = 'mine'\n" + FOURBAR_TOML,
+     "mine.toml: unknown key 'comment'; known: "),
+    ("a word for true or false", FOURBAR_TOML.replace("equal_axes = true", 'equal_axes = "yes"'),
+     "mine.toml: mechanism.charts[1].equal_axes: must be true or false (got 'yes')"),
+    ("a required key missing", FOURBAR_TOML.replace('type = "dyad"', 'tpye = "dyad"'),
+     "mechanism.steps[1] (step B).type: is missing ('tpye' is not a key: did you mean "
+     "'type'?)"),
+    ("a step of an unknown type", FOURBAR_TOML.replace('type = "dyad"', 'type = "triad"'),
+     "(triad B).type: must be one of crank, dyad, slider"),
+    ("a symbol that is no identifier", FOURBAR_TOML.replace("a2 = {", "2a = {"),
+     "mine.toml: parameters.2a: is not a symbol: letters, digits and _, starting with a letter"),
+    ("a link of one point", FOURBAR_TOML.replace('links = [["A0", "A"]', 'links = [["A0"]'),
+     "mine.toml: mechanism.links[0]: must have at least 2 entries (got ['A0'])"),
+    ("a chart's curve that is no column key", FOURBAR_TOML.replace('y = ["yC"]', 'y = [["yC"]]'),
+     "mine.toml: mechanism.charts[1].y[0]: must be text (got ['yC'])"),
+    ("a sweep key misspelt", FOURBAR_TOML.replace('step = 5', 'stpe = 5'),
+     "mine.toml: sweep: unknown key 'stpe' (did you mean 'step'?)"),
+    ("an actuator's length swept through zero", (ROOT / "templates" / "boom-cylinder.toml")
+     .read_text(encoding="utf-8").replace("start = 600", "start = -10"),
+     "mine.toml: sweep.start: a linear actuator's length must be positive (got -10 mm)"),
     ("parameter not a table", FOURBAR_TOML.replace(
         'a1 = { label = "ground link |A0B0|", unit = "mm", value = 70.0 }', "a1 = 70"), "a1"),
 ]

@@ -110,3 +110,42 @@ def test_bad_input_exits_2_with_one_line_and_no_file(tmp_path, args, field):
 def test_unknown_key_suggests_the_nearest():
     out = run("build", "fourbar", "--set", "a22=5", "-o", "/tmp/never.xlsx")
     assert out.returncode == 2 and "did you mean a2" in out.stderr
+
+
+def test_new_copies_a_bundled_template_and_never_overwrites(tmp_path):
+    """After `pip install` the templates live inside the package: `new` copies one out, and the
+    copy builds as the bundled one does."""
+    out = run("new", "fourbar", "mine.toml", cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    mine = tmp_path / "mine.toml"
+    assert mine.read_text(encoding="utf-8") == (ROOT / "templates" / "fourbar.toml").read_text(
+        encoding="utf-8")
+    mine.write_text("# my own\n", encoding="utf-8")
+    again = run("new", "slider-crank", "mine.toml", cwd=tmp_path)
+    assert again.returncode == 2 and again.stderr.count("\n") == 1, again.stderr
+    assert "mine.toml: exists already" in again.stderr
+    assert mine.read_text(encoding="utf-8") == "# my own\n"
+    typo = run("new", "fourbr", "other.toml", cwd=tmp_path)
+    assert typo.returncode == 2 and "did you mean 'fourbar'?" in typo.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.toml"]
+
+
+def test_check_validates_and_writes_nothing(tmp_path):
+    text = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")
+    (tmp_path / "good.toml").write_text(text, encoding="utf-8")
+    (tmp_path / "bad.toml").write_text(text.replace('p_length = "a3"', 'p_lenght = "a3"'),
+                                       encoding="utf-8")
+    good = run("check", "good.toml", cwd=tmp_path)
+    assert good.returncode == 0 and good.stdout.startswith("good.toml: ok"), good.stderr
+    bad = run("check", "bad.toml", cwd=tmp_path)
+    assert bad.returncode == 2 and bad.stderr == (
+        "linkbook: error: bad.toml: mechanism.steps[1] (dyad B): unknown key 'p_lenght' (did "
+        "you mean 'p_length'?)\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml", "good.toml"]
+
+
+def test_a_missing_toml_named_like_a_bundled_template_points_to_it(tmp_path):
+    out = run("build", "fourbar.toml", cwd=tmp_path)
+    assert out.returncode == 2
+    assert "no such file 'fourbar.toml'; the bundled template is `fourbar`" in out.stderr
+    assert "linkbook new fourbar fourbar.toml" in out.stderr

@@ -15,6 +15,8 @@ from conftest import ROOT, checks_of, formula_cells
 from linkbook import builder, engine, templates
 from linkbook.templates import InputError
 
+SCHEMA = ROOT / "src" / "linkbook" / "mechanism.schema.json"
+
 
 def fourbar_data() -> dict:
     return tomllib.loads((templates.TEMPLATE_DIR / "fourbar.toml").read_text(encoding="utf-8"))
@@ -66,7 +68,7 @@ BAD = [
     ("an unknown symbol", _step("B", "p_length", "a3*k9"), ["(dyad B).p_length",
                                                              "unknown symbol 'k9'"]),
     ("a missing key", _step("B", "q_length", _DELETE), ["(dyad B).q_length", "is missing"]),
-    ("an unknown key", _step("B", "lenght", 3), ["(dyad B).lenght", "is not a key here"]),
+    ("an unknown key", _step("B", "lenght", 3), ["(dyad B): unknown key 'lenght'"]),
     ("a duplicate point", _add_step({"type": "crank", "point": "A", "pivot": "A0",
                                      "length": "a2"}), ["point 'A' is defined twice"]),
     ("a duplicate column key", _step("C", "columns", {"x": {"key": "xA"}}),
@@ -98,6 +100,10 @@ BAD = [
     ("a fixed point that is not a pair", _set("mechanism.ground.B0", ["a1"]),
      ["ground.B0", "must be [x, y]"]),
     ("a trace of a fixed point", _set("mechanism.trace", "A0"), ["trace", "moving point"]),
+    ("an output that is no column", _set("mechanism.output", "theta9"),
+     ["mechanism.output", "'theta9' is not a shown column of a length or an angle"]),
+    ("an angle output without its degree view", _set("mechanism.output", "psi"),
+     ["mechanism.output", "the angle 'psi' needs its degree view (degrees = true)"]),
     ("an unknown parameter kind", _set("parameters.a1.kind", "distance"),
      ["parameters.a1.kind", "must be one of"]),
     ("an input without a symbol", _set("mechanism.input", {"key": "theta12"}),
@@ -110,7 +116,7 @@ BAD = [
      ["(slider S).through", "must be a fixed point"]),
     ("an input of an unknown kind", _set("mechanism.input", {"key": "theta12", "symbol": "θ",
                                                              "kind": "force"}),
-     ["input.kind", "must be angle", "length"]),
+     ["input.kind", "must be angle", "length", "(got 'force')"]),
     ("a crank turned by a length input", _set("mechanism.input", {"key": "s", "symbol": "s",
                                                                   "kind": "length"}),
      ["(crank A).type", "a crank turns with an angle input"]),
@@ -199,8 +205,8 @@ def test_expression_means_what_the_doc_says(formula, expected):
 
 
 def test_every_template_fits_the_json_schema():
-    jsonschema = pytest.importorskip("jsonschema")
-    schema = json.loads((ROOT / "docs" / "mechanism.schema.json").read_text(encoding="utf-8"))
+    import jsonschema
+    schema = json.loads(SCHEMA.read_text(encoding="utf-8"))
     jsonschema.Draft7Validator.check_schema(schema)
     texts = {path.name: path.read_text(encoding="utf-8") for path in templates.bundled()}
     for name, text in {**texts, "EVERY_OPTION": EVERY_OPTION}.items():
@@ -209,6 +215,26 @@ def test_every_template_fits_the_json_schema():
     broken = fourbar_data()
     step(broken, "B")["branch"] = 3
     assert list(jsonschema.Draft7Validator(schema).iter_errors(broken))
+
+
+def test_the_docs_copy_of_the_schema_is_the_packaged_one():
+    """Editors read docs/mechanism.schema.json; build checks with the one inside the package."""
+    docs = (ROOT / "docs" / "mechanism.schema.json").read_bytes()
+    assert docs == SCHEMA.read_bytes(), ("docs/mechanism.schema.json has drifted: copy "
+                                         "src/linkbook/mechanism.schema.json over it")
+
+
+def test_the_compiler_knows_the_keys_the_schema_allows():
+    """One source of truth: the semantic checks take each step's keys from the schema, so a key
+    the schema allows is one the compiler reads, and no other."""
+    from linkbook import language
+    steps = json.loads(SCHEMA.read_text(encoding="utf-8"))["properties"]["mechanism"][
+        "properties"]["steps"]["items"]
+    for rule in steps["allOf"]:
+        kind = rule["if"]["properties"]["type"]["const"]
+        required, optional = language.STEP_KEYS[kind]
+        assert required | optional | language.COMMON_KEYS == set(rule["then"]["properties"])
+        assert required | {"type"} == set(rule["then"]["required"])
 
 
 def test_a_new_step_in_a_copied_template_needs_no_python():
@@ -414,3 +440,140 @@ def test_a_bad_step_of_a_length_sweep_says_its_unit():
     with pytest.raises(InputError) as caught:
         templates.with_overrides(templates.load("boom-cylinder"), step="-5")
     assert "positive length in mm" in str(caught.value)
+
+
+GARAGE_TOML = (templates.TEMPLATE_DIR / "garage-door.toml").read_text(encoding="utf-8")
+
+
+def test_a_length_that_comes_out_negative_is_refused_at_build(tmp_path, capsys):
+    """|CD| = a6 − 200 is −50 mm with the template's a6 = 150: the loop cannot be assembled
+    (the reference says so), so build refuses with one line naming the step's field."""
+    from linkbook.cli import main
+    (tmp_path / "mine.toml").write_text(
+        GARAGE_TOML.replace('p_length = "a6"', 'p_length = "a6 - 200"'), encoding="utf-8")
+    code = main(["build", str(tmp_path / "mine.toml"), "-o", str(tmp_path / "mine.xlsx")])
+    err = capsys.readouterr().err
+    assert code == 2 and err == ("linkbook: error: mine.toml: mechanism.steps[3] (dyad C)."
+                                 "p_length: 'a6 - 200' = -50 mm with these parameters; a length "
+                                 "must be positive\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.toml"]
+    for raw, shown in (("a1 - a1", "0 mm"), ("SQRT(a1 - 200)", "not a number")):
+        data = tomllib.loads(GARAGE_TOML)
+        step(data, "D")["length"] = raw
+        with pytest.raises(InputError, match=f"(crank D).length: '{raw}' = {shown}".replace(
+                "(", r"\(").replace(")", r"\)")):
+            templates.from_data("bad", data, origin="bad.toml")
+
+
+def test_a_length_made_negative_in_the_book_is_na_where_the_reference_says_so(tmp_path):
+    """The same length, positive in the template (a6 = 350: |CD| = 150) and then made −50 by
+    editing a6 in the book: the cells of the dyad C are #N/A, and verify agrees with the
+    reference, which cannot assemble that loop either."""
+    import openpyxl
+    import linkbook
+    text = GARAGE_TOML.replace('p_length = "a6"', 'p_length = "a6 - 200"').replace(
+        "value = 150.0", "value = 350.0")
+    (tmp_path / "mine.toml").write_text(text, encoding="utf-8")
+    book = linkbook.build(str(tmp_path / "mine.toml"), tmp_path / "mine.xlsx")
+    assert linkbook.verify(book).status == 0
+    wb = openpyxl.load_workbook(book)
+    sheet, cell = wb.defined_names["a_6"].attr_text.replace("$", "").split("!")
+    wb[sheet.strip("'")][cell].value = 150.0
+    wb.save(book)
+    report = linkbook.verify(book)
+    assert report.status == 0, report.differing
+    closing = next(c for c in report.checks if c.name == "xC")
+    assert closing.na_expected == closing.cells > 0
+
+
+def _runs(angles, closes) -> list[tuple[float, float]]:
+    runs = []
+    for i, (angle, ok) in enumerate(zip(angles, closes)):
+        if ok:
+            continue
+        if runs and not closes[i - 1]:
+            runs[-1] = (runs[-1][0], angle)
+        else:
+            runs.append((angle, angle))
+    return runs
+
+
+@pytest.mark.parametrize("door", [10.0, 1.0])
+def test_a_loop_that_cannot_close_is_named_with_where_at_build(tmp_path, capsys, door):
+    """|CD| = 10 mm: the garage door's dyad C closes over part of the turn only (|CD| = 1 mm:
+    nowhere). Build still writes the book (exit 0) and says, in one line on stderr, which step
+    fails and over which angles — the angles where the independent reference cannot assemble
+    the mechanism."""
+    import numpy as np
+    from linkbook import generic
+    from linkbook.cli import main
+    path = tmp_path / "door.toml"
+    path.write_text(GARAGE_TOML.replace("value = 150.0", f"value = {door}"), encoding="utf-8")
+    t = templates.load(str(path))
+    angles = t.sweep.angles()
+    closes = generic.solve(t.mechanism.description, t.values(), np.array(angles))["assembled"]
+    assert not closes.all()
+    runs = _runs(angles, closes)
+    if closes.any():
+        spans = ", ".join(f"from {a:g}° to {b:g}°" for a, b in runs)
+        where = f"for θ12 {spans} ({int((~closes).sum())} of {len(angles)} rows)"
+    else:
+        where = f"at any θ12 of the sweep ({angles[0]:g}° to {angles[-1]:g}°)"
+    for command in (["build", str(path), "-o", str(tmp_path / "door.xlsx")],
+                    ["check", str(path)]):
+        assert main(command) == 0
+        err = capsys.readouterr().err
+        assert err == (f"linkbook: warning: door.toml: mechanism.steps[3] (dyad C): the loop "
+                       f"cannot close {where}; every cell that depends on it is #N/A there\n")
+    assert (tmp_path / "door.xlsx").is_file()
+
+
+@pytest.mark.parametrize("door, expected", [(10.0, None), (150.0, "—")])
+def test_the_summary_names_the_first_loop_step_that_cannot_close(door, expected):
+    """The geometry summary's live cell names the first loop step (in order) that cannot close
+    somewhere in the sweep: the first step whose point the reference cannot place on some row;
+    a dash where every loop closes."""
+    import numpy as np
+    from linkbook import generic
+    t = templates.from_data("door", tomllib.loads(GARAGE_TOML.replace(
+        "value = 150.0", f"value = {door}")))
+    ref = generic.solve(t.mechanism.description, t.values(), np.array(t.sweep.angles()))
+    if expected is None:
+        loops = [s for s in t.mechanism.description["steps"]
+                 if s["type"] in ("dyad", "slider", "slide", "slot")]
+        expected = next(f"{s['type']} {s['point']}" for s in loops
+                        if not np.isfinite(ref["points"][s["point"]][0]).all())
+    b, values = builder.make(t)
+    cell = b.meta["summary"]["failing_step"]["cell"]
+    assert values[("Mechanism", cell)] == expected
+    assert not [m for c in checks_of(b, values) for m in c.mismatches]
+
+
+def test_a_mechanism_that_closes_everywhere_builds_without_a_warning(tmp_path, capsys):
+    from linkbook.cli import main
+    assert main(["build", "garage-door", "-o", str(tmp_path / "door.xlsx")]) == 0
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("b0", ['["a1", 0]', '[0, "a1"]'])
+def test_an_angle_output_gives_its_range_and_swing_in_degrees(b0):
+    """A rocker's swing is a four-bar's design number: output = "theta14" gives the summary
+    its smallest and largest value and the swing, in degrees, in the degree view's window
+    (with the ground turned 90°, the rocker swings across 180°: still one piece). Expected
+    values: the reference's rocker angle, unwrapped."""
+    import numpy as np
+    from linkbook import generic
+    data = fourbar_data()
+    data["mechanism"]["output"] = "theta14"
+    data["mechanism"]["ground"]["B0"] = json.loads(b0)
+    t = templates.from_data("rocker", data)
+    ref = generic.solve(t.mechanism.description, t.values(), np.array(t.sweep.angles()))
+    (bx, by), (ox, oy) = ref["points"]["B"], ref["points"]["B0"]
+    rocker = np.degrees(np.unwrap(np.arctan2(by - oy, bx - ox)))    # angle of B0→B
+    b, values = builder.make(t)
+    got = {k: values[("Mechanism", b.meta["summary"][f"output_{k}"]["cell"])]
+           for k in ("min", "max", "swing")}
+    assert got["swing"] == pytest.approx(np.ptp(rocker), abs=1e-9)
+    assert (got["min"] - rocker.min()) % 360 == pytest.approx(0, abs=1e-9)
+    assert got["max"] - got["min"] == pytest.approx(np.ptp(rocker), abs=1e-9)
+    assert not [m for c in checks_of(b, values) for m in c.mismatches]

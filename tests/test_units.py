@@ -104,3 +104,37 @@ def test_a_length_expression_with_a_number_cannot_be_converted():
     with pytest.raises(templates.InputError) as caught:
         templates.with_unit(t, "m")
     assert "steps[" in str(caught.value) and ".formula" in str(caught.value)
+
+
+def _with_expression(formula: str, unit: str) -> templates.Template:
+    data = tomllib.loads(_fourbar_text())
+    data["mechanism"].pop("columns")
+    data["mechanism"]["steps"].append({"type": "expression", "key": "q", "unit": unit,
+                                       "formula": formula})
+    return templates.from_data("mine", data, origin="mine.toml")
+
+
+# Numbers that are no length (a ratio, a scale factor, an angle in degrees): --unit converts
+@pytest.mark.parametrize("formula, unit", [
+    ("yC/a2 - 4", "-"), ("2*a2", "length"), ("SQRT(a2^2 + a3^2)", "length"),
+    ("DEGREES(ATAN2(xC, yC)) + 90", "-"), ("IF(xC > 0, xC, 0)", "length"),
+    ("a2*PI()/180", "length"), ("(a2 + a3)/2", "length")])
+def test_a_number_that_is_no_length_converts(formula, unit):
+    t = templates.with_unit(_with_expression(formula, unit), "m")
+    assert t.length_unit == "m"
+
+
+# Numbers that are lengths (or mixed with one): --unit cannot convert them and says where
+@pytest.mark.parametrize("formula, unit, words", [
+    ("a2 + 10", "length", "the number 10 is a length here"),
+    ("MAX(a2, 5)", "length", "the number 5 is a length here"),
+    ("SQRT(a2^2 + 9)", "length", "the number 9 is an area here"),
+    ("IF(xC > 3, xC, 0)", "length", "the number 3 is a length here"),
+    ("yC/a2 - 4", "length", "yC / a2 - 4 is a number (no length in it), where a length belongs"),
+    ("SIN(a2)", "-", "a2 is a length, where a number (no length in it) belongs")])
+def test_a_number_that_is_a_length_is_named(formula, unit, words):
+    with pytest.raises(templates.InputError) as caught:
+        templates.with_unit(_with_expression(formula, unit), "m")
+    message = str(caught.value)
+    assert message.startswith("--unit: mechanism.steps[3] (expression q).formula: "), message
+    assert words in message, message

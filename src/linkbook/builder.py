@@ -21,8 +21,10 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
     degree views are written with their windows; then, when the values are needed, the whole
     book is evaluated."""
     built = workbook.build(t)
-    angles = engine.evaluate(built.workbook, only=degree_window_sources(built))
+    angles = engine.evaluate(built.workbook,
+                             only=degree_window_sources(built) | loop_witness_cells(built))
     workbook.set_degree_windows(built, degree_windows(built, angles))
+    built.warnings += closure_warnings(built, t, angles)
     values = engine.evaluate(built.workbook) if values_needed else None
     charts.add_charts(built, t, built.model)
     _print_setup(built.workbook)
@@ -48,6 +50,50 @@ def degree_window_sources(built: workbook.Built) -> set[tuple[str, str]]:
     r0, r1 = sweep["rows"]
     return {(sweep["sheet"], f"{letter}{r}") for q, letter in _angle_columns(built)
             if not q.wrap_360 for r in range(r0, r1 + 1)}
+
+
+def loop_witness_cells(built: workbook.Built) -> set[tuple[str, str]]:
+    """The sweep cells of each loop step's witness column: a number exactly where it closes."""
+    sweep = built.meta["sweep"]
+    r0, r1 = sweep["rows"]
+    return {(sweep["sheet"], f"{sweep['columns'][key]}{r}") for key in built.model.closes
+            for r in range(r0, r1 + 1)}
+
+
+def closure_warnings(built: workbook.Built, t: Template, values: dict) -> list[str]:
+    """One line for the first loop step that cannot close somewhere in the sweep (the steps
+    after it fail there with it): which step, and over which input values."""
+    sweep, model = built.meta["sweep"], built.model
+    r0, r1 = sweep["rows"]
+    inputs = t.sweep.angles()
+    for key, (step, _) in zip(model.closes, model.loop_steps):
+        letter = sweep["columns"][key]
+        failing = [inputs[r - r0] for r in range(r0, r1 + 1)
+                   if not isinstance(values.get((sweep["sheet"], f"{letter}{r}")), float)]
+        if failing:
+            return [f"{step}: the loop cannot close {_where(t, inputs, failing)}; every cell "
+                    "that depends on it is #N/A there"]
+    return []
+
+
+def _where(t: Template, inputs: list[float], failing: list[float]) -> str:
+    """'at any θ12 of the sweep (0° to 360°)', 'for θ12 from 40° to 120°, at 300° (18 of 73
+    rows)'."""
+    mech = t.mechanism
+    unit = "°" if mech.input_is_angle else f" {t.length_unit}"
+    if len(failing) == len(inputs):
+        return f"at any {mech.input_symbol} of the sweep ({inputs[0]:g}{unit} to " \
+               f"{inputs[-1]:g}{unit})"
+    runs, index = [], {x: i for i, x in enumerate(inputs)}
+    for x in failing:
+        if runs and index[x] == index[runs[-1][1]] + 1:
+            runs[-1][1] = x
+        else:
+            runs.append([x, x])
+    spans = [f"at {a:g}{unit}" if a == b else f"from {a:g}{unit} to {b:g}{unit}"
+             for a, b in runs]
+    shown = ", ".join(spans[:3]) + (f" and {len(spans) - 3} more" if len(spans) > 3 else "")
+    return f"for {mech.input_symbol} {shown} ({len(failing)} of {len(inputs)} rows)"
 
 
 def degree_windows(built: workbook.Built, values: dict) -> dict[str, float]:

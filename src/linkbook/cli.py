@@ -21,6 +21,8 @@ EPILOG = """examples:
   linkbook build fourbar --set a2=40 --branch crossed -o crossed.xlsx
   linkbook build slider-crank --step 1          # one row per degree
   linkbook build pump --set s1=20,50,100        # the grid's adjustments s1
+  linkbook new fourbar mine.toml                # a bundled template to start from
+  linkbook check mine.toml                      # check it, write nothing
   linkbook build my-linkage.toml                # your own mechanism (docs/language.md)
   linkbook build --all --outdir output          # every bundled template
   linkbook verify fourbar.xlsx                  # every formula against the reference
@@ -66,6 +68,21 @@ def _parser() -> argparse.ArgumentParser:
     ls = sub.add_parser("list", help="the bundled templates, one line each")
     ls.add_argument("-v", "--verbose", action="store_true",
                     help="also list each template's parameters and defaults")
+
+    n = sub.add_parser("new", help="copy a bundled template to a TOML file of your own",
+                       description="Copy a bundled template (see `linkbook list`) to a new TOML "
+                                   "file to edit: your numbers, or a mechanism of your own "
+                                   "(docs/language.md). An existing file is never overwritten.")
+    n.add_argument("template", metavar="NAME", help="a bundled template name")
+    n.add_argument("output", metavar="MINE.toml", help="the file to write (must not exist)")
+
+    c = sub.add_parser("check", help="check a template without writing anything",
+                       description="Check a template as build does (the schema of what a "
+                                   "template may contain, then its sense: points, symbols, "
+                                   "lengths, the sweep) and write nothing. Exit status: 0 it "
+                                   "builds, 2 it does not (one line says why and where).")
+    c.add_argument("template", metavar="NAME_OR_TOML",
+                   help="a bundled template name or a .toml file")
 
     b = sub.add_parser("build", help="write a workbook from a template",
                        description="Write a workbook from a bundled template (by name) or a "
@@ -254,6 +271,10 @@ def _main(argv: list[str] | None) -> int:
             return _list(args.verbose)
         if args.command == "build":
             return _build(args)
+        if args.command == "new":
+            return _new(args)
+        if args.command == "check":
+            return _check(args)
         if args.command == "verify":
             return _verify(args)
         if args.command == "preview":
@@ -454,6 +475,30 @@ def _list(verbose: bool) -> int:
     return 0
 
 
+def _new(args) -> int:
+    out = templates.copy_bundled(args.template, Path(args.output))
+    print(f"wrote {out}: the bundled {args.template}; edit it, then `linkbook check {out}` "
+          f"and `linkbook build {out}`")
+    return 0
+
+
+def _check(args) -> int:
+    from .builder import make
+    t = templates.load(args.template)
+    built, _ = make(t, values_needed=False)
+    _warn(built)
+    print(f"{args.template}: ok ({len(t.mechanism.description['steps'])} steps, "
+          f"{len(t.parameters)} parameters)")
+    return 0
+
+
+def _warn(built) -> None:
+    """What the user should know about a book that is not an error (a loop that cannot close
+    over part of the sweep): one line each on stderr."""
+    for line in built.warnings:
+        print(f"linkbook: warning: {line}", file=sys.stderr)
+
+
 def _build(args) -> int:
     if args.all:
         if args.template or args.output or args.assignments or args.step or args.branch \
@@ -466,7 +511,7 @@ def _build(args) -> int:
         for path in templates.bundled():
             t = templates.load(str(path))
             out = outdir / f"{t.name}.xlsx"
-            build_file(t, out, args.values)
+            _warn(build_file(t, out, args.values))
             print(f"wrote {out}")
         return 0
     if not args.template:
@@ -480,7 +525,7 @@ def _build(args) -> int:
     from .files import check_output
     out = check_output(Path(args.output or f"{t.name}.xlsx"), "-o", (".xlsx",))
     from .builder import build_file
-    build_file(t, out, args.values)
+    _warn(build_file(t, out, args.values))
     print(f"wrote {out}")
     return 0
 

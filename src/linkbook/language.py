@@ -8,13 +8,17 @@ from __future__ import annotations
 
 import ast
 import keyword
+import math
+import operator
 import re
 from dataclasses import dataclass
+from fractions import Fraction
 
 from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism, on_loop)
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Chart, FourBarLoop, Joint, Model,
                     Quantity, _one_group, references)
+from .schema import keys_of, schema, step_schemas
 from .steps import Sym, acos_or_na, input_angle, offset_slide, polar, slider, triangle
 
 KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND)
@@ -120,6 +124,221 @@ def _emit(field: str, node: ast.AST, symbols: set[str]) -> Expr:
         return Expr(f"{name}({args})")
     raise DescriptionError(field, "may hold only numbers, symbols, + - * / ^, comparisons, "
                                   "parentheses and " + ", ".join(FUNCTIONS))
+
+
+class _NotANumber(Exception):
+    """An expression's value is an error (#N/A, a domain error, a division by zero)."""
+
+
+def value_of(raw: object, values: dict[str, float]) -> float | None:
+    """The number an expression of parameters stands for with these values: NaN where its
+    value is an error, None where it names something else (the swept input, a column). The
+    grammar is expression()'s; the arithmetic Excel's."""
+    if not isinstance(raw, str):
+        return float(raw)
+    try:
+        return _value(ast.parse(raw.replace("^", "**"), mode="eval").body, values)
+    except _NotANumber:
+        return math.nan
+    except KeyError:
+        return None
+
+
+def _value(node: ast.AST, values: dict[str, float]) -> float:
+    if isinstance(node, ast.Constant):
+        return float(node.value)
+    if isinstance(node, ast.Name):
+        return values[node.id]
+    if isinstance(node, ast.UnaryOp):
+        inner = _value(node.operand, values)
+        return -inner if isinstance(node.op, ast.USub) else inner
+    if isinstance(node, ast.BinOp):
+        a, b = _value(node.left, values), _value(node.right, values)
+        return _checked(lambda: _ARITHMETIC[type(node.op)](a, b))
+    if isinstance(node, ast.Compare):
+        a, b = _value(node.left, values), _value(node.comparators[0], values)
+        return float(_ORDER[type(node.ops[0])](a, b))
+    name = node.func.id.upper()
+    if name == "IF":
+        test = _value(node.args[0], values)
+        return _value(node.args[1 if test else 2], values)
+    if name == "IFERROR":
+        try:
+            return _value(node.args[0], values)
+        except _NotANumber:
+            return _value(node.args[1], values)
+    args = [_value(a, values) for a in node.args]
+    return _checked(lambda: _EXCEL[name](*args))
+
+
+def _checked(compute) -> float:
+    try:
+        result = float(compute())
+    except (ValueError, ZeroDivisionError, OverflowError, TypeError):   # TypeError: complex
+        raise _NotANumber from None
+    if not math.isfinite(result):
+        raise _NotANumber
+    return result
+
+
+def _not_available() -> float:
+    raise _NotANumber
+
+
+_ARITHMETIC = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+               ast.Div: operator.truediv, ast.Pow: operator.pow}
+_ORDER = {ast.Gt: operator.gt, ast.GtE: operator.ge, ast.Lt: operator.lt, ast.LtE: operator.le,
+          ast.Eq: operator.eq, ast.NotEq: operator.ne}
+_EXCEL = {"SQRT": math.sqrt, "ABS": abs, "SIN": math.sin, "COS": math.cos, "TAN": math.tan,
+          "ASIN": math.asin, "ACOS": math.acos, "ATAN": math.atan,
+          "ATAN2": lambda x, y: math.atan2(y, x), "RADIANS": math.radians,
+          "DEGREES": math.degrees, "PI": lambda: math.pi, "MIN": min, "MAX": max,
+          "NA": _not_available}
+
+
+# ---------------------------------------------------------------- dimensions (for --unit)
+# The power of length each expression stands for: a parameter of kind length or offset, a
+# length column, a linear actuator's length is 1, an angle or a ratio 0; a bare number takes
+# the dimension its place gives it (a scale factor in a product, a length in a sum with one).
+_ANGLE_FUNCTIONS = {"SIN", "COS", "TAN", "ASIN", "ACOS", "ATAN", "RADIANS", "DEGREES"}
+
+
+class _Dimensions:
+    """Finds where an expression writes a length as a number (which a change of length unit
+    cannot convert) or mixes a length with a number."""
+
+    def __init__(self, dims: dict[str, int]):
+        self.dims = dims
+        self.problem: str | None = None
+
+    def check(self, raw: object, want: int) -> str | None:
+        if not isinstance(raw, str):
+            raw = repr(raw)
+        self.need(ast.parse(raw.replace("^", "**"), mode="eval").body, Fraction(want))
+        return self.problem
+
+    def _note(self, text: str) -> None:
+        self.problem = self.problem or text
+
+    def need(self, node: ast.AST, want: Fraction) -> None:
+        got = self.dim(node)
+        if got is None:
+            if want != 0 and value_of(_source(node), {}) != 0:
+                self._note(f"the number {_source(node)} is {_dimension_word(want)} here, which a "
+                           "change of unit cannot convert; make it a parameter (a number in a "
+                           "product, a ratio or an angle is fine)")
+        elif got != want:
+            self._note(f"{_source(node)} is {_dimension_word(got)}, where "
+                       f"{_dimension_word(want)} belongs, so a change of unit would change "
+                       "its meaning")
+
+    def same(self, nodes: list) -> Fraction | None:
+        """The one dimension of terms that are added, compared or chosen between."""
+        dims = [self.dim(n) for n in nodes]
+        known = {d for d in dims if d is not None}
+        if len(known) > 1:
+            self._note(f"{' and '.join(_source(n) for n in nodes)} mix a length with a number, "
+                       "so a change of unit would change their meaning")
+            return max(known)
+        d = known.pop() if known else None
+        if d:
+            for n, nd in zip(nodes, dims):
+                if nd is None:
+                    self.need(n, d)
+        return d
+
+    def dim(self, node: ast.AST) -> Fraction | None:
+        """The node's dimension, None for a bare number (or numbers alone)."""
+        if isinstance(node, ast.Constant):
+            return None
+        if isinstance(node, ast.Name):
+            return Fraction(self.dims.get(node.id, 0))
+        if isinstance(node, ast.UnaryOp):
+            return self.dim(node.operand)
+        if isinstance(node, ast.BinOp):
+            if isinstance(node.op, (ast.Add, ast.Sub)):
+                return self.same([node.left, node.right])
+            if isinstance(node.op, ast.Pow):
+                self.need(node.right, Fraction(0))
+                base, power = self.dim(node.left), value_of(_source(node.right), {})
+                if base is None or base == 0:
+                    return base
+                if power is None or power != power:
+                    self._note(f"{_source(node)} raises a length to a power that is not a number")
+                    return base
+                return base * Fraction(power).limit_denominator(12)
+            a, b = self.dim(node.left), self.dim(node.right)
+            if a is None and b is None:
+                return None
+            a, b = a or Fraction(0), b or Fraction(0)
+            return a + b if isinstance(node.op, ast.Mult) else a - b
+        if isinstance(node, ast.Compare):
+            self.same([node.left, *node.comparators])
+            return Fraction(0)
+        name = node.func.id.upper()
+        args = node.args
+        if name in _ANGLE_FUNCTIONS:
+            for a in args:
+                self.need(a, Fraction(0))
+            return Fraction(0)
+        if name == "ATAN2":
+            self.same(args)
+            return Fraction(0)
+        if name == "SQRT":
+            d = self.dim(args[0])
+            return None if d is None else d / 2
+        if name == "IF":
+            self.dim(args[0])
+            return self.same(args[1:])
+        if name in ("ABS", "MIN", "MAX", "IFERROR"):
+            return self.same(args)
+        return None                                   # PI(), NA(): numbers
+
+
+def _source(node: ast.AST) -> str:
+    return ast.unparse(node).replace("**", "^")
+
+
+def _dimension_word(d: Fraction) -> str:
+    return {0: "a number (no length in it)", 1: "a length", 2: "an area"}.get(
+        d, f"a length to the power {d}")
+
+
+def unconvertible(mechanism: "Mechanism", model: Model) -> tuple[str, str] | None:
+    """(field, why) of the first place a description writes a length as a number (or mixes
+    a length with a number), so that a change of length unit could not convert it; None when
+    every length is a parameter's."""
+    description = mechanism.description or {}
+    dims = {symbol: int(kind in (LENGTH_KIND, OFFSET_KIND))
+            for symbol, kind in mechanism.parameters.items()}
+    dims.update({s: 1 for s in MOTION_SYMBOLS[LENGTH_KIND]})
+    dims.update({q.key: int(q.unit == LENGTH) for q in model.quantities})
+    dims[mechanism.input_key] = int(not mechanism.input_is_angle)
+    for name, xy in (description.get("ground") or {}).items():
+        for i, raw in enumerate(xy):
+            found = _Dimensions(dims).check(raw, 1)
+            if found:
+                return f"mechanism.ground.{name}[{i}]", found
+    for i, step in enumerate(description.get("steps") or []):
+        label = step.get("point") or step.get("key")
+        field = f"mechanism.steps[{i}] ({step.get('type')} {label})"
+        for k, raw in step.items():
+            want = _STEP_DIMENSIONS.get(k)
+            if k == "formula":
+                want = int(step.get("unit") == "length")
+            if want is None:
+                continue
+            for j, item in enumerate(raw if isinstance(raw, list) else [raw]):
+                found = _Dimensions(dims).check(item, want)
+                if found:
+                    return f"{field}.{k}" + (f"[{j}]" if isinstance(raw, list) else ""), found
+    return None
+
+
+# The dimension of each step key that takes an expression: lengths 1, angles (degrees) 0
+_STEP_DIMENSIONS = {"length": 1, "p_length": 1, "q_length": 1, "local": 1, "distances": 1,
+                    "distance": 1, "offset": 1, "phase": 0, "angle": 0, "direction": 0,
+                    "slot_angle": 0}
 
 
 def radians(angle: Expr) -> Expr:
@@ -229,23 +448,14 @@ def polar_columns(n: str, a: str, b: str, degrees: bool = False) -> list[Column]
             Column("phi", f"phi_{n}", f"ϕ_{n}", f"angle of {a}→{b}", RAD, degrees)]
 
 
-STEP_KEYS = {
-    "crank": ({"point", "pivot", "length"}, {"phase"}),
-    "dyad": ({"point", "p", "q", "p_length", "q_length", "branch"}, set()),
-    "slider": ({"point", "p", "length", "through", "branch"}, {"direction", "along"}),
-    "slide": ({"point", "p", "pivot", "offset", "branch"}, set()),
-    "point": ({"point", "frame"}, {"local", "distances", "side", "distance", "angle"}),
-    "slot": ({"point", "slot_through", "slot_frame", "through"},
-             {"slot_angle", "direction"}),
-    "vector": ({"from", "to", "key"}, set()),
-    "distance": ({"between", "key"}, {"symbol", "label"}),
-    "expression": ({"key", "formula"}, {"symbol", "label", "unit", "shown", "time_ratio_of"}),
-}
-UNITS = {"length": LENGTH, "rad": RAD, "-": "-"}
+# The keys each part of a description may have: the schema's (one source of truth)
 COMMON_KEYS = {"type", "columns"}
-MECHANISM_KEYS = ({"input", "ground", "steps", "links"},
-                  {"trace", "output", "transmission", "columns", "charts"})
-CHART_KEYS = ({"title", "x", "y"}, {"x_title", "y_title", "equal_axes"})
+STEP_KEYS = {kind: tuple(keys - COMMON_KEYS for keys in keys_of(part))
+             for kind, part in step_schemas().items()}
+UNITS = {"length": LENGTH, "rad": RAD, "-": "-"}
+_MECHANISM = schema()["properties"]["mechanism"]
+MECHANISM_KEYS = keys_of(_MECHANISM)
+CHART_KEYS = keys_of(_MECHANISM["properties"]["charts"]["items"])
 
 
 def _table(field: str, value: object) -> dict:
@@ -287,6 +497,7 @@ class Compiler:
         self.input_kind = ANGLE_KIND
         self.swept: set[str] = set()     # the input key, where it is a length expressions use
         self.records: list[dict] = []    # per step what it placed, for motion.py
+        self.lengths: list[tuple[str, object]] = []   # (field, expression) of every length
         self.traced = ""
         self.field = f"{origin}: mechanism"
         self.data = _table(self.field, data)
@@ -345,6 +556,22 @@ class Compiler:
         if e.text.startswith("{") and e.text.endswith("}") and inner in self.symbols:
             return inner
         self.model.add(Quantity(f"_{hint}", hint, LENGTH, e.text, ALIAS))
+        return f"_{hint}"
+
+    def length_operand(self, field: str, hint: str, e: Expr, raw: object) -> str:
+        """A key standing for a length the loop is closed with. The template's value must be
+        positive (checked at build: `self.lengths`); in the book, where the inputs make it zero
+        or negative the loop cannot be assembled and the cells that use it are #N/A, as the
+        reference says (a length parameter itself needs no guard: its cell refuses a
+        non-positive value, and so does the swept input's)."""
+        self.lengths.append((field, raw))
+        inner = e.text[1:-1]
+        bare = e.text.startswith("{") and e.text.endswith("}")
+        if "{" not in e.text or bare and (self.kinds.get(inner) == LENGTH_KIND
+                                          or inner in self.swept):
+            return self.operand(hint, e)
+        guarded = f"IF({e.at_least(SUM)}>0,{e.text},NA())"
+        self.model.add(Quantity(f"_{hint}", hint, LENGTH, guarded, ALIAS))
         return f"_{hint}"
 
     def columns(self, field: str, step: dict, defaults: list[Column]) -> dict[str, Sym]:
@@ -488,6 +715,7 @@ class Compiler:
                                                     f"(got {kind!r})")
         label = step.get("point") or step.get("key")
         field = f"{self.field}.steps[{i}] ({kind} {label})" if isinstance(label, str) else field
+        self.step_name = f"{kind} {label}"
         required, optional = STEP_KEYS[kind]
         _keys(field, step, required, optional | COMMON_KEYS)
         if "point" in step:
@@ -507,6 +735,7 @@ class Compiler:
                                                     "q_length")
         pivot = self.known_point(f"{field}.pivot", s["pivot"], name)
         length = self.expr(f"{field}.length", s["length"])
+        self.lengths.append((f"{field}.length", s["length"]))
         phase = self.expr(f"{field}.phase", s.get("phase", 0))
         angle = key(self.input_key) if phase.zero else \
             Expr(f"{{{self.input_key}}}+{radians(phase).text}", SUM)
@@ -546,8 +775,8 @@ class Compiler:
         (px, py), (qx, qy) = self.points[p], self.points[q]
         polar(self.model, minus(px, qx).text, minus(py, qy).text,
               cols["xs"], cols["ys"], cols["s"], cols["phi"])
-        p_key = self.operand(f"p_length_{n}", p_len)
-        q_key = self.operand(f"q_length_{n}", q_len)
+        p_key = self.length_operand(f"{field}.p_length", f"p_length_{n}", p_len, s["p_length"])
+        q_key = self.length_operand(f"{field}.q_length", f"q_length_{n}", q_len, s["q_length"])
         # angle(P→R) from μ, or from the angle at P when μ is hidden and that angle is shown.
         use_p = not cols["mu"].shown and cols["p_interior"].shown
         triangle(self.model, side=cols["s"].key, angle=cols["phi"].key, p=p_key, q=q_key,
@@ -596,7 +825,7 @@ class Compiler:
             Column("y", f"y{n}", f"y{n}", f"y of {n}", LENGTH)])
         (px, py), (tx, ty) = self.points[p], self.points[through]
         dx, dy = minus(px, tx), minus(py, ty)
-        length_key = self.operand(f"length_{n}", length)
+        length_key = self.length_operand(f"{field}.length", f"length_{n}", length, s["length"])
         pos = cols["s"].key
         if along:
             angle = self.angle_of(*along)
@@ -704,8 +933,9 @@ class Compiler:
                 db = self.expr(f"{field}.distances[1]", pair[1])
                 side = self.branch(f"{field}.side", s.get("side", 1))
                 ab = self.length_of(a, b)
-                k_ab, k_a, k_b = (self.operand(f"{h}_{n}", e) for h, e in
-                                  (("frame_length", ab), ("distance_a", da), ("distance_b", db)))
+                k_ab = self.operand(f"frame_length_{n}", ab)
+                k_a, k_b = (self.length_operand(f"{field}.distances[{i}]", f"{h}_{n}", e, pair[i])
+                            for i, (h, e) in enumerate((("distance_a", da), ("distance_b", db))))
                 g = cols["gamma"]
                 gamma = acos_or_na(f"({{{k_ab}}}^2+{{{k_a}}}^2-{{{k_b}}}^2)"
                                    f"/(2*{{{k_ab}}}*{{{k_a}}})")
@@ -717,6 +947,7 @@ class Compiler:
                 d = da.at_least(PRODUCT)
             else:
                 da = self.expr(f"{field}.distance", s["distance"])
+                self.lengths.append((f"{field}.distance", s["distance"]))
                 offset = self.expr(f"{field}.angle", s.get("angle", 0))
                 angle = base.text if offset.zero else plus(base, radians(offset).text)
                 t = cols["theta"]
@@ -847,6 +1078,7 @@ class Compiler:
         for name in order:
             if cols[name].shown:
                 self.model.closes += (cols[name].key,)
+                self.model.loop_steps += ((field, self.step_name),)
                 return
         raise DescriptionError(f"{field}.columns", f"a loop step must show one of "
                                                    f"{', '.join(order)}")
@@ -881,13 +1113,17 @@ class Compiler:
             m.path = (x, y)
             self.traced = t
         if "output" in d:
-            if not isinstance(d["output"], str) or d["output"] not in shown \
-                    or shown[d["output"]].unit != LENGTH:
-                # the summary's smallest and largest value: a length has one; an angle only
-                # within a window of its own
-                raise DescriptionError(f"{self.field}.output", f"{d['output']!r} is not a shown "
-                                                               "column of a length")
-            m.output = d["output"]
+            out = d["output"]
+            q = shown.get(out) if isinstance(out, str) else None
+            if q is None or q.unit not in (LENGTH, RAD):
+                raise DescriptionError(f"{self.field}.output", f"{out!r} is not a shown column "
+                                                               "of a length or an angle")
+            if q.unit == RAD and not q.in_degrees:
+                # its smallest and largest value are read in its degree view, whose window
+                # keeps the swing in one piece
+                raise DescriptionError(f"{self.field}.output", f"the angle {out!r} needs its "
+                                                               "degree view (degrees = true)")
+            m.output = out
         m.transmissions = self.transmissions(d.get("transmission"), shown)
         m.fourbars = self.fourbar_loops()
         if "columns" in d:
@@ -1029,7 +1265,7 @@ def compile_mechanism(name: str, data: dict, kinds: dict[str, str], origin: str,
         if out not in {q.key for q in model.of_role(COLUMN)}:
             raise DescriptionError(f"{origin}: grid.output", f"{out!r} is not a shown column")
     return Mechanism(name, dict(c.kinds), c.input_key, c.input_symbol, lambda: model, grid,
-                     description=data, input_kind=c.input_kind)
+                     description=data, input_kind=c.input_kind, lengths=tuple(c.lengths))
 
 
 def from_record(meta: dict) -> Mechanism:

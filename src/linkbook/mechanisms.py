@@ -30,6 +30,8 @@ class Mechanism:
     grid: tuple[str, str] | None = None   # (parameter across the grid, quantity in its cells)
     description: dict | None = None       # the [mechanism] table it was compiled from
     input_kind: str = ANGLE_KIND          # a crank's angle, or a linear actuator's length
+    # (field, expression) of every length a step takes: each must come out positive
+    lengths: tuple[tuple[str, object], ...] = ()
 
     @property
     def input_is_angle(self) -> bool:

@@ -85,6 +85,8 @@ class Model:
     charts: list[Chart] = field(default_factory=list)
     path: tuple[str, str] | None = None    # (x key, y key) of a traced point drawn on the mechanism
     closes: tuple[str, ...] = ()   # quantities that are all numbers exactly where every loop closes
+    # the loop step each of `closes` belongs to: (as errors name it, its short name "dyad C")
+    loop_steps: tuple[tuple[str, str], ...] = ()
     output: str = ""          # the main output, whose swing the summary reports
     transmissions: tuple[str, ...] = ()   # transmission angles whose range the summary reports
     fourbars: tuple[FourBarLoop, ...] = ()  # four-bar loops on the ground (Grashof, limit angles)

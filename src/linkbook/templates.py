@@ -197,7 +197,7 @@ def find(name_or_path: str) -> Path:
     path = Path(name_or_path)
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
-            raise InputError("template", f"no such file {name_or_path!r}")
+            raise InputError("template", f"no such file {name_or_path!r}{_bundled_hint(path)}")
         return path
     candidate = TEMPLATE_DIR / f"{name_or_path}.toml"
     if candidate.is_file():
@@ -206,6 +206,34 @@ def find(name_or_path: str) -> Path:
     hint = difflib.get_close_matches(name_or_path, names, n=1)
     more = f"; did you mean {hint[0]!r}?" if hint else f"; known: {', '.join(names)}"
     raise InputError("template", f"unknown template {name_or_path!r}{more}")
+
+
+def _bundled_hint(path: Path) -> str:
+    """A missing file named like a bundled template: the name alone builds that one."""
+    if (TEMPLATE_DIR / f"{path.stem}.toml").is_file():
+        return (f"; the bundled template is `{path.stem}` (no .toml), and `linkbook new "
+                f"{path.stem} {path.name}` copies it here to edit")
+    return ""
+
+
+def copy_bundled(name: str, out: Path) -> Path:
+    """A bundled template copied to `out`, a new .toml file (never over an existing one)."""
+    source = TEMPLATE_DIR / f"{name}.toml"
+    if not source.is_file():
+        find(name)                  # the unknown-template error, with its suggestion
+    if out.suffix != ".toml":
+        raise InputError("new", f"the copy must be a .toml file (got {str(out)!r})")
+    if not out.parent.is_dir():
+        raise InputError("new", f"folder {str(out.parent)!r} does not exist")
+    try:
+        with open(out, "x", encoding="utf-8") as f:
+            f.write(source.read_text(encoding="utf-8"))
+    except FileExistsError:
+        raise InputError(str(out), "exists already; linkbook new never overwrites a "
+                                   "file") from None
+    except OSError as exc:
+        raise InputError(str(out), f"cannot be written ({exc.strerror or exc})") from None
+    return out
 
 
 def load(name_or_path: str) -> Template:
@@ -257,6 +285,7 @@ def check_text(field: str, text: str) -> str:
 
 
 def from_data(name: str, data: dict, origin: str = "template") -> Template:
+    check_schema(data, origin)
     mech = _mechanism(name, data, origin)
     length_unit = check_length_unit(f"{origin}: length_unit", _need(data, "length_unit", origin))
     table = _need(data, "parameters", origin, dict)
@@ -314,8 +343,18 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         description=_optional_text(data, "description", origin), mechanism=mech, length_unit=length_unit,
         parameters=tuple(params), sweep=sweep, position=position, grid_values=grid_values,
         stroke_step=stroke_step)
-    check_sweep(template)
+    check_sweep(template, f"{origin}: ")
     return template
+
+
+def check_schema(data: dict, origin: str) -> None:
+    """The template against the schema of what a template may contain, before the semantic
+    checks: an unknown key, a wrong type or a missing key, one line naming the field."""
+    from .schema import problem
+    found = problem(data)
+    if found:
+        field, message = found
+        raise InputError(f"{origin}: {field}" if field else origin, message)
 
 
 # The length units a book may have, in metres: one per mechanism (the template's length_unit).
@@ -339,38 +378,6 @@ def parameter_unit(mech: Mechanism, symbol: str, kind: str, length_unit: str) ->
     return "-"
 
 
-# Keys of the mechanism language whose numbers are lengths (ground points too): a number
-# written there cannot follow --unit, which converts parameters.
-_LENGTH_KEYS = ("length", "p_length", "q_length", "local", "distances", "distance", "offset")
-_NUMBER = re.compile(r"(?<![\w.])(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-
-
-def _length_literals(description: dict) -> list[str]:
-    """Where the description writes a non-zero length as a number, not a parameter."""
-    found = []
-
-    def numbers(value) -> bool:
-        if isinstance(value, bool):
-            return False
-        if isinstance(value, (int, float)):
-            return value != 0
-        if isinstance(value, str):
-            return any(float(m) != 0 for m in _NUMBER.findall(value))
-        if isinstance(value, list):
-            return any(numbers(v) for v in value)
-        return False
-    for name, xy in (description.get("ground") or {}).items():
-        if numbers(xy):
-            found.append(f"ground.{name}")
-    for i, step in enumerate(description.get("steps") or []):
-        if isinstance(step, dict):
-            found += [f"steps[{i}].{k}" for k in _LENGTH_KEYS if numbers(step.get(k))]
-            if step.get("type") == "expression" and step.get("unit") == "length" \
-                    and numbers(step.get("formula")):
-                found.append(f"steps[{i}].formula")
-    return found
-
-
 def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template":
     """The same mechanism with lengths in `unit`: every length and offset parameter, a linear
     actuator's sweep, position and rates, and length grid values converted. `flag`: what the
@@ -378,10 +385,11 @@ def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template"
     check_length_unit(flag, unit)
     if unit == t.length_unit:
         return t
-    literal = _length_literals(t.mechanism.description or {})
-    if literal:
-        raise InputError(flag, f"the template writes a length as a number at "
-                                   f"mechanism.{literal[0]}; give it a parameter to convert it")
+    from .language import unconvertible
+    found = unconvertible(t.mechanism, t.mechanism.build())
+    if found:
+        field, why = found
+        raise InputError(flag, f"{field}: {why}")
     factor = LENGTH_UNITS[t.length_unit] / LENGTH_UNITS[unit]
     linear_rates = set(MOTION_SYMBOLS[LENGTH_KIND])
     params = []
@@ -467,9 +475,27 @@ def _check_unique_names(params: list[Parameter], origin: str) -> None:
                              f"{p.name!r} is already the name of {other}")
 
 
-def check_sweep(t: Template) -> None:
+def check_step_lengths(t: Template) -> None:
+    """Every length a step takes (a side, a rod, a crank), evaluated with the book's values,
+    must be positive: the loop cannot be assembled with a zero or negative one, and a book
+    built so would be #N/A all through. A length of the swept input is checked by the sweep."""
+    from .language import value_of
+    values = t.values()
+    for field, raw in t.mechanism.lengths:
+        value = value_of(raw, values)
+        if value is None or value > 0:
+            continue
+        shown = "not a number" if math.isnan(value) else f"{value:g} {t.length_unit}"
+        given = "" if not isinstance(raw, str) else f"{raw!r} = "
+        raise InputError(field, f"{given}{shown} with these parameters; a length must be "
+                                "positive")
+
+
+def check_sweep(t: Template, where: str = "", step_field: str = "sweep.step") -> None:
     """Positive step, start < stop, and tables inside Excel's limits — before any work; and
-    lengths that fit one book (check_lengths_together)."""
+    lengths that fit one book (check_lengths_together), each step's length positive
+    (check_step_lengths). Called after every change to a template. `where` names the template file
+    ("mine.toml: "), `step_field` where the step came from (the file's sweep.step, --step)."""
     values = t.values()
     if t.mechanism.grid:
         values = {**values, **{f"{t.mechanism.grid[0]}[{i}]": v
@@ -478,28 +504,34 @@ def check_sweep(t: Template) -> None:
     if t.mechanism.grid:
         kinds.update({f"{t.mechanism.grid[0]}[{i}]": kinds[t.mechanism.grid[0]]
                       for i in range(len(t.grid_values))})
-    check_lengths_together(values, kinds, "parameters.")
+    check_lengths_together(values, kinds, f"{where}parameters.")
+    check_step_lengths(t)
     s = t.sweep
     unit = "degrees" if t.mechanism.input_is_angle else t.length_unit
     if s.step <= 0:
-        raise InputError("step", f"must be a positive {t.mechanism.input_word} in {unit} "
-                                 f"(got {s.step:g})")
+        raise InputError(f"{where}{step_field}", f"must be a positive {t.mechanism.input_word} "
+                                                 f"in {unit} (got {s.step:g})")
+    if not t.mechanism.input_is_angle and s.start <= 0:
+        raise InputError(f"{where}sweep.start", f"a linear actuator's length must be positive "
+                                                f"(got {s.start:g} {unit})")
     if s.stop <= s.start:
-        raise InputError("sweep", f"stop must be greater than start (got {s.start:g}..{s.stop:g})")
+        raise InputError(f"{where}sweep", f"stop must be greater than start (got "
+                                          f"{s.start:g}..{s.stop:g})")
     rows = (s.stop - s.start) / s.step + 2
     if rows > EXCEL_MAX_ROWS - 10:
-        raise InputError("step", f"{s.step:g} {unit} gives {rows:,.0f} rows; Excel allows "
-                                 f"{EXCEL_MAX_ROWS:,} per sheet")
+        raise InputError(f"{where}{step_field}", f"{s.step:g} {unit} gives {rows:,.0f} rows; "
+                                                 f"Excel allows {EXCEL_MAX_ROWS:,} per sheet")
     if t.mechanism.grid:
         if t.stroke_step <= 0:
-            raise InputError("grid.stroke_step", f"must be positive (got {t.stroke_step:g})")
+            raise InputError(f"{where}grid.stroke_step", f"must be positive (got "
+                                                         f"{t.stroke_step:g})")
         if len(t.grid_values) + 1 > EXCEL_MAX_COLUMNS:
-            raise InputError(t.mechanism.grid[0], f"{len(t.grid_values):,} grid columns; Excel "
-                                                  f"allows {EXCEL_MAX_COLUMNS:,}")
+            raise InputError(f"{where}grid.values", f"{len(t.grid_values):,} grid columns; "
+                                                    f"Excel allows {EXCEL_MAX_COLUMNS:,}")
         fine_rows = 360 / t.stroke_step + 1
         if fine_rows > EXCEL_MAX_ROWS - 10:
-            raise InputError("grid.stroke_step", f"gives {fine_rows:,.0f} rows; Excel allows "
-                                                 f"{EXCEL_MAX_ROWS:,}")
+            raise InputError(f"{where}grid.stroke_step", f"gives {fine_rows:,.0f} rows; Excel "
+                                                         f"allows {EXCEL_MAX_ROWS:,}")
 
 
 # ---------------------------------------------------------------- command-line overrides
@@ -542,5 +574,5 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
         sweep = replace(sweep, step=parse_number(names["step"], step))
     out = replace(t, parameters=tuple(values[s] for s in values), sweep=sweep,
                   grid_values=grid_values)
-    check_sweep(out)
+    check_sweep(out, step_field=names["step"] if step is not None else "sweep.step")
     return out

@@ -16,6 +16,7 @@ import numpy as np
 from . import generic, sheets as layout
 from .pause import gc_paused
 from .sheets import summary_prefix
+from .model import RAD
 from .templates import InputError, check_lengths_together, check_value
 
 ABS_TOL = 1e-9
@@ -707,7 +708,8 @@ def _check_assembly(wb, meta, model, solver, params, angles, ref, values, size) 
         compare_exact(c, sweep["sheet"], cells, [values.get((sweep["sheet"], x)) for x in cells],
                       expected, units=[unit] * len(cells))
         checks.append(c)
-    expected = _summary_expected(model, solver, params, ref, closes, starts, ends)
+    expected = _summary_expected(model, solver, params, ref, closes, starts, ends,
+                                 _shown_output_degrees(model, sweep, values))
     slack = _edge_slack(model, ref, closes)
     summary = meta.get("summary", {})
     c = Check("summary", "geometry", size)
@@ -723,7 +725,9 @@ def _edge_slack(model, ref, closes: np.ndarray) -> dict[str, float]:
     position (a double root): it gets the same √ε-level allowance as that cell itself."""
     edge = closes & ~(np.roll(closes, 1) & np.roll(closes, -1))
     out = {}
-    extremes = [("output", model.output, 1.0)] + [
+    output_scale = 180.0 / math.pi if model.output and model.get(model.output).unit == RAD \
+        else 1.0
+    extremes = [("output", model.output, output_scale)] + [
         (summary_prefix("mu", i), key, 180.0 / math.pi)
         for i, key in enumerate(model.transmissions, start=1)]
     for prefix, key, scale in extremes:
@@ -744,10 +748,36 @@ def _extreme(values: np.ndarray, fn) -> object:
     return DASH if values.size == 0 else float(fn(values))
 
 
-def _summary_expected(model, solver, params, ref, closes, starts, ends) -> dict:
+def _shown_output_degrees(model, sweep: dict, values: dict) -> list | None:
+    """An angle output's degree view as the book shows it, row by row (None for a length)."""
+    if not model.output or model.get(model.output).unit != RAD:
+        return None
+    letter = sweep["columns"].get(f"{model.output}_deg")
+    rows = range(sweep["rows"][0], sweep["rows"][1] + 1)
+    return [values.get((sweep["sheet"], f"{letter}{r}")) for r in rows]
+
+
+def _in_shown_window(degrees: np.ndarray, shown: list) -> np.ndarray:
+    """The reference's angles, each moved by whole turns next to the book's value in its row:
+    the 360° window is the book's presentation (judged by the window check), the values are
+    the reference's."""
+    out = np.array(degrees, dtype=float)
+    for i, v in enumerate(shown):
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) \
+                and math.isfinite(out[i]):
+            out[i] += 360.0 * round((float(v) - out[i]) / 360.0)
+    return out
+
+
+def _summary_expected(model, solver, params, ref, closes, starts, ends,
+                      shown_output=None) -> dict:
     out: dict[str, object] = {
         "assembles_all": "yes" if closes.all() else "no",
         "not_closing": float((~closes).sum()),
+        # the first loop step, in order, where the reference finds no assembly on some row
+        "failing_step": next((name for key, (_, name) in zip(model.closes, model.loop_steps)
+                              if not np.isfinite(np.asarray(ref[key], dtype=float)).all()),
+                             DASH),
     }
     gap_starts = sorted(x for x in starts if x != DASH)
     gap_ends = sorted(x for x in ends if x != DASH)
@@ -756,7 +786,12 @@ def _summary_expected(model, solver, params, ref, closes, starts, ends) -> dict:
         out[f"gap{k}_to"] = gap_ends[k - 1] if k <= len(gap_ends) else DASH
     if model.output:
         o = np.asarray(ref[model.output], dtype=float)
+        if shown_output is not None:            # an angle: in degrees, in the book's window
+            o = _in_shown_window(np.degrees(o), shown_output)
         out["output_min"], out["output_max"] = _extreme(o, np.min), _extreme(o, np.max)
+        if shown_output is not None:
+            out["output_swing"] = (DASH if out["output_min"] == DASH
+                                   else out["output_max"] - out["output_min"])
     for i, key in enumerate(model.transmissions, start=1):
         m = np.degrees(np.asarray(ref[key], dtype=float))
         n = summary_prefix("mu", i)

@@ -61,6 +61,7 @@ class Built:
     workbook: Workbook
     model: Model
     meta: dict = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)   # for the builder's user, not the book
 
 
 def build(t: Template) -> Built:
@@ -675,9 +676,14 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         return f"$C${row - 1}"
 
     w = rng("closes")
-    add("assembles_all", "assembles at every angle of the sweep",
+    word = t.mechanism.input_word
+    add("assembles_all", f"assembles at every {word} of the sweep",
         f'=IF(SUM({w})=ROWS({w}),"yes","no")', kind="text")
-    add("not_closing", "angles where the loop cannot close", f"=ROWS({w})-SUM({w})")
+    add("not_closing", f"{word}s where the loop cannot close", f"=ROWS({w})-SUM({w})")
+    first_failing = f'"{DASH}"'
+    for key, (_, name) in reversed(list(zip(model.closes, model.loop_steps))):
+        first_failing = f'IF(COUNT({rng(key)})<ROWS({rng(key)}),"{name}",{first_failing})'
+    add("failing_step", "first loop step that cannot close", "=" + first_failing, kind="text")
     for k in range(1, GAPS_SHOWN + 1):
         add(f"gap{k}_from", f"gap {k}: cannot close from",
             f'=IFERROR(SMALL({rng("gap_from")},{k}),"{DASH}")', t.mechanism.input_unit,
@@ -685,17 +691,25 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         add(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"{DASH}")',
             t.mechanism.input_unit, "number_or_dash")
 
-    def extremes(prefix: str, what: str, column: str, unit: str, convert: str = "") -> None:
+    def extremes(prefix: str, what: str, column: str, unit: str, convert: str = "") -> list[str]:
         # over numbers only: the #N/A rows of a column are skipped
+        cells = []
         for suffix, fn, word in (("min", MIN_OF, "smallest"), ("max", MAX_OF, "largest")):
             value = f"{AGGREGATE}({fn},{SKIP_ERRORS},{column})"
             value = f"{convert}({value})" if convert else value
-            add(f"{prefix}_{suffix}", f"{word} {what}",
-                f'=IF(COUNT({column})=0,"{DASH}",{value})', unit, "number_or_dash")
+            cells.append(add(f"{prefix}_{suffix}", f"{word} {what}",
+                             f'=IF(COUNT({column})=0,"{DASH}",{value})', unit, "number_or_dash"))
+        return cells
 
     if model.output:
         q = model.get(model.output)
-        extremes("output", f"{q.symbol} ({q.label})", rng(model.output), q.unit)
+        if q.unit == RAD:
+            # an angle (a rocker's): its degree view, whose window keeps the swing in one piece
+            low, high = extremes("output", f"{q.symbol} ({q.label})", rng(f"{q.key}_deg"), DEG)
+            add("output_swing", f"swing of {q.symbol} (largest − smallest)",
+                f'=IF(ISNUMBER({low}),{high}-{low},"{DASH}")', DEG, "number_or_dash")
+        else:
+            extremes("output", f"{q.symbol} ({q.label})", rng(model.output), q.unit)
     for i, key in enumerate(model.transmissions, start=1):
         # read in radians: a degree view's window moves with the data, μ lies in [0, π]
         extremes(summary_prefix("mu", i), f"transmission angle {model.get(key).symbol}",
