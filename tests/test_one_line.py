@@ -204,9 +204,9 @@ TEMPLATES = [
      "a2.value: must be a finite number (got an integer of 400 digits)"),
     ("a chart with nothing to plot", FOURBAR_TOML.replace(
         'y = ["theta13_deg", "theta14_deg", "mu_deg"]', "y = []"),
-     "mechanism.charts[0].y: must name at least one column to plot"),
+     "mechanism.charts[0].y: must have at least 1 entry (got [])"),
     ("a chart plotting a list", FOURBAR_TOML.replace('y = ["yC"]', "y = [[1]]"),
-     "[1] is not a column"),
+     "mechanism.charts[1].y[0]: must be text (got [1])"),
 ]
 
 

@@ -79,7 +79,7 @@ def _describe(error, data: dict) -> tuple[str, str]:
     if kind == "exclusiveMinimum":
         return field, f"must be greater than {want} (got {got!r})"
     if kind == "minItems" and not described:
-        return field, f"must have at least {want} entries (got {got!r})"
+        return field, f"must have at least {want} {'entry' if want == 1 else 'entries'} (got {got!r})"
     if described:
         return field, f"must be {described} (got {got!r})"
     return field, error.message
