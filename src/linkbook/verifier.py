@@ -107,6 +107,8 @@ class Report:
     inputs: dict[str, float] = field(default_factory=dict)          # as read from the book
     size: float = 0.0                         # S, the mechanism's size
     causes: set[tuple[str, str]] = field(default_factory=set)   # differing cells reading none
+    # cells the build record holds formulas in that hold a constant instead
+    replaced: list[tuple[str, str]] = field(default_factory=list)
 
     @property
     def disagrees(self) -> bool:
@@ -124,8 +126,15 @@ class Report:
 
     @property
     def cells(self) -> int:
-        """Formula cells compared with the reference (each counted once)."""
-        return len(set().union(*(c.judged for c in self.checks)))
+        """Formula cells compared with the reference (each counted once; a constant where the
+        record has a formula is judged, and differs, but is not a formula cell)."""
+        return len(set().union(*(c.judged for c in self.checks)) - set(self.replaced))
+
+    @property
+    def stored_differ(self) -> int:
+        """Formula cells whose stored value (what a reader that does not calculate shows)
+        differs from the reference."""
+        return sum(len(c.mismatches) for c in self.checks if c.block == STORED)
 
     @property
     def differing(self) -> int:
@@ -929,10 +938,101 @@ def verify(path: Path, engine: str = "vector") -> Report:
                            f"workbook ({type(exc).__name__}: {exc})") from None
     formulas = formula_cells(wb)
     judged = set().union(*(c.judged for c in checks))
+    replaced = sorted(judged - formulas, key=cell_order)
+    if replaced:
+        checks.append(_check_replaced(wb, replaced))
+    stored = stored_values(wb, path, formulas & judged)
+    if stored:
+        checks.append(_check_stored(wb, meta, values, stored, is_error, error_code, relative))
     params = inputs_of(wb, meta)
     return Report(str(path), meta["mechanism"], engine, checks, len(formulas),
                   sorted(formulas - judged, key=cell_order), params,
-                  mechanism_size(meta, params), likely_causes(wb, checks))
+                  mechanism_size(meta, params), likely_causes(wb, checks), replaced)
+
+
+# ---------------------------------------------------------------- what the book shows unrecalculated
+STORED = "stored"
+
+
+def _check_replaced(wb, replaced: list[tuple[str, str]]) -> Check:
+    """A constant where the build record has a formula differs whatever its value: the book no
+    longer follows its inputs there (a formula pasted as its value)."""
+    c = Check("constants", "in place of formulas", cells=len(replaced))
+    for sheet, cell in replaced:
+        c.mismatches.append(Mismatch(sheet, cell, "a formula",
+                                     f"the constant {wb[sheet][cell].value!r}"))
+    return c
+
+
+def stored_values(wb, path, cells: set[tuple[str, str]]) -> dict[tuple[str, str], object]:
+    """(sheet, cell) -> the value each of `cells` (formula cells) stores with its formula (the
+    `<v>`): what LibreOffice with default settings, openpyxl's data_only and pandas show. Numbers
+    as float, errors as office.CellError, text as str; a cell that stores none is left out."""
+    from .office import CellError, read_values
+    from .xlsx import column_letter
+    if not all(hasattr(ws, "stored") for ws in wb.worksheets):   # openpyxl read the book
+        return {k: v for k, v in read_values(path).items() if k in cells}
+    out = {}
+    for ws in wb.worksheets:
+        for (row, col), (kind, text) in ws.stored.items():
+            key = (ws.title, f"{column_letter(col)}{row}")
+            if key not in cells:
+                continue
+            if kind == "e":
+                out[key] = CellError(text)
+            elif kind == "b":
+                out[key] = text.strip() in ("1", "true")
+            elif kind == "n":
+                try:
+                    out[key] = float(text)
+                except ValueError:
+                    raise UnusableFile(f"{path}: {key[0]}!{key[1]}: the stored value {text!r} "
+                                       "is not a number") from None
+            else:
+                out[key] = text
+    return out
+
+
+def _same(a, b, error_code) -> bool:
+    from .office import CellError
+    code_a = str(a) if isinstance(a, CellError) else None
+    if code_a is not None or error_code(b) is not None:
+        return code_a == error_code(b)
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        return isinstance(a, bool) == isinstance(b, bool) and float(a) == float(b)
+    return a == b
+
+
+def _check_stored(wb, meta, values, stored, is_error, error_code, relative) -> Check:
+    """Each stored value judged as its formula's value is, with the same bounds: a value stored
+    that its formula does not give (an edit of the file, a stale save) differs, named with what
+    the formula gives and what is stored. Only the stored values that differ from the formula's
+    own are judged again."""
+    from .office import CellError
+    c = Check(STORED, "value ≠ the formula's", cells=len(stored))
+    differ = {k: v for k, v in stored.items() if not _same(v, values.get(k), error_code)}
+    if not differ:
+        return c
+
+    def any_error(v) -> bool:
+        return isinstance(v, CellError) or is_error(v)
+
+    def any_code(v) -> str | None:
+        return str(v) if isinstance(v, CellError) else error_code(v)
+
+    again = check_book(wb, meta, {**values, **differ}, any_error, any_code, relative=relative)
+    named = set()
+    for check in again:
+        for m in check.mismatches:
+            key = (m.sheet, m.cell)
+            if key in differ and key not in named:
+                named.add(key)
+                computed, got = values.get(key), differ[key]
+                c.mismatches.append(Mismatch(m.sheet, m.cell, _show(computed, error_code),
+                                             _show(got, any_code)))
+                if isinstance(computed, float) and isinstance(got, float):
+                    c.max_abs = max(c.max_abs, abs(got - computed))
+    return c
 
 
 def likely_causes(wb, checks: list[Check]) -> set[tuple[str, str]]:
