@@ -16,7 +16,8 @@ import numpy as np
 from . import generic, sheets as layout
 from .pause import gc_paused
 from .sheets import summary_prefix
-from .templates import InputError, check_lengths_together, check_value
+from .domain import (InputError, check_input, check_lengths_together, check_value,
+                     check_written_lengths)
 
 ABS_TOL = 1e-9
 ANGLE_UNITS = {"rad": 2 * math.pi, "deg": 360.0}
@@ -159,13 +160,18 @@ def inputs_of(wb, meta: dict) -> dict[str, float]:
             raise UnusableFile(str(exc)) from None
     try:
         check_lengths_together(values, {s: i["kind"] for s, i in meta["inputs"].items()},
-                               "input ")
+                               "input ", written_in(meta))
     except InputError as exc:
         raise UnusableFile(str(exc)) from None
     return values
 
 
-INPUT_LIMIT = 3600.0     # degrees either way for an angle input (the input cell's validation)
+def written_in(meta: dict) -> dict[str, float]:
+    """The lengths the recorded description writes as numbers (domain.written_lengths)."""
+    try:
+        return check_written_lengths(meta.get("description") or {}, "the book's record: ")
+    except InputError as exc:
+        raise UnusableFile(str(exc)) from None
 
 
 def _angles(ws, column: str, rows: list[int], is_angle: bool) -> np.ndarray:
@@ -175,13 +181,10 @@ def _angles(ws, column: str, rows: list[int], is_angle: bool) -> np.ndarray:
 
 def _input(ws, cell: str, what: str, is_angle: bool) -> float:
     """An input angle (or actuator length): a number within the supported domain."""
-    from .templates import LENGTH_RANGE
-    v = _number(ws, cell, what)
-    limit, unit = (INPUT_LIMIT, "°") if is_angle else (LENGTH_RANGE[1], "")
-    if not abs(v) <= limit:
-        raise UnusableFile(f"{ws.title}!{cell}: {what} {v:g} is outside the supported range "
-                           f"(±{limit:g}{unit})")
-    return v
+    try:
+        return check_input(f"{ws.title}!{cell}: {what}", _number(ws, cell, what), is_angle)
+    except InputError as exc:
+        raise UnusableFile(str(exc)) from None
 
 
 def _number(ws, cell: str, what: str) -> float:
@@ -192,10 +195,11 @@ def _number(ws, cell: str, what: str) -> float:
 
 
 def mechanism_size(meta: dict, params: dict[str, float]) -> float:
-    """S: the sum of the input lengths and offsets (every frame fits in a circle that big)."""
+    """S: the sum of the input lengths and offsets and of the lengths the description writes as
+    numbers (every frame fits in a circle that big)."""
     kinds = {s: info["kind"] for s, info in meta["inputs"].items()}
     size = sum(abs(v) for s, v in params.items() if kinds[s] in ("length", "offset"))
-    return max(size, 1e-300)
+    return max(size + sum(abs(v) for v in written_in(meta).values()), 1e-300)
 
 
 # ---------------------------------------------------------------- comparing
@@ -834,7 +838,7 @@ def _check_grid(wb, meta, solver, params, values, is_error, error_code, tol, rel
                                                      zip(grid["columns"], adjust)}},
                                        {**{s: i["kind"] for s, i in meta["inputs"].items()},
                                         **{f"{param}@{c}": kind for c in grid["columns"]}},
-                                       "input ")
+                                       "input ", written_in(meta))
             except InputError as exc:
                 raise UnusableFile(str(exc)) from None
         expected = _grid_reference(solver, params, param, angles, adjust)
