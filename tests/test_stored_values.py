@@ -153,3 +153,17 @@ def test_books_openpyxl_reads_have_their_stored_values_judged(book, tmp_path, mo
     report = linkbook.verify(path)
     assert report.status == 1 and report.stored_differ == 1
     assert linkbook.verify(book).status == 0
+
+
+def test_cells_of_a_deleted_sheet_are_not_counted_as_compared(book, tmp_path):
+    """A sheet deleted takes its formula cells with it: they differ (no value), and are
+    neither constants nor formula cells compared."""
+    import openpyxl
+    wb = openpyxl.load_workbook(book)
+    gone = sum(1 for row in wb["Drawing data"].iter_rows() for c in row if c.data_type == "f")
+    del wb["Drawing data"]
+    wb.save(tmp_path / "deleted.xlsx")
+    report = linkbook.verify(tmp_path / "deleted.xlsx")
+    assert report.status == 1 and not report.replaced
+    assert len(report.absent) == gone > 0
+    assert report.cells == report.formula_cells == linkbook.verify(book).formula_cells - gone

@@ -110,6 +110,9 @@ class Report:
     causes: set[tuple[str, str]] = field(default_factory=set)   # differing cells reading none
     # cells the build record holds formulas in that hold a constant instead
     replaced: list[tuple[str, str]] = field(default_factory=list)
+    # cells the build record holds formulas in that are empty or on a sheet deleted (each
+    # differs: it has no value)
+    absent: list[tuple[str, str]] = field(default_factory=list)
 
     @property
     def disagrees(self) -> bool:
@@ -129,7 +132,8 @@ class Report:
     def cells(self) -> int:
         """Formula cells compared with the reference (each counted once; a constant where the
         record has a formula is judged, and differs, but is not a formula cell)."""
-        return len(set().union(*(c.judged for c in self.checks)) - set(self.replaced))
+        return len(set().union(*(c.judged for c in self.checks)) - set(self.replaced)
+                   - set(self.absent))
 
     @property
     def stored_differ(self) -> int:
@@ -942,7 +946,10 @@ def verify(path: Path, engine: str = "vector") -> Report:
                            f"workbook ({type(exc).__name__}: {exc})") from None
     formulas = formula_cells(wb)
     judged = set().union(*(c.judged for c in checks))
-    replaced = sorted(judged - formulas, key=cell_order)
+    replaced, absent = [], []
+    for key in sorted(judged - formulas, key=cell_order):
+        held = key[0] in wb.sheetnames and wb[key[0]][key[1]].value is not None
+        (replaced if held else absent).append(key)
     if replaced:
         checks.append(_check_replaced(wb, replaced))
     stored = stored_values(wb, path, formulas & judged)
@@ -951,7 +958,7 @@ def verify(path: Path, engine: str = "vector") -> Report:
     params = inputs_of(wb, meta)
     return Report(str(path), meta["mechanism"], engine, checks, len(formulas),
                   sorted(formulas - judged, key=cell_order), params,
-                  mechanism_size(meta, params), likely_causes(wb, checks), replaced)
+                  mechanism_size(meta, params), likely_causes(wb, checks), replaced, absent)
 
 
 # ---------------------------------------------------------------- what the book shows unrecalculated
