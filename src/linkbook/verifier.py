@@ -939,22 +939,20 @@ def verify(path: Path, engine: str = "vector") -> Report:
             raise UnusableFile(f"unknown engine {engine!r}")
     except engines.EngineError as exc:
         raise UnusableFile(f"{path}: {exc}") from None
+    formulas = formula_cells(wb)
     try:
         checks = check_book(wb, meta, values, is_error, error_code, relative=relative)
+        judged = set().union(*(c.judged for c in checks))
+        replaced, absent = _not_formulas(wb, judged - formulas)
+        if replaced:
+            checks.append(_check_replaced(wb, replaced))
+        stored = stored_values(wb, path, formulas & judged)
+        if stored:
+            checks.append(_check_stored(wb, meta, values, stored, is_error, error_code,
+                                        relative))
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
         raise UnusableFile(f"{path}: the build record (sheet {layout.META}) does not match the "
                            f"workbook ({type(exc).__name__}: {exc})") from None
-    formulas = formula_cells(wb)
-    judged = set().union(*(c.judged for c in checks))
-    replaced, absent = [], []
-    for key in sorted(judged - formulas, key=cell_order):
-        held = key[0] in wb.sheetnames and wb[key[0]][key[1]].value is not None
-        (replaced if held else absent).append(key)
-    if replaced:
-        checks.append(_check_replaced(wb, replaced))
-    stored = stored_values(wb, path, formulas & judged)
-    if stored:
-        checks.append(_check_stored(wb, meta, values, stored, is_error, error_code, relative))
     params = inputs_of(wb, meta)
     return Report(str(path), meta["mechanism"], engine, checks, len(formulas),
                   sorted(formulas - judged, key=cell_order), params,
@@ -963,6 +961,16 @@ def verify(path: Path, engine: str = "vector") -> Report:
 
 # ---------------------------------------------------------------- what the book shows unrecalculated
 STORED = "stored"
+
+
+def _not_formulas(wb, cells: set[tuple[str, str]]) -> tuple[list, list]:
+    """Cells the record holds formulas in that hold none: (those holding a constant, those
+    empty or on a sheet deleted), in cell order."""
+    replaced, absent = [], []
+    for key in sorted(cells, key=cell_order):
+        held = key[0] in wb.sheetnames and wb[key[0]][key[1]].value is not None
+        (replaced if held else absent).append(key)
+    return replaced, absent
 
 
 def _check_replaced(wb, replaced: list[tuple[str, str]]) -> Check:
