@@ -22,6 +22,7 @@ from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS
 from .model import (ACCEL, ANG_ACCEL, ANG_SPEED, AREA, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
                     SPEED, Model, Resolver, header, render, unit_text)
 from .controls import control_record
+from .domain import INPUT_ANGLE_LIMIT
 from .package import Formula
 from .sheets import (CHARTS, DASH, DRAWING_COLUMNS, FORMAT_VERSION, GAPS_SHOWN, GRID, MECH,  # noqa: F401
                      META, MOTION_SHEET, STROKE, SWEEP, read_meta, summary_prefix, write_meta)
@@ -349,8 +350,8 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     ws["I7"].number_format = number_format(mech.input_unit, t.length_unit)
     _text(ws, "J7", unit_text(mech.input_unit, t.length_unit))
     if mech.input_is_angle:
-        dv = DataValidation(type="decimal", operator="between", formula1="-3600",
-                            formula2="3600")
+        dv = DataValidation(type="decimal", operator="between",
+                            formula1=f"{-INPUT_ANGLE_LIMIT:g}", formula2=f"{INPUT_ANGLE_LIMIT:g}")
         dv.prompt = "The input angle in degrees"
     else:
         dv = DataValidation(type="decimal", operator="greaterThan", formula1="0")
