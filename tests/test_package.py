@@ -61,9 +61,9 @@ def _every_kind() -> openpyxl.Workbook:
     ws["K2"] = np.bool_(True)
     ws["L2"] = Decimal("0.1000000000000000055511151231257827")
     ws["M2"] = -0.0
-    ws["A3"] = '=IF(B3<>"–",A2&"<x>",NA())'
+    workbook.set_formula(ws["A3"], '=IF(B3<>"–",A2&"<x>",NA())')
     ws["A3"].number_format = "0.000"
-    ws["B3"] = "=SUM(A2:C2)"
+    workbook.set_formula(ws["B3"], "=SUM(A2:C2)")
     ws["B3"].fill = PatternFill("solid", fgColor="FFFF00")
     ws["C4"].alignment = Alignment(wrap_text=True)     # styled, no value
     ws["D4"]                                           # neither: not written
@@ -72,7 +72,7 @@ def _every_kind() -> openpyxl.Workbook:
     ws.merge_cells("A9:C9")
     ws["A9"] = "merged"
     second = wb.create_sheet("Sweep θ")
-    second["B5"] = "=Sheet!A2*2"
+    workbook.set_formula(second["B5"], "=Sheet!A2*2")
     wb.create_sheet("Empty")
     return wb
 
@@ -100,7 +100,7 @@ _TEXT = st.text(st.characters(blacklist_categories=("Cs", "Cc")) | st.sampled_fr
                 max_size=12)
 _VALUE = st.one_of(st.none(), st.booleans(), st.integers(-10**17, 10**17),
                    st.floats(allow_nan=True, allow_infinity=True), _TEXT,
-                   _TEXT.map(lambda t: "=" + repr(t).replace("'", '"')))
+                   _TEXT.map(lambda t: package.Formula("=" + repr(t).replace("'", '"'))))
 
 
 @settings(max_examples=150, derandomize=True, deadline=None,
@@ -115,7 +115,12 @@ def test_random_sheets_as_openpyxl_writes_them(tmp_path, cells, heights):
         ws = wb.active
         for (row, col), (value, fmt) in cells.items():
             c = ws.cell(row, col)
-            c.value = value
+            if isinstance(value, package.Formula):
+                workbook.set_formula(c, value)
+            else:
+                c.value = value
+                if isinstance(value, str):
+                    c.data_type = "s"       # text is text (openpyxl's guess aside)
             if fmt:
                 c.number_format = fmt
         for row, height in heights.items():
@@ -131,14 +136,36 @@ def test_table_cells_are_openpyxl_cells(tmp_path):
     wb = openpyxl.Workbook()
     ws = wb.active
     style = workbook.table_style(ws, "0.000")
-    workbook.put(ws, 3, 2, "=A1*2", style)
+    workbook.put(ws, 3, 2, package.Formula("=A1*2"), style)
     workbook.put(ws, 4, 2, 1.5, style)
-    workbook.put(ws, 5, 2, "=A1")
+    workbook.put(ws, 5, 2, package.Formula("=A1"))
     for row, value, fmt in ((3, "=A1*2", "0.000"), (4, 1.5, "0.000"), (5, "=A1", "General")):
         made = ws.cell(row, 2)
         expected = openpyxl.Workbook().active.cell(row, 2, value)
         assert (made.value, made.data_type, made.number_format) == \
             (expected.value, expected.data_type, fmt)
+
+
+def test_text_is_never_a_formula(tmp_path):
+    """Text that openpyxl's setter takes for a formula (it starts with '='), or that put() is
+    given, is written as a string cell: only a package.Formula is a formula."""
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    ws["A1"] = '=HYPERLINK("http://example.com","click")'
+    workbook.put(ws, 2, 1, "=1+1")
+    workbook.put(ws, 3, 1, "#N/A")
+    workbook.put(ws, 4, 1, package.Formula("=1+1"))
+    assert [ws.cell(r, 1).data_type for r in (2, 3, 4)] == ["s", "s", "f"]
+    path = tmp_path / "text.xlsx"
+    with package.cells_held_back(wb) as cells:
+        wb.save(path)
+    package.finish(path, path, cells=cells)
+    with zipfile.ZipFile(path) as z:
+        sheet = z.read("xl/worksheets/sheet1.xml").decode()
+    assert sheet.count("<f>") == 1 and "<f>1+1</f>" in sheet
+    back = openpyxl.load_workbook(path).active
+    assert [(back.cell(r, 1).value, back.cell(r, 1).data_type) for r in (1, 2, 3)] == [
+        ('=HYPERLINK("http://example.com","click")', "s"), ("=1+1", "s"), ("#N/A", "s")]
 
 
 def _commented(cell, value):
@@ -179,7 +206,7 @@ def test_characters_no_workbook_can_hold_are_refused(value, code):
     writer must, or the part would not parse."""
     wb = openpyxl.Workbook()
     if value.startswith("="):
-        workbook.put(wb.active, 2, 3, value)
+        workbook.put(wb.active, 2, 3, package.Formula(value))
     else:                       # text set past openpyxl's own check, as put() sets formulas
         cell = wb.active.cell(2, 3)
         cell._value, cell.data_type = value, "s"

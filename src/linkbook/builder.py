@@ -2,14 +2,17 @@
 from __future__ import annotations
 
 import math
+import re
+from dataclasses import replace
 from pathlib import Path
 
-from . import charts, engine, package, workbook
+from . import charts, domain, engine, package, workbook
 from .controls import Control
 from .files import write_atomic
 from .model import COLUMN
 from .pause import gc_paused
-from .templates import Template
+from .templates import Sweep, Template
+from .xlsx import column_letter, xml_text
 
 
 def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict | None]:
@@ -20,6 +23,8 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
     each curve is continuous: the angles, and only what they need, are evaluated first; the
     degree views are written with their windows; then, when the values are needed, the whole
     book is evaluated."""
+    if table_cells(t) > SMALL_BOOK:
+        domain.check_size(*book_size(t, values_needed))
     built = workbook.build(t)
     angles = engine.evaluate(built.workbook,
                              only=degree_window_sources(built) | loop_witness_cells(built))
@@ -137,6 +142,101 @@ def build_file(t: Template, path: Path, with_values: bool = False) -> workbook.B
                     for sheet, items in built.meta.get("controls", {}).items()}
         package.finish(tmp, tmp, values=values if with_values else None, controls=controls,
                        cells=cells)
+        _refuse_beyond_verify(tmp)
 
     write_atomic(path, write)
     return built
+
+
+def _refuse_beyond_verify(path: Path) -> None:
+    """The written book, checked as verify will check it (safety.check_zip: its XML, exactly,
+    where book_size estimated it): one verify would refuse is refused before it takes the place
+    of anything."""
+    from .safety import UnsafeFile, check_zip
+    try:
+        check_zip(path)
+    except UnsafeFile as exc:
+        raise domain.InputError("book size", f"verify would refuse the book: "
+                                        f"{str(exc).split(': ', 1)[-1]}") from None
+
+
+# ---------------------------------------------------------------- how big a book will be
+# A book of at most this many sweep rows and grid cells stays inside the budget whatever its
+# mechanism (300 formula cells a row would be 1.5 million cells; a grid cell holds at most about
+# 8 kB, workbook.EXCEL_FORMULA_CHARS), so its size is not estimated: every bundled template.
+SMALL_BOOK = 5_000
+SMALL_ROWS = 3            # sweep rows of the small books a size is measured on
+OTHER_PARTS = 2 * 2**20   # charts, drawings, styles, controls: bytes, generously
+VALUE_BYTES = 24          # a stored value: <v> and up to 17 digits, sign and exponent
+_REFERENCE = re.compile(r"(?<![A-Za-z_\d.])\$?[A-Z]{1,3}\$?\d+(?![\d(])")
+
+
+def table_cells(t: Template) -> int:
+    """Sweep rows plus grid cells: what a book's size grows with."""
+    rows = (t.sweep.stop - t.sweep.start) / t.sweep.step + 2
+    if not t.mechanism.grid:
+        return int(rows)
+    fine = 0 if workbook.grid_is_fine(t) else 360 / t.stroke_step + 1
+    return int(rows + (rows + fine) * len(t.grid_values))
+
+
+def book_size(t: Template, with_values: bool = False) -> tuple[int, int]:
+    """(formula cells, bytes of XML) of the book `t` makes, estimated before it is laid out:
+    from two small books of the same mechanism (SMALL_ROWS and one more sweep row, one grid
+    column, a three-row stroke sweep), what a sweep row adds, a grid cell holds and the rest
+    takes, scaled to `t`'s rows and columns (a cell reference grows with its row's digits)."""
+    rows = int(table_cells(replace(t, grid_values=())))
+    if rows <= SMALL_ROWS + 1 and len(t.grid_values) <= 1:
+        first = second = _layout_size(t)
+        rows_small = rows
+    else:
+        first = _layout_size(_small(t, SMALL_ROWS))
+        second = _layout_size(_small(t, SMALL_ROWS + 1))
+        rows_small = SMALL_ROWS
+    grow = len(str(rows + 10)) - 1                    # digits a row number gains
+    per_row = [b - a for a, b in zip(first["rows"], second["rows"])]   # cells, bytes, refs
+    cells = first["rows"][0] + (rows - rows_small) * per_row[0]
+    xml = first["rows"][1] + (rows - rows_small) * (per_row[1] + per_row[2] * grow)
+    if t.mechanism.grid:
+        columns = len(t.grid_values)
+        fine = 0 if workbook.grid_is_fine(t) else int(round(360 / t.stroke_step)) + 1
+        size, refs = first["grid cell"]
+        grid_cells = (rows + 1 + fine + 1) * columns
+        grow = len(str(max(rows, fine) + 10)) - 1 + len(column_letter(columns + 1)) - 1
+        cells += grid_cells
+        xml += grid_cells * (size + refs * grow)
+    if with_values:
+        xml += cells * VALUE_BYTES
+    return cells, xml + OTHER_PARTS
+
+
+def _small(t: Template, rows: int) -> Template:
+    """`t` with `rows` sweep rows, one grid column and a three-row stroke sweep."""
+    s = t.sweep
+    return replace(t, sweep=Sweep(s.start, s.start + (rows - 1) * s.step, s.step),
+                   grid_values=t.grid_values[:1], stroke_step=180.0)
+
+
+def _layout_size(t: Template) -> dict:
+    """Formula cells and bytes of cell XML (about what package writes) of `t`'s layout: "rows"
+    (cells, bytes, references) of every sheet but the grid's; "grid cell" the largest of the
+    grid's formula cells (bytes, references), all but a few of which hold the same formula."""
+    built = workbook.build(t)
+    out = {"rows": [0, 0, 0], "grid cell": [0, 0]}
+    for ws in built.workbook.worksheets:
+        grid = ws.title in (workbook.GRID, workbook.STROKE)
+        rows = out["rows"]
+        for cell in ws._cells.values():
+            value = cell._value
+            size = 32 + len(cell.coordinate)
+            if cell.data_type == "f" and isinstance(value, str):
+                size += len(xml_text(value).encode("ascii", "xmlcharrefreplace"))
+                refs = len(_REFERENCE.findall(value))
+                if grid:
+                    out["grid cell"] = max(out["grid cell"], [size, refs])
+                    continue
+                rows[0] += 1
+                rows[2] += refs
+            if not grid:
+                rows[1] += size
+    return out

@@ -329,6 +329,8 @@ def _as_data(report) -> dict:
         "mismatches": report.differing,
         "likely_causes": _ranges(report, report.causes),
         "unjudged": _ranges(report, report.unjudged),
+        "replaced_by_constants": [f"{s}!{c}" for s, c in report.replaced],
+        "stored_values_differ": report.stored_differ,
         "max_abs_diff": report.max_abs if usable else None, "inputs": report.inputs,
         "tolerance": {**TOLERANCE_RULE, "S": report.size} if usable else None,
         "checks": [c.as_dict() for c in report.checks]}
@@ -380,8 +382,12 @@ def _print_report(report, verbose: bool = False) -> None:
     compared = f"{report.cells} of {report.formula_cells} formula cells compared"
     if report.disagrees:
         causes = cell_ranges(_in_book_order(report, report.causes))
-        print(f"DISAGREES: {report.differing} cells differ, likely cause {causes}; {compared}, "
-              f"max |Δ| {report.max_abs:.2e}")
+        kinds = [f"{n} {what}" for n, what in (
+            (len(report.replaced), "hold a constant where the build wrote a formula"),
+            (report.stored_differ, "store a value their formula does not give")) if n]
+        kinds = f" ({'; '.join(kinds)})" if kinds else ""
+        print(f"DISAGREES: {report.differing} cells differ{kinds}, likely cause {causes}; "
+              f"{compared}, max |Δ| {report.max_abs:.2e}")
     elif report.unjudged:
         print(f"CANNOT JUDGE {len(report.unjudged)} formula cells (the build record does not "
               f"say what they hold): {cell_ranges(_in_book_order(report, report.unjudged))}; "

@@ -16,7 +16,7 @@ from .model import LENGTH, Model
 from .templates import Template
 from .workbook import (AGGREGATE, BOLD, DERIVED_FILL, DRAWING_COLUMNS, LINE_HEIGHT, MAX_OF,
                        MECH, MIN_OF, NOTE, SKIP_ERRORS, SWEEP, TITLE, _head, _text, label_lines,
-                       number_format, put, table_style, text_width)
+                       Formula, number_format, put, set_formula, table_style, text_width)
 
 SHEET = "Drawing data"
 HALF = 5                 # the frame: -HALF … HALF grid squares on both axes
@@ -143,7 +143,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
     for i, (key, text, is_length) in enumerate(FRAME_CELLS):
         r = FIRST_ROW + i
         _text(ws, f"{label}{r}", text)
-        ws[f"{value}{r}"] = formulas[key]
+        set_formula(ws[f"{value}{r}"], formulas[key])
         ws[f"{value}{r}"].fill = DERIVED_FILL
         if is_length:
             ws[f"{value}{r}"].number_format = number_format(LENGTH, t.length_unit)
@@ -162,7 +162,8 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
             source = f"{quote_sheetname(sheet)}!{s['source'][j]}"
             style = table_style(ws, MAPPED_FORMAT)
             for k, r in enumerate(range(s["rows"][0], s["rows"][1] + 1)):
-                put(ws, FIRST_ROW + k, c + j, f"=({source}{r}-{centre})/{ref['square']}", style)
+                put(ws, FIRST_ROW + k, c + j,
+                    Formula(f"=({source}{r}-{centre})/{ref['square']}"), style)
         s["columns"] = [x_letter, y_letter]
         s["mapped_rows"] = [FIRST_ROW, FIRST_ROW + s["rows"][1] - s["rows"][0]]
         c += 2

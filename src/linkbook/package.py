@@ -43,6 +43,15 @@ SST_PART = "xl/sharedStrings.xml"
 SST_TYPE = "application/vnd.openxmlformats-officedocument.spreadsheetml.sharedStrings+xml"
 SST_REL = f"{REL_NS}/sharedStrings"
 CHUNK = 4 * 1024 * 1024
+
+
+class Formula(str):
+    """A formula linkbook made ('=' first). The writer here writes a cell as a formula only when
+    its value is a Formula: any other text (a title, a label, a note from a template or the
+    command line) is a string cell, whatever it starts with ('=', '+', '-', '@'), so no text a
+    user wrote can become a live formula."""
+    __slots__ = ()
+
 # An inline-string cell as openpyxl writes it (no namespace prefix, `t` after `r` and `s`).
 INLINE = re.compile(rb'<c( [^>]*?) t="inlineStr"([^>]*)><is>(.*?)</is></c>', re.S)
 # CT_Font's children in the schema's order.
@@ -328,7 +337,7 @@ def _sheet_cells(ws, strings: "_SharedStrings") -> _SheetCells:
             if value is None and not style:
                 continue
             ref = f'<c r="{column_letter(cell.column)}{row}"{style}'
-            if cell.data_type == "f" and type(value) is str:      # most cells: formulas
+            if type(value) is Formula:                            # most cells: formulas
                 text = value[1:]
                 if _NEEDS_ESCAPE.search(text):
                     _refuse_what_xml_cannot_hold(cell, text)
@@ -385,7 +394,9 @@ class _StyleIds:
 def _cell_xml(cell, ref: str, strings: "_SharedStrings") -> str:
     """A cell other than a formula, after its `<c r=".." s=".."` (not yet closed)."""
     kind, value = cell.data_type, cell._value
-    if kind == "f":
+    if kind == "f" and isinstance(value, str):
+        kind = "s"          # text that openpyxl took for a formula: not one linkbook made
+    elif kind == "f":
         raise ValueError(f"{_where(cell)}: array and data-table formulas are not written here")
     if kind == "s":
         if not isinstance(value, str):

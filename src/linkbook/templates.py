@@ -12,6 +12,9 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from .domain import (BRANCH_WORDS, LENGTH_RANGE, LENGTH_SPAN, RATE_LIMIT,  # noqa: F401
+                     InputError, check_input, check_lengths_together, check_value,
+                     check_written_lengths, parse_number, written_lengths)
 from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism)
 
@@ -25,21 +28,6 @@ def _template_dir() -> Path:
 TEMPLATE_DIR = _template_dir()
 EXCEL_MAX_ROWS = 1_048_576
 EXCEL_MAX_COLUMNS = 16_384
-BRANCH_WORDS = {"open": 1.0, "crossed": -1.0}
-# The numbers a book supports (in the template's length unit): within these, every step keeps
-# about 9 significant digits in double precision and no square or product can overflow, so a
-# book built from accepted input always verifies. Outside them, build and verify refuse.
-LENGTH_RANGE = (1e-6, 1e9)       # a length; an offset may also be 0 (or up to 1e9 either way)
-RATE_LIMIT = 1e9                 # |ω|, |α|, |v|, |a| of the input
-LENGTH_SPAN = 1e9                # the largest length over the smallest
-
-
-class InputError(Exception):
-    """A bad value from the user: one line naming the field and the value."""
-
-    def __init__(self, field: str, message: str):
-        super().__init__(f"{field}: {message}")
-        self.field = field
 
 
 # What a message calls each override: the command line's flags, or the Python API's arguments
@@ -125,61 +113,6 @@ def default_name(symbol: str) -> str:
 
 
 # ---------------------------------------------------------------- values
-def parse_number(field: str, text: object) -> float:
-    if isinstance(text, bool):
-        raise InputError(field, f"must be a number (got {text!r})")
-    try:
-        value = float(text)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise InputError(field, f"must be a number (got {text!r})") from None
-    except OverflowError:       # an integer with hundreds of digits
-        raise InputError(field, f"must be a finite number (got an integer of "
-                                f"{len(str(abs(text)))} digits)") from None
-    if not math.isfinite(value):
-        raise InputError(field, f"must be a finite number (got {text!r})")
-    return value
-
-
-def check_value(field: str, kind: str, raw: object) -> float:
-    """The parameter's value, checked for its kind."""
-    if kind == BRANCH_KIND:
-        if isinstance(raw, str) and raw.strip().lower() in BRANCH_WORDS:
-            return BRANCH_WORDS[raw.strip().lower()]
-        value = parse_number(field, raw)
-        if value not in (1.0, -1.0):
-            raise InputError(field, f"must be open (1) or crossed (-1) (got {raw!r})")
-        return value
-    value = parse_number(field, raw)
-    if kind == LENGTH_KIND and value <= 0:
-        raise InputError(field, f"must be a positive length (got {raw!r})")
-    lo, hi = LENGTH_RANGE
-    if kind == LENGTH_KIND and not lo <= value <= hi:
-        raise InputError(field, f"must be a length from {lo:g} to {hi:g} (got {raw!r})")
-    if kind == OFFSET_KIND and abs(value) > hi:
-        raise InputError(field, f"must be from {-hi:g} to {hi:g} (got {raw!r})")
-    if kind == RATE_KIND and abs(value) > RATE_LIMIT:
-        raise InputError(field, f"must be from {-RATE_LIMIT:g} to {RATE_LIMIT:g} (got {raw!r})")
-    if kind == ANGLE_KIND and not -360 <= value <= 360:
-        raise InputError(field, f"must be an angle from -360 to 360 degrees (got {raw!r})")
-    return value
-
-
-def check_lengths_together(values: dict[str, float], kinds: dict[str, str],
-                           where: str = "") -> None:
-    """The largest length over the smallest at most LENGTH_SPAN: beyond it, the small one is
-    below the rounding of the large one. (An offset may be anything up to LENGTH_RANGE[1]: one
-    far below the others acts as the zero it nearly is.)"""
-    lengths = {k: abs(v) for k, v in values.items() if kinds.get(k) == LENGTH_KIND}
-    if len(lengths) < 2:
-        return
-    small = min(lengths, key=lengths.get)
-    large = max(lengths, key=lengths.get)
-    if lengths[large] > LENGTH_SPAN * lengths[small]:
-        raise InputError(f"{where}{small}", f"{values[small]:g} is too small beside {large} = "
-                                            f"{values[large]:g} (at most {LENGTH_SPAN:g} "
-                                            "times apart)")
-
-
 def parse_list(field: str, kind: str, text: object) -> tuple[float, ...]:
     """'20,50,100' (command line) or [20, 50, 100] (TOML) -> checked values."""
     items = text if isinstance(text, list) else str(text).split(",")
@@ -343,7 +276,7 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         description=_optional_text(data, "description", origin), mechanism=mech, length_unit=length_unit,
         parameters=tuple(params), sweep=sweep, position=position, grid_values=grid_values,
         stroke_step=stroke_step)
-    check_sweep(template, f"{origin}: ")
+    check_sweep(template, origin)
     return template
 
 
@@ -491,11 +424,12 @@ def check_step_lengths(t: Template) -> None:
                                 "positive")
 
 
-def check_sweep(t: Template, where: str = "", step_field: str = "sweep.step") -> None:
-    """Positive step, start < stop, and tables inside Excel's limits — before any work; and
-    lengths that fit one book (check_lengths_together), each step's length positive
-    (check_step_lengths). Called after every change to a template. `where` names the template file
-    ("mine.toml: "), `step_field` where the step came from (the file's sweep.step, --step)."""
+def check_sweep(t: Template, origin: str = "", step_field: str = "sweep.step") -> None:
+    """Positive step, start < stop, the sweep and the current position within the inputs a book
+    supports, and tables inside Excel's limits — before any work; and lengths that fit one book
+    (check_lengths_together, with the lengths the description writes as numbers), each step's
+    length positive (check_step_lengths). Called after every change to a template. `origin` names
+    the template file, `step_field` where the step came from (the file's sweep.step, --step)."""
     values = t.values()
     if t.mechanism.grid:
         values = {**values, **{f"{t.mechanism.grid[0]}[{i}]": v
@@ -504,9 +438,14 @@ def check_sweep(t: Template, where: str = "", step_field: str = "sweep.step") ->
     if t.mechanism.grid:
         kinds.update({f"{t.mechanism.grid[0]}[{i}]": kinds[t.mechanism.grid[0]]
                       for i in range(len(t.grid_values))})
-    check_lengths_together(values, kinds, f"{where}parameters.")
+    where = f"{origin}: " if origin else ""
+    written = check_written_lengths(t.mechanism.description or {}, where)
+    check_lengths_together(values, kinds, f"{where}parameters.", written)
     check_step_lengths(t)
     s = t.sweep
+    for field, value in (("sweep.start", s.start), ("sweep.stop", s.stop),
+                         ("sweep.position", t.position)):
+        check_input(f"{where}{field}", value, t.mechanism.input_is_angle)
     unit = "degrees" if t.mechanism.input_is_angle else t.length_unit
     if s.step <= 0:
         raise InputError(f"{where}{step_field}", f"must be a positive {t.mechanism.input_word} "

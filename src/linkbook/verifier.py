@@ -17,7 +17,8 @@ from . import generic, sheets as layout
 from .pause import gc_paused
 from .sheets import summary_prefix
 from .model import RAD
-from .templates import InputError, check_lengths_together, check_value
+from .domain import (InputError, check_input, check_lengths_together, check_value,
+                     check_written_lengths)
 
 ABS_TOL = 1e-9
 ANGLE_UNITS = {"rad": 2 * math.pi, "deg": 360.0}
@@ -111,6 +112,11 @@ class Report:
     causes: set[tuple[str, str]] = field(default_factory=set)   # differing cells reading none
     sheets: list[str] = field(default_factory=list)  # the book's sheets in its tab order
     error: str | None = None        # why the book cannot be verified at all (status 2)
+    # cells the build record holds formulas in that hold a constant instead
+    replaced: list[tuple[str, str]] = field(default_factory=list)
+    # cells the build record holds formulas in that are empty or on a sheet deleted (each
+    # differs: it has no value)
+    absent: list[tuple[str, str]] = field(default_factory=list)
 
     @property
     def disagrees(self) -> bool:
@@ -130,8 +136,16 @@ class Report:
 
     @property
     def cells(self) -> int:
-        """Formula cells compared with the reference (each counted once)."""
-        return len(set().union(*(c.judged for c in self.checks)))
+        """Formula cells compared with the reference (each counted once; a constant where the
+        record has a formula is judged, and differs, but is not a formula cell)."""
+        return len(set().union(*(c.judged for c in self.checks)) - set(self.replaced)
+                   - set(self.absent))
+
+    @property
+    def stored_differ(self) -> int:
+        """Formula cells whose stored value (what a reader that does not calculate shows)
+        differs from the reference."""
+        return sum(len(c.mismatches) for c in self.checks if c.block == STORED)
 
     @property
     def differing(self) -> int:
@@ -156,13 +170,18 @@ def inputs_of(wb, meta: dict) -> dict[str, float]:
             raise UnusableFile(str(exc)) from None
     try:
         check_lengths_together(values, {s: i["kind"] for s, i in meta["inputs"].items()},
-                               "input ")
+                               "input ", written_in(meta))
     except InputError as exc:
         raise UnusableFile(str(exc)) from None
     return values
 
 
-INPUT_LIMIT = 3600.0     # degrees either way for an angle input (the input cell's validation)
+def written_in(meta: dict) -> dict[str, float]:
+    """The lengths the recorded description writes as numbers (domain.written_lengths)."""
+    try:
+        return check_written_lengths(meta.get("description") or {}, "the book's record: ")
+    except InputError as exc:
+        raise UnusableFile(str(exc)) from None
 
 
 def _angles(ws, column: str, rows: list[int], is_angle: bool) -> np.ndarray:
@@ -172,13 +191,10 @@ def _angles(ws, column: str, rows: list[int], is_angle: bool) -> np.ndarray:
 
 def _input(ws, cell: str, what: str, is_angle: bool) -> float:
     """An input angle (or actuator length): a number within the supported domain."""
-    from .templates import LENGTH_RANGE
-    v = _number(ws, cell, what)
-    limit, unit = (INPUT_LIMIT, "°") if is_angle else (LENGTH_RANGE[1], "")
-    if not abs(v) <= limit:
-        raise UnusableFile(f"{ws.title}!{cell}: {what} {v:g} is outside the supported range "
-                           f"(±{limit:g}{unit})")
-    return v
+    try:
+        return check_input(f"{ws.title}!{cell}: {what}", _number(ws, cell, what), is_angle)
+    except InputError as exc:
+        raise UnusableFile(str(exc)) from None
 
 
 def _number(ws, cell: str, what: str) -> float:
@@ -189,10 +205,11 @@ def _number(ws, cell: str, what: str) -> float:
 
 
 def mechanism_size(meta: dict, params: dict[str, float]) -> float:
-    """S: the sum of the input lengths and offsets (every frame fits in a circle that big)."""
+    """S: the sum of the input lengths and offsets and of the lengths the description writes as
+    numbers (every frame fits in a circle that big)."""
     kinds = {s: info["kind"] for s, info in meta["inputs"].items()}
     size = sum(abs(v) for s, v in params.items() if kinds[s] in ("length", "offset"))
-    return max(size, 1e-300)
+    return max(size + sum(abs(v) for v in written_in(meta).values()), 1e-300)
 
 
 # ---------------------------------------------------------------- comparing
@@ -865,7 +882,7 @@ def _check_grid(wb, meta, solver, params, values, is_error, error_code, tol, rel
                                                      zip(grid["columns"], adjust)}},
                                        {**{s: i["kind"] for s, i in meta["inputs"].items()},
                                         **{f"{param}@{c}": kind for c in grid["columns"]}},
-                                       "input ")
+                                       "input ", written_in(meta))
             except InputError as exc:
                 raise UnusableFile(str(exc)) from None
         expected = _grid_reference(solver, params, param, angles, adjust)
@@ -965,14 +982,21 @@ def verify(path: Path, engine: str = "vector") -> Report:
             is_error, error_code, relative = office.is_error, office.error_code, True
     except engines.EngineError as exc:
         raise UnusableFile(f"{path}: {exc}") from None
+    formulas = formula_cells(wb)
     try:
         checks = check_book(wb, meta, values, is_error, error_code, relative=relative)
-        formulas = formula_cells(wb)
         judged = set().union(*(c.judged for c in checks))
+        replaced, absent = _not_formulas(wb, judged - formulas)
+        if replaced:
+            checks.append(_check_replaced(wb, replaced))
+        stored = stored_values(wb, path, formulas & judged)
+        if stored:
+            checks.append(_check_stored(wb, meta, values, stored, is_error, error_code,
+                                        relative))
         return Report(str(path), meta["mechanism"], engine, checks, len(formulas),
                       sorted(formulas - judged, key=cell_order), params,
                       mechanism_size(meta, params), likely_causes(wb, checks),
-                      list(wb.sheetnames))
+                      sheets=list(wb.sheetnames), replaced=replaced, absent=absent)
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
         raise UnusableFile(_record_mismatch(path, exc)) from None
 
@@ -1018,6 +1042,101 @@ def _sheets_named(meta: dict) -> set[str]:
         elif isinstance(item, list):
             todo.extend(item)
     return named
+
+
+# ---------------------------------------------------------------- what the book shows unrecalculated
+STORED = "stored"
+
+
+def _not_formulas(wb, cells: set[tuple[str, str]]) -> tuple[list, list]:
+    """Cells the record holds formulas in that hold none: (those holding a constant, those
+    empty or on a sheet deleted), in cell order."""
+    replaced, absent = [], []
+    for key in sorted(cells, key=cell_order):
+        held = key[0] in wb.sheetnames and wb[key[0]][key[1]].value is not None
+        (replaced if held else absent).append(key)
+    return replaced, absent
+
+
+def _check_replaced(wb, replaced: list[tuple[str, str]]) -> Check:
+    """A constant where the build record has a formula differs whatever its value: the book no
+    longer follows its inputs there (a formula pasted as its value)."""
+    c = Check("constants", "in place of formulas", cells=len(replaced))
+    for sheet, cell in replaced:
+        c.mismatches.append(Mismatch(sheet, cell, "a formula",
+                                     f"the constant {wb[sheet][cell].value!r}"))
+    return c
+
+
+def stored_values(wb, path, cells: set[tuple[str, str]]) -> dict[tuple[str, str], object]:
+    """(sheet, cell) -> the value each of `cells` (formula cells) stores with its formula (the
+    `<v>`): what LibreOffice with default settings, openpyxl's data_only and pandas show. Numbers
+    as float, errors as office.CellError, text as str; a cell that stores none is left out."""
+    from .office import CellError, read_values
+    from .xlsx import column_letter
+    if not all(hasattr(ws, "stored") for ws in wb.worksheets):   # openpyxl read the book
+        return {k: v for k, v in read_values(path).items() if k in cells}
+    out = {}
+    for ws in wb.worksheets:
+        for (row, col), (kind, text) in ws.stored.items():
+            key = (ws.title, f"{column_letter(col)}{row}")
+            if key not in cells:
+                continue
+            if kind == "e":
+                out[key] = CellError(text)
+            elif kind == "b":
+                out[key] = text.strip() in ("1", "true")
+            elif kind == "n":
+                try:
+                    out[key] = float(text)
+                except ValueError:
+                    raise UnusableFile(f"{path}: {key[0]}!{key[1]}: the stored value {text!r} "
+                                       "is not a number") from None
+            else:
+                out[key] = text
+    return out
+
+
+def _same(a, b, error_code) -> bool:
+    from .office import CellError
+    code_a = str(a) if isinstance(a, CellError) else None
+    if code_a is not None or error_code(b) is not None:
+        return code_a == error_code(b)
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        return isinstance(a, bool) == isinstance(b, bool) and float(a) == float(b)
+    return a == b
+
+
+def _check_stored(wb, meta, values, stored, is_error, error_code, relative) -> Check:
+    """Each stored value judged as its formula's value is, with the same bounds: a value stored
+    that its formula does not give (an edit of the file, a stale save) differs, named with what
+    the formula gives and what is stored. Only the stored values that differ from the formula's
+    own are judged again."""
+    from .office import CellError
+    c = Check(STORED, "value ≠ the formula's", cells=len(stored))
+    differ = {k: v for k, v in stored.items() if not _same(v, values.get(k), error_code)}
+    if not differ:
+        return c
+
+    def any_error(v) -> bool:
+        return isinstance(v, CellError) or is_error(v)
+
+    def any_code(v) -> str | None:
+        return str(v) if isinstance(v, CellError) else error_code(v)
+
+    again = check_book(wb, meta, {**values, **differ}, any_error, any_code, relative=relative)
+    named = set()
+    for check in again:
+        for m in check.mismatches:
+            key = (m.sheet, m.cell)
+            if key in differ and key not in named:
+                named.add(key)
+                computed, got = values.get(key), differ[key]
+                c.mismatches.append(Mismatch(m.sheet, m.cell, _show(computed, error_code),
+                                             _show(got, any_code)))
+                if isinstance(computed, float) and isinstance(got, float):
+                    c.max_abs = max(c.max_abs, abs(got - computed))
+    return c
 
 
 def likely_causes(wb, checks: list[Check]) -> set[tuple[str, str]]:

@@ -22,6 +22,8 @@ from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS
 from .model import (ACCEL, ANG_ACCEL, ANG_SPEED, AREA, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
                     SPEED, Model, Resolver, header, render, unit_text)
 from .controls import control_record
+from .domain import INPUT_ANGLE_LIMIT
+from .package import Formula
 from .sheets import (CHARTS, DASH, DRAWING_COLUMNS, FORMAT_VERSION, GAPS_SHOWN, GRID, MECH,  # noqa: F401
                      META, MOTION_SHEET, STROKE, SWEEP, read_meta, summary_prefix, write_meta)
 from .templates import Template
@@ -139,11 +141,20 @@ def put(ws, row: int, col: int, value, style=None) -> None:
     the 0.1° four-bar's build): the style is made once here, and the characters are checked
     where the cells are written (package.cells_held_back)."""
     cell = Cell(ws, row=row, column=col, style_array=style)
-    if isinstance(value, str) and value.startswith("="):
+    if isinstance(value, Formula):
         cell._value, cell.data_type = value, "f"
     else:
         cell.value = value
+        if isinstance(value, str):
+            cell.data_type = "s"    # text stays text, whatever it starts with ('=', '#N/A')
     ws._cells[row, col] = cell
+
+
+def set_formula(cell, text: str):
+    """`cell` (already styled, or styled after) holds the formula `text`: a package.Formula, the
+    only kind of text the writer writes as a formula. Returns the cell."""
+    cell._value, cell.data_type = Formula(text), "f"
+    return cell
 
 
 LINE_HEIGHT = 15.0      # points per line of 11-pt text
@@ -315,7 +326,7 @@ def _inputs_block(wb, ws, t: Template, model: Model):
             _wrap_in(ws, f"A{row}")
             _text(ws, f"B{row}", q.symbol)
             c = ws[f"C{row}"]
-            c.value = resolve.formula(q.key)
+            set_formula(c, resolve.formula(q.key))
             c.fill = DERIVED_FILL
             c.number_format = number_format(q.unit, t.length_unit)
             _text(ws, f"D{row}", unit_text(q.unit, t.length_unit))
@@ -342,8 +353,8 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     ws["I7"].number_format = number_format(mech.input_unit, t.length_unit)
     _text(ws, "J7", unit_text(mech.input_unit, t.length_unit))
     if mech.input_is_angle:
-        dv = DataValidation(type="decimal", operator="between", formula1="-3600",
-                            formula2="3600")
+        dv = DataValidation(type="decimal", operator="between",
+                            formula1=f"{-INPUT_ANGLE_LIMIT:g}", formula2=f"{INPUT_ANGLE_LIMIT:g}")
         dv.prompt = "The input angle in degrees"
     else:
         dv = DataValidation(type="decimal", operator="greaterThan", formula1="0")
@@ -363,7 +374,7 @@ def _position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
         _text(ws, f"G{r}", q.label)
         ws[f"G{r}"].alignment = Alignment(wrap_text=True, vertical="top")
         _text(ws, f"H{r}", q.symbol)
-        ws[cell] = (_degree_formula(q, cells[q.key]) if key != q.key
+        set_formula(ws[cell], _degree_formula(q, cells[q.key]) if key != q.key
                     else resolve.formula(key))
         unit = DEG if key != q.key else q.unit
         ws[cell].number_format = number_format(unit, t.length_unit)
@@ -415,7 +426,7 @@ def _joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
     for j in model.joints:
         _text(ws, f"M{row}", j.name)
         for col, expr in ((x_col, j.x), (y_col, j.y)):
-            ws[f"{col}{row}"] = "=" + render(expr, resolve)
+            set_formula(ws[f"{col}{row}"], "=" + render(expr, resolve))
             ws[f"{col}{row}"].number_format = number_format(LENGTH, t.length_unit)
         cells[j.name] = [f"{x_col}{row}", f"{y_col}{row}"]
         row += 1
@@ -430,8 +441,8 @@ def _joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
         for name in link:
             _text(ws, f"L{row}", f"link {i}")
             _text(ws, f"M{row}", name)
-            ws[f"{x_col}{row}"] = f"={cells[name][0]}"
-            ws[f"{y_col}{row}"] = f"={cells[name][1]}"
+            set_formula(ws[f"{x_col}{row}"], f"={cells[name][0]}")
+            set_formula(ws[f"{y_col}{row}"], f"={cells[name][1]}")
             for col in DRAWING_COLUMNS:
                 ws[f"{col}{row}"].number_format = number_format(LENGTH, t.length_unit)
             row += 1
@@ -467,11 +478,11 @@ def set_degree_windows(built: Built, windows: dict[str, float]) -> None:
         if not q.in_degrees or windows.get(q.key, default_window(q)) == default_window(q):
             continue
         cell = position["cells"][key]
-        ws_mech[cell] = _degree_formula(q, position["cells"][q.key], windows[q.key])
+        set_formula(ws_mech[cell], _degree_formula(q, position["cells"][q.key], windows[q.key]))
         letter, source = sweep["columns"][key], sweep["columns"][q.key]
         col = column_index_from_string(letter)
         for r in range(r0, r1 + 1):
-            ws_sweep.cell(r, col).value = _degree_formula(q, f"{source}{r}", windows[q.key])
+            set_formula(ws_sweep.cell(r, col), _degree_formula(q, f"{source}{r}", windows[q.key]))
 
 
 def _degree_formula(q, ref: str, lo: float | None = None) -> str:
@@ -518,7 +529,7 @@ def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
         put(ws, r, 1, angle, angle_style)
         row_text = str(r)
         for key, text in formulas.items():
-            put(ws, r, columns_at[key], text.replace(ROW, row_text), styles[key])
+            put(ws, r, columns_at[key], Formula(text.replace(ROW, row_text)), styles[key])
     last = first + len(angles) - 1
     if model.closes:
         letters.update(_assembly_columns(ws, letters, model.closes, first, last, head_row,
@@ -561,11 +572,11 @@ def _motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
     in_position[mech.input_column] = position["input_name"]
     at_current = Resolver(model, names, {**in_position, **own})
     formats = {q.key: number_format(q.unit, t.length_unit) for q in qs}
-    ws.cell(current, 1, f"={position['input_name']}").number_format = number_format(
-        mech.input_unit, t.length_unit)
+    set_formula(ws.cell(current, 1), f"={position['input_name']}").number_format = \
+        number_format(mech.input_unit, t.length_unit)
     for q in qs:
         c = ws[f"{letters[q.key]}{current}"]
-        c.value = at_current.formula(q.key).replace(ROW, str(current))
+        set_formula(c, at_current.formula(q.key).replace(ROW, str(current)))
         c.number_format = formats[q.key]
         c.fill = DERIVED_FILL
     texts = {q.key: at_sweep.formula(q.key) for q in qs}
@@ -575,10 +586,10 @@ def _motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
     styles = {key: table_style(ws, formats[key]) for key in texts}
     for r in range(r0, r1 + 1):
         row, row_text, sweep_text = r + MOTION_OFFSET, str(r + MOTION_OFFSET), str(r)
-        put(ws, row, 1, f"={src}!A{r}", input_style)
+        put(ws, row, 1, Formula(f"={src}!A{r}"), input_style)
         for key, text in texts.items():
             put(ws, row, columns_at[key],
-                text.replace(ROW, row_text).replace(SWEEP_ROW, sweep_text), styles[key])
+                Formula(text.replace(ROW, row_text).replace(SWEEP_ROW, sweep_text)), styles[key])
     ws.freeze_panes = ws.cell(first, 2)
     return {"sheet": MOTION_SHEET, "rows": [r0 + MOTION_OFFSET, r1 + MOTION_OFFSET],
             "current_row": current, "columns": letters}
@@ -605,7 +616,7 @@ def _position_motion(ws, t: Template, model: Model, position: dict, motion: dict
         _text(ws, f"G{row}", q.label)
         _text(ws, f"H{row}", q.symbol)
         c = ws[f"I{row}"]
-        c.value = f"={src}!{motion['columns'][key]}{motion['current_row']}"
+        set_formula(c, f"={src}!{motion['columns'][key]}{motion['current_row']}")
         c.number_format = number_format(q.unit, t.length_unit)
         _text(ws, f"J{row}", unit_text(q.unit, t.length_unit))
         cells[key] = f"I{row}"
@@ -626,13 +637,13 @@ def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int,
         ws.column_dimensions[get_column_letter(col + i)].width = 11
     for r in range(first, last + 1):
         every = "*".join(f"ISNUMBER({letters[w]}{r})" for w in witnesses)
-        put(ws, r, col, f"=IF({every},1,0)")
+        put(ws, r, col, Formula(f"=IF({every},1,0)"))
         # (x=0)*(y=1) rather than AND(): the same truth in every application, and element-wise
         # for the vector engine (AND aggregates, so it would run row by row).
         before = f"{closes}{r}=0" if r == first else f"({closes}{r}=0)*({closes}{r - 1}=1)"
         after = f"{closes}{r}=0" if r == last else f"({closes}{r}=0)*({closes}{r + 1}=1)"
-        put(ws, r, col + 1, f'=IF({before},A{r},"{DASH}")')
-        put(ws, r, col + 2, f'=IF({after},A{r},"{DASH}")')
+        put(ws, r, col + 1, Formula(f'=IF({before},A{r},"{DASH}")'))
+        put(ws, r, col + 2, Formula(f'=IF({after},A{r},"{DASH}")'))
     return {"closes": closes, "gap_from": start, "gap_to": end}
 
 
@@ -663,8 +674,7 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         nonlocal row
         _text(ws, f"A{row}", label)
         _wrap_across(ws, row, "A", "B", label)
-        c = ws[f"C{row}"]
-        c.value = formula
+        c = set_formula(ws[f"C{row}"], formula)
         c.fill = DERIVED_FILL
         c.number_format = number_format(unit, t.length_unit) if unit else "General"
         # a text value (a Grashof class) reads on into the empty cells to its right
@@ -836,7 +846,8 @@ def _fill_grid(ws, t: Template, model: Model, names: dict, param_row: int, rows:
     at = {letter: column_index_from_string(letter) for letter in cols}
     for i in rows:
         for letter in cols:
-            put(ws, i, at[letter], text.replace(COL, letter).replace(ROW, str(i)), style)
+            put(ws, i, at[letter], Formula(text.replace(COL, letter).replace(ROW, str(i))),
+                style)
     ws.freeze_panes = ws.cell(rows.start, 2)
 
 
@@ -877,7 +888,7 @@ def _stroke_sheet(ws, t: Template, model: Model, names: dict[str, str], grid: di
     grid_ws_ref = quote_sheetname(GRID)
     for j, letter in enumerate(grid["columns"], start=2):
         mine = get_column_letter(j)
-        c = ws.cell(head_row, j, f"={grid_ws_ref}!{letter}${grid['param_row']}")
+        c = set_formula(ws.cell(head_row, j), f"={grid_ws_ref}!{letter}${grid['param_row']}")
         c.font = BOLD
         c.fill = HEAD_FILL
         cols.append(mine)
@@ -901,8 +912,7 @@ def _stroke_row(ws, t: Template, grid: dict, stroke: dict) -> int:
     src = "" if stroke is grid else f"{quote_sheetname(stroke['sheet'])}!"
     for mine, theirs in zip(grid["columns"], stroke["columns"]):
         rng = f"{src}{theirs}{first}:{theirs}{last}"
-        c = ws[f"{mine}{row}"]
-        c.value = f"=MAX({rng})-MIN({rng})"
+        c = set_formula(ws[f"{mine}{row}"], f"=MAX({rng})-MIN({rng})")
         c.number_format = number_format(LENGTH, t.length_unit)
         c.font = BOLD
         c.fill = DERIVED_FILL

@@ -57,6 +57,9 @@ class Worksheet:
     def __init__(self, title: str):
         self.title = title
         self._cells: dict[tuple[int, int], Cell] = {}
+        # (row, col) -> (t, text) of the value a formula cell stores with it (its `<v>`), what a
+        # reader that does not calculate shows; formula cells without one are left out
+        self.stored: dict[tuple[int, int], tuple[str, str]] = {}
 
     def __getitem__(self, coordinate: str) -> Cell:
         return self.cell(*coordinate_to_tuple(coordinate))
@@ -201,6 +204,10 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
             if formula.get("t") in ("shared", "array", "dataTable"):
                 raise Unsupported(f"{ws.title}!{address}: a {formula.get('t')} formula")
             cells[(row, col)] = Cell(ws, row, col, "=" + (formula.text or ""), "f")
+            stored = el.findtext(v_tag)
+            if stored or kind == "str":     # an empty <v> stores nothing, but as empty text
+                ws.stored[(row, col)] = (kind, strings[int(stored)] if kind == "s"
+                                         else stored or "")
             continue
         if kind == "inlineStr":
             child = el.find(is_tag)
