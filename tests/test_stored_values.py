@@ -69,7 +69,8 @@ def verdict(path: Path, capsys) -> tuple[int, str, dict]:
     code = main(["verify", str(path)])
     text = capsys.readouterr().out
     main(["verify", str(path), "--json"])
-    return code, text, json.loads(capsys.readouterr().out)
+    [data] = json.loads(capsys.readouterr().out)
+    return code, text, data
 
 
 def test_a_fresh_book_stores_what_its_formulas_give(book):
