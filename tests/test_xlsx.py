@@ -145,3 +145,89 @@ def test_what_the_view_does_not_model_is_read_by_openpyxl(tmp_path, make):
     wb = safety.read_workbook_safely(path)
     assert isinstance(wb, openpyxl.Workbook)
     assert cells(wb) == cells(openpyxl.load_workbook(path))
+
+
+# ---------------------------------------------------------------- what the application reads
+# Each case is a bundled four-bar damaged as a hand edit or a hostile file would be: verify
+# must read it as Excel and LibreOffice do, or refuse it with one line naming the part and the
+# name or cell (exit 2), never say "all agree" about a book the application reads otherwise.
+INPUT_A2 = ('<c r="C8" s="6" t="n"><v>35</v></c>', "xl/worksheets/sheet1.xml")   # a_2 = 35 mm
+FIRST_NAME = "<definedName name=\"a_1\">'Mechanism'!$C$7</definedName>"
+
+
+@pytest.fixture(scope="module")
+def fourbar_bytes(tmp_path_factory) -> bytes:
+    from conftest import template
+    from linkbook import builder
+    path = tmp_path_factory.mktemp("fourbar") / "fourbar.xlsx"
+    builder.build_file(template("fourbar"), path)
+    return path.read_bytes()
+
+
+def _damaged(tmp_path: Path, raw: bytes, part: str, old: str, new: str) -> Path:
+    path = tmp_path / "fourbar.xlsx"
+    path.write_bytes(raw)
+    _rewrite(path, part, old, new)
+    return path
+
+
+def _verify(path: Path, capsys, *options) -> tuple[int, str]:
+    from linkbook.cli import main
+    code = main(["verify", str(path), *options])
+    out = capsys.readouterr()
+    lines = (out.out + out.err).strip().splitlines()
+    assert "Traceback" not in out.out + out.err
+    return code, lines[-1]
+
+
+COMMENT = "<!-- " + "x" * 5000 + " -->"
+DTD = '<!DOCTYPE worksheet [<!ENTITY a2 "35">]>'
+
+
+@pytest.mark.parametrize("part,where", [
+    ("xl/worksheets/sheet1.xml", "after a 5 KB comment"),
+    ("xl/charts/chart1.xml", "after a 5 KB comment"),
+    ("docProps/app.xml", "after a 5 KB comment"),
+    ("xl/worksheets/sheet2.xml", "at the end"),
+])
+def test_a_dtd_anywhere_in_any_part_is_refused(tmp_path, fourbar_bytes, capsys, part, where):
+    path = tmp_path / "fourbar.xlsx"
+    path.write_bytes(fourbar_bytes)
+    with zipfile.ZipFile(path) as zf:
+        body = zf.read(part).decode()
+    root = re.search(r"<[A-Za-z]", body.split("?>", 1)[-1]).group()
+    if where == "at the end":
+        _rewrite(path, part, body[-30:], body[-30:] + COMMENT + DTD)
+    else:
+        _rewrite(path, part, root, COMMENT + DTD + root)
+    code, last = _verify(path, capsys)
+    assert code == 2
+    assert f"part {part} declares a DTD or XML entities; refusing" in last, last
+
+
+@pytest.mark.parametrize("encoding", ["utf-16-le", "utf-16-be"])
+def test_a_dtd_in_a_utf16_part_is_refused(tmp_path, fourbar_bytes, encoding):
+    path = tmp_path / "fourbar.xlsx"
+    path.write_bytes(fourbar_bytes)
+    tmp = tmp_path / "out.xlsx"
+    with zipfile.ZipFile(path) as src, zipfile.ZipFile(tmp, "w") as dst:
+        for info in src.infolist():
+            data = src.read(info)
+            if info.filename == "docProps/app.xml":
+                data = ("\ufeff" + COMMENT + DTD + data.decode()).encode(encoding)
+            dst.writestr(info, data)
+    with pytest.raises(safety.UnsafeFile, match="part docProps/app.xml declares a DTD"):
+        safety.check_zip(tmp)
+
+
+def test_a_dtd_split_between_two_chunks_is_found(tmp_path, fourbar_bytes):
+    """The scan reads a part a chunk at a time: a marker across the boundary is still seen."""
+    for cut in range(1, len("<!DOCTYPE")):
+        path = tmp_path / f"cut{cut}.xlsx"
+        path.write_bytes(fourbar_bytes)
+        padding = "x" * (safety._CHUNK - cut - len("<!--  -->"))
+        _rewrite(path, "docProps/app.xml", "<", f"<!-- {padding} --><!DOCTYPE Properties><")
+        with zipfile.ZipFile(path) as zf:
+            assert zf.read("docProps/app.xml").index(b"<!DOCTYPE") == safety._CHUNK - cut
+        with pytest.raises(safety.UnsafeFile, match="declares a DTD"):
+            safety.check_zip(path)
