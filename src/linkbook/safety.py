@@ -58,7 +58,10 @@ def _check_part(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> None:
     tail = b""
     with zf.open(info) as f:
         while chunk := f.read(_CHUNK):
-            if _DTD.search(tail + chunk[:_LONGEST_MARKER]) or _DTD.search(chunk):
+            window = tail + chunk
+            # every marker starts '<!' (UTF-8) or '<\0!' (UTF-16): two fast finds rule most
+            # chunks out before the regex, which is four times slower
+            if (b"<!" in window or b"<\x00!" in window) and _DTD.search(window):
                 raise UnsafeFile(f"{path}: part {info.filename} declares a DTD or XML "
                                  "entities; refusing")
             tail = chunk[-_LONGEST_MARKER:]

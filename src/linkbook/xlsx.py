@@ -266,7 +266,8 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
         formula = el.find(f_tag)
         if formula is not None:
             text = formula.text or ""
-            _check_formula(text, part, ws.title, address)
+            if len(text) > FORMULA_LENGTH_LIMIT or text.count("(") > FORMULA_NESTING_LIMIT:
+                _check_formula(text, part, ws.title, address)
             if formula.get("t") in ("shared", "array", "dataTable"):
                 unmodelled.append(f"{ws.title}!{address}: a {formula.get('t')} formula")
             cells[(row, col)] = Cell(ws, row, col, "=" + text, "f")
@@ -313,7 +314,8 @@ def _index(text: str, part: str, title: str, address: str) -> int:
 
 def _check_formula(text: str, part: str, title: str, address: str) -> None:
     """Refuse a formula Excel would not hold, before anything parses it: parsing costs grow
-    with its length, and deep nesting crashes LibreOffice."""
+    with its length, and deep nesting crashes LibreOffice. (Called where the formula is long
+    or has many brackets: a cheap test in the loop over cells keeps the call off most.)"""
     if len(text) > FORMULA_LENGTH_LIMIT:
         raise Refused(f"{part}: cell {title}!{address} has a formula of {len(text):,} "
                       f"characters; Excel's limit is {FORMULA_LENGTH_LIMIT:,}")
