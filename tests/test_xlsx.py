@@ -243,16 +243,24 @@ def test_a_number_in_xml_schema_form_is_read(tmp_path, fourbar_bytes, capsys, st
     assert code == 0 and last.startswith("all agree: 3418 of 3418"), last
 
 
+# Edits verify accepts, each in the place it is made: (part, old text, new text).
+ACCEPTED_EDITS = {
+    "a_2 stored ' 35'": (INPUT_A2[1], INPUT_A2[0], INPUT_A2[0].replace(">35<", "> 35<")),
+    "a_2 stored '3.5E+1'": (INPUT_A2[1], INPUT_A2[0], INPUT_A2[0].replace(">35<", ">3.5E+1<")),
+    "a scoped a_2 to the same cell": ("xl/workbook.xml", FIRST_NAME,
+                                      FIRST_NAME + _scoped("a_2", "'Mechanism'!$C$8")),
+}
+
+
 @pytest.mark.libreoffice
-@pytest.mark.parametrize("stored", [" 35", "3.5E+1"])
-def test_libreoffice_reads_an_accepted_number_as_verify_does(tmp_path, fourbar_bytes, capsys,
-                                                             stored):
-    """The judge: LibreOffice recalculates with what it reads in C8 and verify compares that
-    with the reference computed from what verify read there."""
+@pytest.mark.parametrize("edit", sorted(ACCEPTED_EDITS))
+def test_libreoffice_reads_an_accepted_edit_as_verify_does(tmp_path, fourbar_bytes, capsys,
+                                                           edit):
+    """The judge: LibreOffice recalculates with what it reads, and verify compares that with
+    the reference computed from what verify read."""
     from test_office import require_soffice
     require_soffice()
-    cell, part = INPUT_A2
-    path = _damaged(tmp_path, fourbar_bytes, part, cell, cell.replace(">35<", f">{stored}<"))
+    path = _damaged(tmp_path, fourbar_bytes, *ACCEPTED_EDITS[edit])
     code, last = _verify(path, capsys, "--engine", "libreoffice")
     assert code == 0 and last.startswith("all agree: 3418 of 3418"), last
 
