@@ -245,12 +245,14 @@ def test_texts_that_hash_alike_are_compared_in_full(formula, monkeypatch):
     since equal hashes only send the texts to be compared."""
     expected = grammar.parse(formula, engine._plain_functions())
     grammar._hash.cache_clear()
+    grammar._power.cache_clear()
     try:
         monkeypatch.setattr(grammar, "_MODULUS", 3)
         colliding = grammar.parse(formula, engine._plain_functions())
     finally:
         monkeypatch.undo()
         grammar._hash.cache_clear()
+        grammar._power.cache_clear()
     assert colliding == expected
 
 

@@ -301,7 +301,7 @@ class _Reader:
                 n, h = len(part), _hash(part)
             else:
                 n, h = self.lengths[part], self.hashes[part]
-            digest = (digest * pow(_BASE, n, _MODULUS) + h) % _MODULUS
+            digest = (digest * _power(n) + h) % _MODULUS
             length += n
         alike = self.index.setdefault((length, digest), [])
         for i in alike:
@@ -324,6 +324,12 @@ class _Reader:
             else:
                 todo.extend(reversed(self.parts[part]))
         return "".join(out)
+
+
+@functools.lru_cache(maxsize=4096)     # short texts' lengths recur
+def _power(n: int) -> int:
+    """_BASE ** n modulo _MODULUS: what a hash is multiplied by when n characters follow."""
+    return pow(_BASE, n, _MODULUS)
 
 
 @functools.lru_cache(maxsize=4096)     # tokens and operator texts recur
