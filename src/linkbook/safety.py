@@ -1,9 +1,9 @@
 """Open a workbook someone handed us without trusting it.
 
 An .xlsx is a zip of XML parts. Before openpyxl parses anything we check that the file is a zip
-that is complete, that it would not inflate to something huge (a zip bomb), and that no XML part
-declares a DTD or entities (billion laughs, external entities). openpyxl itself parses with
-defusedxml when it is installed, which pyproject requires.
+that is complete, that it would not inflate to something huge (a zip bomb), and that no part
+declares a DTD or entities anywhere in it (billion laughs, external entities). openpyxl itself
+parses with defusedxml when it is installed, which pyproject requires.
 """
 from __future__ import annotations
 
