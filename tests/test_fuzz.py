@@ -6,7 +6,10 @@ mutations are drawn by hypothesis (derandomized, so CI sees the same ones): work
 people make them (a defined name deleted, formulas replaced by any formula of Excel's functions,
 input cells made huge, negative, text or formulas, sheets renamed or deleted, the build record
 cut) and package damage (parts dropped, cut short or scrambled; a sheet renamed in the XML;
-content types, relationships, styles, charts and shared strings broken).
+content types, relationships, styles, charts and shared strings broken). Parametrized cases
+add what the spreadsheet application reads otherwise than Python would: a sheet-scoped
+namesake of an input, a name defined twice (case too), an input stored as another text, a
+DTD anywhere in a part.
 """
 from __future__ import annotations
 
@@ -214,6 +217,107 @@ def test_the_known_cases(books, tmp_path, capsys):
         wb.save(path)
         code, text = _run(["verify", str(path)], capsys)
         assert code == 2 and "Mechanism!I" in text and says in text, text
+
+
+# ------------------------------------------------- what the application reads otherwise
+def _rewritten(raw: bytes, part: str, edit) -> bytes:
+    """The book with `edit` (bytes -> bytes) applied to one part."""
+    src = zipfile.ZipFile(io.BytesIO(raw))
+    out = io.BytesIO()
+    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as dst:
+        for info in src.infolist():
+            body = src.read(info)
+            dst.writestr(info.filename, edit(body) if info.filename == part else body)
+    return out.getvalue()
+
+
+def _first_name(body: bytes) -> re.Match:
+    """The first workbook-scoped name of workbook.xml (an input of every bundled book)."""
+    return re.search(rb'<definedName name="([^"]+)">([^<]+)</definedName>', body)
+
+
+def _add_name(body: bytes, name: bytes, target: bytes, scope: bytes = b"",
+              before: bool = False) -> bytes:
+    m = _first_name(body)
+    added = b'<definedName name="' + name + b'"' + scope + b">" + target + b"</definedName>"
+    at = m.start() if before else m.end()
+    return body[:at] + added + body[at:]
+
+
+NAME_EDITS = {
+    # a sheet-scoped namesake pointing elsewhere: that sheet's formulas would read it
+    "scoped": lambda b: _add_name(b, _first_name(b)[1], b"'Mechanism'!$A$1",
+                                  b' localSheetId="1"'),
+    "scoped, other case": lambda b: _add_name(b, _first_name(b)[1].upper(), b"'Mechanism'!$A$1",
+                                              b' localSheetId="2"'),
+    # a second definition before the first: the application reads the first it meets
+    "defined twice": lambda b: _add_name(b, _first_name(b)[1], b"'Mechanism'!$A$1", before=True),
+    "twice, other case": lambda b: _add_name(b, _first_name(b)[1].upper(), b"'Mechanism'!$A$1",
+                                             before=True),
+}
+
+
+@pytest.mark.parametrize("edit", sorted(NAME_EDITS))
+@pytest.mark.parametrize("name", ["fourbar", "pump", "boom-cylinder"])
+def test_an_ambiguous_name_is_refused(books, tmp_path, capsys, name, edit):
+    path = tmp_path / "names.xlsx"
+    path.write_bytes(_rewritten(books[name], "xl/workbook.xml", NAME_EDITS[edit]))
+    code, text = _run(["verify", str(path)], capsys)
+    _clear_answer(code, text)
+    assert code == 2 and "xl/workbook.xml: the name" in text, text
+
+
+_NUMBER_CELL = re.compile(rb'(<c r="C\d+"[^>]* t="n"><v>)([^<]+)(</v>)')
+REFUSED_NUMBERS = ["3_5", "３５", "0x10", "35.0.0", "1e999", "-1e999", "INF", "NaN", "", "1 0",
+                   "١٢", "1e", ".", "+", "--1", "0b1"]
+SAME_NUMBER = [" {}", "{} ", "\t{}\n", "+{}", "{}.0", "{}e0", "0{}"]
+
+
+@pytest.mark.parametrize("literal", REFUSED_NUMBERS + SAME_NUMBER)
+@pytest.mark.parametrize("name", ["fourbar", "boom-cylinder"])
+def test_an_input_number_is_read_as_the_application_reads_it(books, tmp_path, capsys, name,
+                                                              literal):
+    """The first input of the Mechanism sheet, stored as another text: one the application
+    reads as the same number gives the clean book's answer, any other is refused."""
+    raw = books[name]
+    original = _NUMBER_CELL.search(zipfile.ZipFile(io.BytesIO(raw)).read(
+        "xl/worksheets/sheet1.xml"))[2].decode()
+    stored = literal.format(original)
+
+    def edit(body: bytes) -> bytes:
+        return _NUMBER_CELL.sub(lambda m: m[1] + stored.encode() + m[3], body, count=1)
+    path = tmp_path / "number.xlsx"
+    path.write_bytes(_rewritten(raw, "xl/worksheets/sheet1.xml", edit))
+    code, text = _run(["verify", str(path)], capsys)
+    _clear_answer(code, text)
+    if literal in SAME_NUMBER:
+        assert code == 0, text
+    elif stored == "":
+        assert code == 2, text           # an empty input cell: refused as no number
+    else:
+        assert code == 2 and f"holds {stored!r}" in text, text
+
+
+LONG_COMMENT = b"<!-- " + b"-x" * 4000 + b" -->"
+
+
+@pytest.mark.parametrize("where", ["after a long comment", "at the end", "utf-16"])
+@pytest.mark.parametrize("part", ["xl/worksheets/sheet2.xml", "xl/styles.xml",
+                                  "[Content_Types].xml", "xl/drawings/vmlDrawing1.vml"])
+def test_a_dtd_is_refused_wherever_it_is(books, tmp_path, capsys, part, where):
+    dtd = b'<!DOCTYPE x [<!ENTITY e "1">]>'
+
+    def edit(body: bytes) -> bytes:
+        if where == "at the end":
+            return body + LONG_COMMENT + dtd
+        at = re.search(rb"<[A-Za-z]", body).start()
+        body = body[:at] + LONG_COMMENT + dtd + body[at:]
+        return body.decode().encode("utf-16") if where == "utf-16" else body
+    path = tmp_path / "dtd.xlsx"
+    path.write_bytes(_rewritten(books["fourbar"], part, edit))
+    code, text = _run(["verify", str(path)], capsys)
+    _clear_answer(code, text)
+    assert code == 2 and f"part {part} declares a DTD" in text, text
 
 
 # ---------------------------------------------------------------- templates

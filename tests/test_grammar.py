@@ -224,3 +224,51 @@ def test_a_node_without_a_value_hands_the_call_to_formulas_compiled_graph():
             outcomes.append(("raised", type(ex).__name__))
     assert pipe.compiled is not None
     assert outcomes[0] == outcomes[1]
+
+
+LONG_SUM = "=(I17-a_1)" + "+0" * 300     # (the tree walk of the test recurses)
+DEEP = "=" + "COS(" * 40 + "-A1%" + ")" * 40 + "+" + "(" * 40 + "B1" + ")" * 40
+
+
+@pytest.mark.parametrize("formula", [LONG_SUM, DEEP], ids=["long sum", "deep nesting"])
+def test_long_and_deep_formulas_are_read_as_formulas_reads_them(formula):
+    assert grammar.parse(formula, engine._plain_functions()) is not None
+    assert_same_reading(formula)
+
+
+@pytest.mark.parametrize("formula", [
+    "=COS(-(A1%))/COS(-A1%)", "=A1+A1*A1", "=COS(A1)+COS(A1)+cos(A1)", "=(A1+B1)*(A1+B1)-A1",
+    "=-(-A1)+--A1+(-A1)%+-(A1%)", "=A1+B1+C1+D1+E1*F1-G1/H1", LONG_SUM, DEEP,
+])
+def test_texts_that_hash_alike_are_compared_in_full(formula, monkeypatch):
+    """With a modulus of 3 nearly every pair of texts hashes alike: the graph must not change,
+    since equal hashes only send the texts to be compared."""
+    expected = grammar.parse(formula, engine._plain_functions())
+    grammar._hash.cache_clear()
+    grammar._power.cache_clear()
+    try:
+        monkeypatch.setattr(grammar, "_MODULUS", 3)
+        colliding = grammar.parse(formula, engine._plain_functions())
+    finally:
+        monkeypatch.undo()
+        grammar._hash.cache_clear()
+        grammar._power.cache_clear()
+    assert colliding == expected
+
+
+def _peak_bytes(formula: str) -> int:
+    import tracemalloc
+    tracemalloc.start()
+    try:
+        assert grammar.parse(formula, engine._plain_functions()) is not None
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+def test_memory_grows_linearly_with_the_formula():
+    """Ten times the length, about ten times the memory (each node's full text would make it
+    a hundred: `(I17-a_1)+0+0…` of 100 k characters took 7 GiB)."""
+    short, long = ("=(I17-a_1)" + "+0" * n for n in (1_000, 10_000))
+    ratio = _peak_bytes(long) / _peak_bytes(short)
+    assert ratio < 20, ratio

@@ -145,3 +145,256 @@ def test_what_the_view_does_not_model_is_read_by_openpyxl(tmp_path, make):
     wb = safety.read_workbook_safely(path)
     assert isinstance(wb, openpyxl.Workbook)
     assert cells(wb) == cells(openpyxl.load_workbook(path))
+
+
+# ---------------------------------------------------------------- what the application reads
+# Each case is a bundled four-bar damaged as a hand edit or a hostile file would be: verify
+# must read it as Excel and LibreOffice do, or refuse it with one line naming the part and the
+# name or cell (exit 2), never say "all agree" about a book the application reads otherwise.
+INPUT_A2 = ('<c r="C8" s="6" t="n"><v>35</v></c>', "xl/worksheets/sheet1.xml")   # a_2 = 35 mm
+FIRST_NAME = "<definedName name=\"a_1\">'Mechanism'!$C$7</definedName>"
+
+
+@pytest.fixture(scope="module")
+def fourbar_bytes(tmp_path_factory) -> bytes:
+    from conftest import template
+    from linkbook import builder
+    path = tmp_path_factory.mktemp("fourbar") / "fourbar.xlsx"
+    builder.build_file(template("fourbar"), path)
+    return path.read_bytes()
+
+
+def _damaged(tmp_path: Path, raw: bytes, part: str, old: str, new: str) -> Path:
+    path = tmp_path / "fourbar.xlsx"
+    path.write_bytes(raw)
+    _rewrite(path, part, old, new)
+    return path
+
+
+def _verify(path: Path, capsys, *options) -> tuple[int, str]:
+    from linkbook.cli import main
+    code = main(["verify", str(path), *options])
+    out = capsys.readouterr()
+    lines = (out.out + out.err).strip().splitlines()
+    assert "Traceback" not in out.out + out.err
+    return code, lines[-1]
+
+
+def _scoped(name: str, target: str, sheet: int = 1) -> str:
+    return f'<definedName name="{name}" localSheetId="{sheet}">{target}</definedName>'
+
+
+@pytest.mark.parametrize("added", [
+    _scoped("a_2", "'Mechanism'!$C$9"),                 # the issue's Name Manager edit
+    _scoped("A_2", "'Mechanism'!$C$9", sheet=2),        # names are compared without case
+], ids=["a_2 on Sweep", "A_2 on Motion"])
+def test_a_scoped_name_shadowing_an_input_is_refused(tmp_path, fourbar_bytes, capsys, added):
+    path = _damaged(tmp_path, fourbar_bytes, "xl/workbook.xml", FIRST_NAME, FIRST_NAME + added)
+    code, last = _verify(path, capsys)
+    assert code == 2
+    assert "xl/workbook.xml" in last and "shadows the workbook's 'a_2'" in last, last
+
+
+@pytest.mark.parametrize("added", [
+    _scoped("a_2", "'Mechanism'!$C$8"),                 # the same target: read the same
+    _scoped("not_read", "'Mechanism'!$C$9"),           # no workbook name of that name
+], ids=["same target", "another name"])
+def test_a_scoped_name_that_changes_no_reading_is_accepted(tmp_path, fourbar_bytes, capsys,
+                                                           added):
+    path = _damaged(tmp_path, fourbar_bytes, "xl/workbook.xml", FIRST_NAME, FIRST_NAME + added)
+    code, last = _verify(path, capsys)
+    assert code == 0 and last.startswith("all agree: 3418 of 3418"), last
+
+
+@pytest.mark.parametrize("first", ["a_2", "A_2"])
+def test_a_name_defined_twice_is_refused(tmp_path, fourbar_bytes, capsys, first):
+    """Excel and LibreOffice read the first definition, openpyxl kept the last."""
+    added = f"<definedName name=\"{first}\">'Mechanism'!$C$9</definedName>"
+    path = _damaged(tmp_path, fourbar_bytes, "xl/workbook.xml", FIRST_NAME, added + FIRST_NAME)
+    code, last = _verify(path, capsys)
+    assert code == 2
+    assert "xl/workbook.xml" in last and "is defined twice in the workbook" in last, last
+
+
+# LibreOffice 7.4 reads '3_5' as 3, '３５' and '0x10' as 0, '35.0.0' as 35, and '1e999', 'INF'
+# and 'NaN' as infinities no formula can use (recalculated and saved as CSV); Python's int()
+# and float() read 35, 35, an error, an error, inf, inf and nan.
+@pytest.mark.parametrize("stored", ["3_5", "３５", "0x10", "35.0.0", "1e999", "INF", "NaN",
+                                    "3 5", "35mm", "1e", "+-35"])
+def test_a_number_the_application_reads_otherwise_is_refused(tmp_path, fourbar_bytes, capsys,
+                                                             stored):
+    cell, part = INPUT_A2
+    path = _damaged(tmp_path, fourbar_bytes, part, cell, cell.replace(">35<", f">{stored}<"))
+    code, last = _verify(path, capsys)
+    assert code == 2
+    assert f"{part}: cell Mechanism!C8 holds {stored!r}" in last, last
+
+
+# Every form of XML Schema's decimal and double: LibreOffice reads each as 35.
+ACCEPTED_35 = [" 35", "35\t", "+35", "35.", "35.000", "3.5e1", "3.5E+1", "350e-1", "035"]
+
+
+@pytest.mark.parametrize("stored", ACCEPTED_35)
+def test_a_number_in_xml_schema_form_is_read(tmp_path, fourbar_bytes, capsys, stored):
+    cell, part = INPUT_A2
+    path = _damaged(tmp_path, fourbar_bytes, part, cell, cell.replace(">35<", f">{stored}<"))
+    assert xlsx.read(path)["Mechanism"]["C8"].value == 35
+    code, last = _verify(path, capsys)
+    assert code == 0 and last.startswith("all agree: 3418 of 3418"), last
+
+
+# Edits verify accepts, each in the place it is made: (part, old text, new text).
+ACCEPTED_EDITS = {
+    "a_2 stored ' 35'": (INPUT_A2[1], INPUT_A2[0], INPUT_A2[0].replace(">35<", "> 35<")),
+    "a_2 stored '3.5E+1'": (INPUT_A2[1], INPUT_A2[0], INPUT_A2[0].replace(">35<", ">3.5E+1<")),
+    "a scoped a_2 to the same cell": ("xl/workbook.xml", FIRST_NAME,
+                                      FIRST_NAME + _scoped("a_2", "'Mechanism'!$C$8")),
+}
+
+
+@pytest.mark.libreoffice
+@pytest.mark.parametrize("edit", sorted(ACCEPTED_EDITS))
+def test_libreoffice_reads_an_accepted_edit_as_verify_does(tmp_path, fourbar_bytes, capsys,
+                                                           edit):
+    """The judge: LibreOffice recalculates with what it reads, and verify compares that with
+    the reference computed from what verify read."""
+    from test_office import require_soffice
+    require_soffice()
+    path = _damaged(tmp_path, fourbar_bytes, *ACCEPTED_EDITS[edit])
+    code, last = _verify(path, capsys, "--engine", "libreoffice")
+    assert code == 0 and last.startswith("all agree: 3418 of 3418"), last
+
+
+@pytest.mark.libreoffice
+def test_libreoffice_reads_the_scoped_name_verify_refuses(tmp_path, fourbar_bytes, capsys):
+    """Why the shadowing name is refused: the application's formulas on Sweep read a_3."""
+    from test_office import require_soffice
+    require_soffice()
+    added = _scoped("a_2", "'Mechanism'!$C$9")
+    path = _damaged(tmp_path, fourbar_bytes, "xl/workbook.xml", FIRST_NAME, FIRST_NAME + added)
+    from linkbook import office
+    clean = tmp_path / "clean.xlsx"
+    clean.write_bytes(fourbar_bytes)
+    before, after = office.recalculated_values(clean), office.recalculated_values(path)
+    sweep = [k for k in before if k[0] == "Sweep" and isinstance(before[k], float)]
+    assert sum(before[k] != after[k] for k in sweep) > 100
+
+
+COMMENT = "<!-- " + "x" * 5000 + " -->"
+DTD = '<!DOCTYPE worksheet [<!ENTITY a2 "35">]>'
+
+
+@pytest.mark.parametrize("part,where", [
+    ("xl/worksheets/sheet1.xml", "after a 5 KB comment"),
+    ("xl/charts/chart1.xml", "after a 5 KB comment"),
+    ("docProps/app.xml", "after a 5 KB comment"),
+    ("xl/worksheets/sheet2.xml", "at the end"),
+])
+def test_a_dtd_anywhere_in_any_part_is_refused(tmp_path, fourbar_bytes, capsys, part, where):
+    path = tmp_path / "fourbar.xlsx"
+    path.write_bytes(fourbar_bytes)
+    with zipfile.ZipFile(path) as zf:
+        body = zf.read(part).decode()
+    root = re.search(r"<[A-Za-z]", body.split("?>", 1)[-1]).group()
+    if where == "at the end":
+        _rewrite(path, part, body[-30:], body[-30:] + COMMENT + DTD)
+    else:
+        _rewrite(path, part, root, COMMENT + DTD + root)
+    code, last = _verify(path, capsys)
+    assert code == 2
+    assert f"part {part} declares a DTD or XML entities; refusing" in last, last
+
+
+@pytest.mark.parametrize("encoding", ["utf-16-le", "utf-16-be"])
+def test_a_dtd_in_a_utf16_part_is_refused(tmp_path, fourbar_bytes, encoding):
+    path = tmp_path / "fourbar.xlsx"
+    path.write_bytes(fourbar_bytes)
+    tmp = tmp_path / "out.xlsx"
+    with zipfile.ZipFile(path) as src, zipfile.ZipFile(tmp, "w") as dst:
+        for info in src.infolist():
+            data = src.read(info)
+            if info.filename == "docProps/app.xml":
+                data = ("\ufeff" + COMMENT + DTD + data.decode()).encode(encoding)
+            dst.writestr(info, data)
+    with pytest.raises(safety.UnsafeFile, match="part docProps/app.xml declares a DTD"):
+        safety.check_zip(tmp)
+
+
+def test_a_dtd_split_between_two_chunks_is_found(tmp_path, fourbar_bytes):
+    """The scan reads a part a chunk at a time: a marker across the boundary is still seen."""
+    for cut in range(1, len("<!DOCTYPE")):
+        path = tmp_path / f"cut{cut}.xlsx"
+        path.write_bytes(fourbar_bytes)
+        padding = "x" * (safety._CHUNK - cut - len("<!--  -->"))
+        _rewrite(path, "docProps/app.xml", "<", f"<!-- {padding} --><!DOCTYPE Properties><")
+        with zipfile.ZipFile(path) as zf:
+            assert zf.read("docProps/app.xml").index(b"<!DOCTYPE") == safety._CHUNK - cut
+        with pytest.raises(safety.UnsafeFile, match="declares a DTD"):
+            safety.check_zip(path)
+
+
+def _formula_book(path: Path, formula: str) -> Path:
+    wb = openpyxl.Workbook()
+    wb.active["A1"], wb.active["B1"] = 1, "=" + formula
+    wb.save(path)
+    return path
+
+
+def _sum_of_length(n: int) -> str:
+    return "A1" + "+1" * ((n - 2) // 2) + ("1" if n % 2 else "")
+
+
+@pytest.mark.parametrize("length,refused", [(8192, False), (8193, True)])
+def test_a_formula_longer_than_excel_holds_is_refused(tmp_path, length, refused):
+    formula = _sum_of_length(length)
+    assert len(formula) == length
+    path = _formula_book(tmp_path / "book.xlsx", formula)
+    if not refused:
+        assert xlsx.read(path)["Sheet"]["B1"].value == "=" + formula
+        return
+    with pytest.raises(xlsx.Refused, match=r"^xl/worksheets/sheet1.xml: cell Sheet!B1 has a "
+                                            r"formula of 8,193 characters; Excel's limit is "
+                                            r"8,192$"):
+        xlsx.read(path)
+
+
+@pytest.mark.parametrize("formula,refused", [
+    ("(" * 64 + "A1" + ")" * 64, False),
+    ("(" * 65 + "A1" + ")" * 65, True),
+    ("SIN(" * 65 + "A1" + ")" * 65, True),
+    ("(" * 64 + "A1" + ")" * 64 + "&\"" + "(" * 70 + "\"", False),     # brackets in text
+    ("'((((((((((((((((((((((((((((((((((((((((((((((((((((((((((((((((((((('!A1+"
+     + "(" * 60 + "1" + ")" * 60, False),                                # and in a sheet name
+    ("(" * 60 + ")" * 60 + "+" + "(" * 60 + "A1" + ")" * 60, False),    # wide, not deep
+])
+def test_a_formula_nested_deeper_than_excel_allows_is_refused(tmp_path, formula, refused):
+    path = _formula_book(tmp_path / "book.xlsx", formula)
+    if not refused:
+        xlsx.read(path)
+        return
+    with pytest.raises(xlsx.Refused, match=r"cell Sheet!B1 has a formula nested 65 brackets "
+                                            r"deep; Excel's limit is 64 levels$"):
+        xlsx.read(path)
+
+
+def test_verify_refuses_a_long_formula_before_parsing_it(tmp_path, fourbar_bytes, capsys):
+    """The issue's `(I17-a_1)+0+0…` (100 k characters took 7 GiB to parse): refused at once."""
+    cell = '<c r="I9" s="8"><f>I17-a_1</f>'
+    long = cell.replace("I17-a_1", "(I17-a_1)" + "+0" * 50_000)
+    path = _damaged(tmp_path, fourbar_bytes, "xl/worksheets/sheet1.xml", cell, long)
+    code, last = _verify(path, capsys)
+    assert code == 2
+    assert last.endswith("xl/worksheets/sheet1.xml: cell Mechanism!I9 has a formula of 100,009 "
+                         "characters; Excel's limit is 8,192"), last
+
+
+def test_a_book_openpyxl_reads_is_checked_whole_first(tmp_path):
+    """A shared formula sends the book to openpyxl, whose int() reads '3_5' as 35: the view
+    reads every part first, and refuses."""
+    path = tmp_path / "book.xlsx"
+    _shared_formula_book(path)
+    _rewrite(path, "xl/worksheets/sheet1.xml", "<v>2</v>", "<v>3_5</v>")
+    with pytest.raises(xlsx.Refused, match="cell Sheet!A2 holds '3_5'"):
+        xlsx.read(path)
+    with pytest.raises(safety.UnsafeFile, match="cell Sheet!A2 holds '3_5'"):
+        safety.read_workbook_safely(path)

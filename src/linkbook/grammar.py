@@ -8,7 +8,9 @@ that `formulas` implements — in one regex pass and one operator-precedence pas
 same graph `formulas`' parser would: the same operators and functions from `formulas`' own tables,
 the same constants, the same inputs under the same names, the same order of operations
 (`formulas`' precedence and left associativity, unary minus above ^ as in Excel), repeated
-subexpressions computed once, as `formulas` shares them (by their expression text).
+subexpressions computed once, as `formulas` shares them (by their expression text).  The text
+of a node is never built: it is known by its length and a hash made from its parts' (see
+_Reader._node), so memory grows linearly with a formula's length, not with its square.
 tests/test_grammar.py checks that node by node against `formulas` on every formula of the bundled
 books and on random formulas in and around the grammar.
 
@@ -23,6 +25,7 @@ function the formula calls, numbers with leading zeros or of hundreds of digits)
 """
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass
 
@@ -53,6 +56,10 @@ _R1C1 = re.compile(r"[Rr][0-9]*(?:[Cc][0-9]*)?|[Cc][0-9]*")
 _BOOLEAN_START = re.compile(r"(?:TRUE|FALSE)(?![A-Za-z0-9.])", re.IGNORECASE)
 _LONGEST_NUMBER = 300       # Python will not read an integer of over 4,300 digits
 _MAX_ROW, _MAX_COL = 1048576, 16384
+# Expression texts are compared by length and a polynomial hash modulo a Mersenne prime; texts
+# that hash alike are compared in full, so a collision costs time, never a wrong graph.
+_MODULUS = (1 << 127) - 1
+_BASE = 0x9E3779B97F4A7C15F39CC0605CEDC835
 
 # formulas' precedences (tokens/operator.py): all binary operators are left-associative.
 _PRECEDENCE = {"u-": 7, "u+": 7, "%": 6, "^": 5, "*": 4, "/": 4, "+": 3, "-": 3, "&": 2,
@@ -93,8 +100,12 @@ class _Reader:
     def __init__(self, formula: str, known_functions):
         self.formula, self.known = formula, known_functions
         self.nodes: list[tuple] = []
-        self.index: dict[str, int] = {}     # node of each expression text
-        self.exprs: list[str] = []          # expression text of each node
+        # A node's expression text as parts: literal strings and indices of earlier nodes
+        # (whose texts they stand for); its length and hash; the nodes of each (length, hash).
+        self.parts: list[tuple] = []
+        self.lengths: list[int] = []
+        self.hashes: list[int] = []
+        self.index: dict[tuple[int, int], list[int]] = {}
         self.values: list[int] = []         # node indices of the operands read so far
         self.stack: list[list] = []         # operators, and ["(", None] / ["call", name, n]
         self.spans: list[tuple[int, int]] = []
@@ -161,16 +172,16 @@ class _Reader:
     def _operand(self, kind: str, token: str, m) -> int:
         """The node of an operand; its expression text is the token as written, or the key."""
         if kind == "string":
-            return self._node(token, ("const", token[1:-1].replace('""', '"')))
+            return self._node((token,), ("const", token[1:-1].replace('""', '"')))
         if kind == "number":
             if len(token) > 1 and token[0] == "0" and token[1].isdigit() \
                     or len(token) > _LONGEST_NUMBER:
                 raise _Unread       # 007: formulas evaluates the text as Python does
             value = float(token) if any(c in token for c in ".eE") else int(token)
-            return self._node(token, ("const", value))
+            return self._node((token,), ("const", value))
         if kind == "name":
             if token.upper() in ("TRUE", "FALSE"):
-                return self._node(token, ("const", token.upper() == "TRUE"))
+                return self._node((token,), ("const", token.upper() == "TRUE"))
             if _R1C1.fullmatch(token) or _BOOLEAN_START.match(token):
                 raise _Unread
             key = token.upper()
@@ -181,7 +192,7 @@ class _Reader:
             key = self._ref_key(m)
         self.spans.append(m.span(kind))
         self.keys.append(key)
-        return self._node(key, ("input", key))
+        return self._node((key,), ("input", key))
 
     @staticmethod
     def _ref_key(m) -> str:
@@ -259,15 +270,17 @@ class _Reader:
     def _apply(self, op: str) -> None:
         args = self._arguments(1 if op in _UNARY else 2)
         self.functions.add(op)
-        texts = [self.exprs[a] for a in args]
-        expr = (f"{op[1]}{texts[0]}" if op in ("u-", "u+") else f"{texts[0]}%" if op == "%"
-                else f"({texts[0]} {op} {texts[1]})")
-        self.values.append(self._node(expr, ("call", op, args)))
+        parts = ((op[1], args[0]) if op in ("u-", "u+") else (args[0], "%") if op == "%"
+                 else ("(", args[0], f" {op} ", args[1], ")"))
+        self.values.append(self._node(parts, ("call", op, args)))
 
     def _apply_call(self, name: str, n: int) -> None:
         args = self._arguments(n)
-        expr = f"{name.upper()}({', '.join(self.exprs[a] for a in args)})"
-        self.values.append(self._node(expr, ("call", name, args)))
+        parts = [f"{name.upper()}("]
+        for i, a in enumerate(args):
+            parts += (", ", a) if i else (a,)
+        parts.append(")")
+        self.values.append(self._node(tuple(parts), ("call", name, args)))
 
     def _arguments(self, n: int) -> tuple[int, ...]:
         """The last n operands read, taken off the operand stack."""
@@ -277,13 +290,52 @@ class _Reader:
         del self.values[len(self.values) - n:]
         return args
 
-    def _node(self, expr: str, node: tuple) -> int:
-        """The index of the node of this expression text, as formulas writes it (its node id):
-        a repeated subexpression is computed once, and what formulas takes for one (-(A1%) and
-        (-A1)%, both -A1%) is one node here too."""
-        i = self.index.get(expr)
-        if i is None:
-            i = self.index[expr] = len(self.nodes)
-            self.nodes.append(node)
-            self.exprs.append(expr)
-        return i
+    def _node(self, parts: tuple, node: tuple) -> int:
+        """The index of the node of this expression text (`parts`: literal strings and earlier
+        nodes standing for their texts), as formulas writes it (its node id): a repeated
+        subexpression is computed once, and what formulas takes for one (-(A1%) and (-A1)%,
+        both -A1%) is one node here too."""
+        length, digest = 0, 0
+        for part in parts:
+            if isinstance(part, str):
+                n, h = len(part), _hash(part)
+            else:
+                n, h = self.lengths[part], self.hashes[part]
+            digest = (digest * _power(n) + h) % _MODULUS
+            length += n
+        alike = self.index.setdefault((length, digest), [])
+        for i in alike:
+            if self.parts[i] == parts or self._text(self.parts[i]) == self._text(parts):
+                return i
+        alike.append(len(self.nodes))
+        self.nodes.append(node)
+        self.parts.append(parts)
+        self.lengths.append(length)
+        self.hashes.append(digest)
+        return len(self.nodes) - 1
+
+    def _text(self, parts: tuple) -> str:
+        """The expression text the parts stand for (only to tell apart texts that hash alike)."""
+        out, todo = [], list(reversed(parts))
+        while todo:
+            part = todo.pop()
+            if isinstance(part, str):
+                out.append(part)
+            else:
+                todo.extend(reversed(self.parts[part]))
+        return "".join(out)
+
+
+@functools.lru_cache(maxsize=4096)     # short texts' lengths recur
+def _power(n: int) -> int:
+    """_BASE ** n modulo _MODULUS: what a hash is multiplied by when n characters follow."""
+    return pow(_BASE, n, _MODULUS)
+
+
+@functools.lru_cache(maxsize=4096)     # tokens and operator texts recur
+def _hash(text: str) -> int:
+    """The polynomial hash of a text: its characters' code points as digits in base _BASE."""
+    digest = 0
+    for ch in text:
+        digest = (digest * _BASE + ord(ch)) % _MODULUS
+    return digest

@@ -10,19 +10,27 @@ book's verify; verify needs only what this module reads. The view gives what ope
 own rules: numbers with a '.', 'e' or 'E' are floats, others ints; a formula cell's value is
 '=' and its text; shared strings lose 'x005F_'. A book with what the view does not model (a
 shared, array or data-table formula, a number styled as a date, a chart sheet, a cell without
-its address) raises Unsupported: the caller loads it with openpyxl.
+its address) raises Unsupported, after the whole book has been read: the caller loads it with
+openpyxl.
+
+What the spreadsheet application would read otherwise than this view (and openpyxl) raises
+Refused: a number not in XML Schema's lexical form (Python's int() reads '3_5' and full-width
+digits, the application does not), a defined name given twice (Excel compares names without
+case), a sheet-scoped name that shadows a workbook name with another target (a formula on that
+sheet reads the scoped one), and a formula longer or more deeply nested than Excel allows.
 """
 from __future__ import annotations
 
 import functools
+import math
 import re
 import zipfile
 from dataclasses import dataclass
 from pathlib import PurePosixPath
 from xml.etree.ElementTree import iterparse
 
-__all__ = ["Unsupported", "read", "coordinate_to_tuple", "column_index", "column_letter",
-           "xml_text", "xml_attribute", "NOT_IN_XML"]
+__all__ = ["Unsupported", "Refused", "read", "coordinate_to_tuple", "column_index",
+           "column_letter", "xml_text", "xml_attribute", "NOT_IN_XML"]
 
 MAIN = "{http://schemas.openxmlformats.org/spreadsheetml/2006/main}"
 REL = "{http://schemas.openxmlformats.org/officeDocument/2006/relationships}"
@@ -35,10 +43,28 @@ DATE_FORMAT_IDS = frozenset([*range(14, 23), *range(27, 37), *range(45, 48), *ra
 _NOT_DATE_PARTS = re.compile(r'"[^"]*"|\\.|_.|\*.|\[[^\]]*\]')
 _DATE_LETTERS = re.compile(r"[dmyhsDMYHS]")
 _COORDINATE = re.compile(r"^\$?([A-Za-z]{1,3})\$?(\d+)$")
+# xsd:decimal / xsd:double without INF and NaN (LibreOffice reads those, and overflowing
+# exponents, as infinities no formula can use), around XML white space (ASCII only: \s would
+# take Unicode spaces too). LibreOffice reads the digits before a stray character ('3_5' as 3,
+# '0x10' as 0): a book that needs that reading is refused.
+_NUMBER = re.compile(r"[ \t\r\n]*[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+                     r"[ \t\r\n]*")
+_INDEX = re.compile(r"[ \t\r\n]*[0-9]+[ \t\r\n]*")
+# Excel's limits (Microsoft's "Excel specifications and limits"): 8,192 characters of formula
+# contents, 64 levels of nested functions (counted here as brackets of any kind, so a formula
+# of 64 nested brackets or fewer passes whatever its brackets are).
+FORMULA_LENGTH_LIMIT = 8192
+FORMULA_NESTING_LIMIT = 64
+_BRACKETS = re.compile(r'"(?:[^"]|"")*"|\'(?:[^\']|\'\')*\'|[()]')
 
 
 class Unsupported(Exception):
     """The book uses something this view does not model; read it with openpyxl."""
+
+
+class Refused(Exception):
+    """The application would read the book otherwise than this view and openpyxl do: it cannot
+    be verified (one line naming the part and the cell or name)."""
 
 
 class Cell:
@@ -82,7 +108,7 @@ class DefinedName:
     name: str
     attr_text: str
     hidden: bool = False
-    localSheetId: int | None = None
+    localSheetId: str | None = None     # the index of the sheet, as written
 
 
 class Workbook:
@@ -106,46 +132,84 @@ class Workbook:
 
 
 def read(path) -> Workbook:
-    """The view of the workbook at `path` (already checked by safety.check_zip)."""
+    """The view of the workbook at `path` (already checked by safety.check_zip). Refused is
+    raised before Unsupported: every part is read, so a book openpyxl will load has been
+    checked whole."""
     with zipfile.ZipFile(path) as zf:
         names = set(zf.namelist())
         strings = _shared_strings(zf, "xl/sharedStrings.xml") if "xl/sharedStrings.xml" in \
             names else []
         date_styles = _date_styles(zf) if "xl/styles.xml" in names else frozenset()
-        sheets, defined = _workbook(zf)
+        unmodelled: list[str] = []
+        sheets, defined = _workbook(zf, unmodelled)
         worksheets = []
         for title, part in sheets:
             ws = Worksheet(title)
             with zf.open(part) as f:
-                _read_cells(f, ws, strings, date_styles)
+                _read_cells(f, ws, strings, date_styles, part, unmodelled)
             worksheets.append(ws)
+    if unmodelled:
+        raise Unsupported(unmodelled[0])
     return Workbook(worksheets, defined)
 
 
-def _workbook(zf: zipfile.ZipFile):
-    """[(sheet title, part name)] in tab order, and the workbook-scoped defined names."""
+def _workbook(zf: zipfile.ZipFile, unmodelled: list[str]):
+    """[(sheet title, part name)] in tab order (worksheets only: any other kind of sheet is
+    noted in `unmodelled`), and the workbook-scoped defined names."""
     targets = {}
     with zf.open("xl/_rels/workbook.xml.rels") as f:
         for _, el in iterparse(f):
             if el.tag == f"{PKG_REL}Relationship":
                 targets[el.get("Id")] = (el.get("Target"), el.get("Type", ""))
-    sheets, defined = [], {}
+    titles, sheets, entries = [], [], []
     with zf.open("xl/workbook.xml") as f:
         for _, el in iterparse(f):
             if el.tag == f"{MAIN}sheet":
+                titles.append(el.get("name"))
                 target, kind = targets[el.get(f"{REL}id")]
                 if not kind.endswith("/worksheet"):
-                    raise Unsupported(f"sheet {el.get('name')!r} is not a worksheet")
+                    unmodelled.append(f"sheet {el.get('name')!r} is not a worksheet")
+                    continue
                 part = (target.lstrip("/") if target.startswith("/")
                         else str(PurePosixPath("xl") / target))
                 sheets.append((el.get("name"), part))
             elif el.tag == f"{MAIN}definedName":
-                local = el.get("localSheetId")
-                if local is None:
-                    name = el.get("name")
-                    defined[name] = DefinedName(name, el.text or "",
-                                                el.get("hidden") in ("1", "true"))
-    return sheets, defined
+                entries.append(DefinedName(el.get("name") or "", el.text or "",
+                                           el.get("hidden") in ("1", "true"),
+                                           el.get("localSheetId")))
+    return sheets, _workbook_names(entries, titles)
+
+
+def _workbook_names(entries: list[DefinedName], titles: list[str]) -> dict[str, DefinedName]:
+    """The workbook-scoped names, once every name is known to be unambiguous: Excel compares
+    names without case, so A_2 after a_2 in one scope is a second definition (Excel reads the
+    first, openpyxl the last); and a formula on a sheet with its own a_2 reads that one, which
+    verify, reading workbook-scoped names only, would not."""
+    def scope(entry: DefinedName) -> str:
+        local = entry.localSheetId
+        if local is None:
+            return "the workbook"
+        title = titles[int(local)] if local.isascii() and local.isdigit() and int(local) < len(titles) else None
+        return f"sheet {title!r}" if title is not None else f"sheet number {local}"
+
+    seen: dict[tuple, DefinedName] = {}
+    for entry in entries:
+        key = (entry.localSheetId, entry.name.upper())
+        first = seen.setdefault(key, entry)
+        if first is not entry:
+            raise Refused(f"xl/workbook.xml: the name {entry.name!r} is defined twice in "
+                          f"{scope(entry)} ({first.attr_text!r} and {entry.attr_text!r}; "
+                          "names are compared without case)")
+    for entry in entries:
+        shadowed = seen.get((None, entry.name.upper()))
+        if entry.localSheetId is not None and shadowed is not None \
+                and entry.attr_text.upper() != shadowed.attr_text.upper():
+            raise Refused(f"xl/workbook.xml: the name {entry.name!r} of {scope(entry)} "
+                          f"({entry.attr_text!r}) shadows the workbook's {shadowed.name!r} "
+                          f"({shadowed.attr_text!r}) for that sheet's formulas; verify reads "
+                          "workbook names only")
+    return {e.name: DefinedName(e.name, e.attr_text, e.hidden) for e in entries
+            if e.localSheetId is None}
 
 
 def _text(el) -> str:
@@ -182,7 +246,10 @@ def _date_styles(zf: zipfile.ZipFile) -> frozenset[int]:
                      or (fmt in codes and _DATE_LETTERS.search(_NOT_DATE_PARTS.sub("", codes[fmt]))))
 
 
-def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int]) -> None:
+def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int], part: str,
+                unmodelled: list[str]) -> None:
+    """The cells of one sheet part into `ws`; what the view does not model is noted in
+    `unmodelled` and reading goes on, so that all of the book is checked."""
     c_tag, v_tag, f_tag, is_tag = f"{MAIN}c", f"{MAIN}v", f"{MAIN}f", f"{MAIN}is"
     row_tag = f"{MAIN}row"
     cells = ws._cells
@@ -201,13 +268,18 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
         kind = el.get("t", "n")
         formula = el.find(f_tag)
         if formula is not None:
+            text = formula.text or ""
+            if len(text) > FORMULA_LENGTH_LIMIT or text.count("(") > FORMULA_NESTING_LIMIT:
+                _check_formula(text, part, ws.title, address)
             if formula.get("t") in ("shared", "array", "dataTable"):
-                raise Unsupported(f"{ws.title}!{address}: a {formula.get('t')} formula")
-            cells[(row, col)] = Cell(ws, row, col, "=" + (formula.text or ""), "f")
+                unmodelled.append(f"{ws.title}!{address}: a {formula.get('t')} formula")
+            cells[(row, col)] = Cell(ws, row, col, "=" + text, "f")
             stored = el.findtext(v_tag)
             if stored or kind == "str":     # an empty <v> stores nothing, but as empty text
-                ws.stored[(row, col)] = (kind, strings[int(stored)] if kind == "s"
-                                         else stored or "")
+                ws.stored[(row, col)] = (
+                    kind, strings[_index(stored, part, ws.title, address)] if kind == "s"
+                    else _number(stored, part, ws.title, address) if kind == "n"
+                    else stored or "")
             continue
         if kind == "inlineStr":
             child = el.find(is_tag)
@@ -217,18 +289,57 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
             if value is not None:
                 if kind == "n":
                     if int(el.get("s", 0)) in date_styles:
-                        raise Unsupported(f"{ws.title}!{address}: a number shown as a date")
-                    value = float(value) if ("." in value or "e" in value or "E" in value) \
-                        else int(value)
+                        unmodelled.append(f"{ws.title}!{address}: a number shown as a date")
+                    value = _number(value, part, ws.title, address)
                 elif kind == "s":
-                    value = strings[int(value)]
+                    value = strings[_index(value, part, ws.title, address)]
                 elif kind == "b":
-                    value = bool(int(value))
+                    value = bool(_index(value, part, ws.title, address))
                 elif kind == "str":
                     kind = "s"
                 elif kind == "d":
-                    raise Unsupported(f"{ws.title}!{address}: an ISO 8601 date")
+                    unmodelled.append(f"{ws.title}!{address}: an ISO 8601 date")
         cells[(row, col)] = Cell(ws, row, col, value, kind)
+
+
+def _number(text: str, part: str, title: str, address: str) -> int | float:
+    """A stored number as openpyxl reads it (a '.', 'e' or 'E' makes a float), once it is
+    known to be one the application reads as the same finite number."""
+    if _NUMBER.fullmatch(text) and math.isfinite(as_float := float(text)):
+        # a whole number beyond a double's range is refused above, before int() could read it
+        return as_float if ("." in text or "e" in text or "E" in text) else int(text)
+    raise Refused(f"{part}: cell {title}!{address} holds {text!r}, not a finite number in "
+                  "XML Schema's form (the spreadsheet application would read it otherwise)")
+
+
+def _index(text: str, part: str, title: str, address: str) -> int:
+    """A shared string's index or a boolean's 0/1: digits only."""
+    if _INDEX.fullmatch(text):
+        return int(text)
+    raise Refused(f"{part}: cell {title}!{address} holds {text!r} where a whole number "
+                  "belongs")
+
+
+def _check_formula(text: str, part: str, title: str, address: str) -> None:
+    """Refuse a formula Excel would not hold, before anything parses it: parsing costs grow
+    with its length, and deep nesting crashes LibreOffice. (Called where the formula is long
+    or has many brackets: a cheap test in the loop over cells keeps the call off most.)"""
+    if len(text) > FORMULA_LENGTH_LIMIT:
+        raise Refused(f"{part}: cell {title}!{address} has a formula of {len(text):,} "
+                      f"characters; Excel's limit is {FORMULA_LENGTH_LIMIT:,}")
+    if text.count("(") <= FORMULA_NESTING_LIMIT:
+        return
+    depth = deepest = 0
+    for m in _BRACKETS.finditer(text):
+        bracket = m.group()
+        if bracket == "(":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif bracket == ")":
+            depth -= 1
+    if deepest > FORMULA_NESTING_LIMIT:
+        raise Refused(f"{part}: cell {title}!{address} has a formula nested {deepest} brackets "
+                      f"deep; Excel's limit is {FORMULA_NESTING_LIMIT} levels")
 
 
 def coordinate_to_tuple(coordinate: str) -> tuple[int, int]:
