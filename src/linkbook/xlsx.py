@@ -308,15 +308,22 @@ def _number(text: str, part: str, title: str, address: str) -> int | float:
     if _NUMBER.fullmatch(text) and math.isfinite(as_float := float(text)):
         # a whole number beyond a double's range is refused above, before int() could read it
         return as_float if ("." in text or "e" in text or "E" in text) else int(text)
-    raise Refused(f"{part}: cell {title}!{address} holds {text!r}, not a finite number in "
-                  "XML Schema's form (the spreadsheet application would read it otherwise)")
+    raise Refused(f"{part}: cell {title}!{address} holds {_shown(text)}, not a finite number "
+                  "in XML Schema's form (the spreadsheet application would read it otherwise)")
+
+
+def _shown(text: str, most: int = 40) -> str:
+    """A cell's text for a one-line message: whole when short, else its start and its length."""
+    if len(text) <= most:
+        return repr(text)
+    return f"{text[:most]!r}… ({len(text):,} characters)"
 
 
 def _index(text: str, part: str, title: str, address: str) -> int:
     """A shared string's index or a boolean's 0/1: digits only."""
     if _INDEX.fullmatch(text):
         return int(text)
-    raise Refused(f"{part}: cell {title}!{address} holds {text!r} where a whole number "
+    raise Refused(f"{part}: cell {title}!{address} holds {_shown(text)} where a whole number "
                   "belongs")
 
 
