@@ -21,8 +21,8 @@ both before it lays out a cell (builder.book_size) and refuses a book over eithe
 """
 from __future__ import annotations
 
+import ast
 import math
-import re
 
 from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, OFFSET_KIND, RATE_KIND
 from .safety import MAX_UNCOMPRESSED
@@ -120,7 +120,27 @@ def check_input(field: str, value: float, is_angle: bool) -> float:
 
 # Keys of the mechanism language whose numbers are lengths (ground points too).
 LENGTH_KEYS = ("length", "p_length", "q_length", "local", "distances", "distance", "offset")
-_NUMBER = re.compile(r"(?<![\w.])(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+def _number_terms(text: str) -> list[float]:
+    """The numbers a length expression adds as lengths of their own: the terms of its outermost
+    sum (`a6 - 200` → 200, `120` → 120). A number inside a product, a quotient or a function's
+    arguments is a factor, a ratio or an angle (`a2*PI()/180`), not a length."""
+    try:
+        node = ast.parse(text.replace("^", "**"), mode="eval").body
+    except (SyntaxError, ValueError, RecursionError):
+        return []       # not an expression: the language names it
+    terms, todo = [], [node]
+    while todo:
+        node = todo.pop()
+        if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Add, ast.Sub)):
+            todo += [node.left, node.right]
+        elif isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.UAdd, ast.USub)):
+            todo.append(node.operand)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) \
+                and not isinstance(node.value, bool):
+            terms.append(abs(float(node.value)))
+    return terms[::-1]
 
 
 def written_lengths(description: dict) -> dict[str, float]:
@@ -136,9 +156,9 @@ def written_lengths(description: dict) -> dict[str, float]:
             if value != 0:
                 found[field] = float(value)
         elif isinstance(value, str):
-            for i, m in enumerate(_NUMBER.findall(value)):
-                if float(m) != 0:
-                    found[f"{field} ({m})" if i or field in found else field] = float(m)
+            for i, term in enumerate(_number_terms(value)):
+                if term != 0:
+                    found[f"{field} ({term:g})" if i or field in found else field] = term
         elif isinstance(value, list):
             for i, v in enumerate(value):
                 numbers(f"{field}[{i}]", v)
