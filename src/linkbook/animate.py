@@ -48,6 +48,8 @@ class Animation:
     frames: list[Frame]
     whole_turn: bool = True       # else the GIF plays forward, then back
     link_colours: list[str] = field(default_factory=list)   # hex, one per link (the chart's)
+    link_kinds: list[str] = field(default_factory=list)     # "link", or a slider's "guide",
+                                                            # "slot" or "block"
 
 
     @property
@@ -94,7 +96,8 @@ def _frames(path: Path, wb, meta: dict, step: float | None) -> Animation:
         or (step is None and abs(column[-1] - column[0] - 360.0) < 1e-9))
     return Animation(meta.get("title", path.stem), symbol, unit, meta.get("length_unit", ""),
                      _link_names(pos), pos.get("traced"), frames, whole_turn=whole_turn,
-                     link_colours=drawing_colours(pos["drawing"]))
+                     link_colours=drawing_colours(pos["drawing"]),
+                     link_kinds=[link.get("kind", "link") for link in pos["drawing"]])
 
 
 def _sweep_column(wb, sweep: dict) -> list[float]:
@@ -220,14 +223,7 @@ def render(anim: Animation, size: int = DEFAULT_SIZE, progress=None) -> list:
             for piece in pieces:
                 if len(piece) > 1:
                     d.line(piece, fill=PATH_COLOUR_RGB, width=max(1, size // 300))
-        width = max(2, size // 120)
-        for k, link in enumerate(frame.links):
-            colour = _rgb(anim.link_colours[k])
-            pts = [view(x, y) for x, y in link]
-            d.line(pts, fill=colour, width=width, joint="curve")
-            r = width * 1.3
-            for px, py in pts:
-                d.ellipse((px - r, py - r, px + r, py + r), fill=colour)
+        _draw_links(d, anim, frame, view, size)
         for name in fixed:
             _ground_mark(d, view(*drawn[0].points[name]), size)
         d.text((plot[0] + 6, plot[1] + 4), f"{anim.symbol} = {_format_input(frame.value, anim.unit)}",
@@ -238,6 +234,26 @@ def render(anim: Animation, size: int = DEFAULT_SIZE, progress=None) -> list:
     if not anim.whole_turn and len(images) > 2:
         images += images[-2:0:-1]         # an actuator's stroke, or part of a turn: and back
     return images
+
+
+def _draw_links(d, anim: Animation, frame: Frame, view: _View, size: int) -> None:
+    """Guides first, then blocks (filled light, so the links show on them), then the links with
+    a dot on each joint."""
+    width = max(2, size // 120)
+    kinds = anim.link_kinds or ["link"] * len(frame.links)
+    order = {"guide": 0, "slot": 0, "block": 1}
+    for k in sorted(range(len(frame.links)), key=lambda k: order.get(kinds[k], 2)):
+        colour = _rgb(anim.link_colours[k])
+        pts = [view(x, y) for x, y in frame.links[k]]
+        if kinds[k] in ("guide", "slot"):
+            d.line(pts, fill=colour, width=max(1, width // 2))
+        elif kinds[k] == "block":
+            d.polygon(pts, fill=(225, 225, 225), outline=colour, width=width)
+        else:
+            d.line(pts, fill=colour, width=width, joint="curve")
+            r = width * 1.3
+            for px, py in pts:
+                d.ellipse((px - r, py - r, px + r, py + r), fill=colour)
 
 
 def _rgb(hex6: str) -> tuple[int, int, int]:
