@@ -171,14 +171,14 @@ def _drawing(wb, t, model: Model, meta: dict) -> None:
     links, *path = frame["series"]
     colours = drawing_colours(pos["drawing"])
     for i, link in enumerate(pos["drawing"], start=1):
+        part = link.get("kind") in PART_COLOURS      # a guide or a block: a line, no joints
         series = _mapped(ws_frame, links, tuple(link["rows"]), link_label(link, i),
-                         markers=True, width=38000, colour=colours[i - 1])
+                         markers=not part, width=38000, colour=colours[i - 1])
         if link.get("ground"):       # fixed pivots: triangles on a thinner grey line
             series.marker.symbol, series.marker.size = "triangle", 10
             series.graphicalProperties.line.width = 19050
-        elif link.get("kind") in PART_COLOURS:    # a guide or a block: a line, no joints
-            series.marker.symbol = "none"
-            series.graphicalProperties.line.width = 12700 if link["kind"] != "block" else 25400
+        elif part:
+            series.graphicalProperties.line.width = 25400 if link["kind"] == "block" else 12700
         chart.series.append(series)
     for p in path:
         chart.series.append(_mapped(ws_frame, p, tuple(p["rows"]), p["title"], width=12700,

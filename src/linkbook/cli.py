@@ -120,12 +120,21 @@ def _parser() -> argparse.ArgumentParser:
                    help="input step between frames (degrees, or the length unit for a linear "
                         "actuator; default: the book's sweep step)")
 
-    p = sub.add_parser("preview", help="render every sheet and chart of a workbook to PNG",
-                       description="Convert a workbook to PDF with LibreOffice and each page to "
-                                   "PNG with pdftoppm (needs soffice and poppler-utils).")
+    p = sub.add_parser("preview", help="print a workbook's sheets to PDF and PNG",
+                       description="Print the workbook with LibreOffice to BOOK.pdf, and each "
+                                   "printed page to BOOK-SHEET-N.png with pdftoppm (needs "
+                                   "soffice and poppler-utils).",
+                       epilog="examples:\n  linkbook preview fourbar.xlsx --sheet Mechanism "
+                              "--dpi 150\n  linkbook preview pump.xlsx --sheet Grid --sheet "
+                              "Charts -o pictures/",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("book", metavar="BOOK.xlsx")
     p.add_argument("-o", "--outdir", metavar="DIR", default=None,
-                   help="folder for the PNGs (default: BOOK_preview next to the book)")
+                   help="folder for the PDF and PNGs (default: BOOK_preview next to the book)")
+    p.add_argument("--sheet", action="append", metavar="NAME", default=None,
+                   help="a sheet to print (repeat for more; default: every visible sheet)")
+    p.add_argument("--dpi", type=_positive_int(30, 600), default=110,
+                   help="resolution of the PNGs (30-600, default 110)")
     return ap
 
 
@@ -332,19 +341,31 @@ def _animate(args) -> int:
 
 
 def _preview(args) -> int:
-    from .office import OfficeUnavailable, preview
+    from .office import OfficeUnavailable, preview, visible_sheets
     from .safety import UnsafeFile, check_zip
     book = Path(args.book)
     try:
         check_zip(book)
+        sheets = _chosen_sheets(book, args.sheet, visible_sheets(book))
         outdir = Path(args.outdir) if args.outdir else book.with_name(book.stem + "_preview")
         outdir.mkdir(parents=True, exist_ok=True)
-        for png in preview(book, outdir):
+        pictures = preview(book, outdir, dpi=args.dpi, sheets=sheets)
+        print(f"wrote {outdir / (book.stem + '.pdf')}")
+        for png in pictures:
             print(f"wrote {png}")
     except (UnsafeFile, OfficeUnavailable) as exc:
         print(f"linkbook: error: {exc}", file=sys.stderr)
         return 2
     return 0
+
+
+def _chosen_sheets(book: Path, asked: list[str] | None, visible: list[str]) -> list[str]:
+    """The sheets --sheet names, in the book's order, each a visible sheet of the book."""
+    for name in asked or []:
+        if name not in visible:
+            raise InputError("--sheet", f"{book.name} has no visible sheet {name!r} (it has "
+                                        f"{', '.join(visible)})")
+    return [name for name in visible if name in asked] if asked else visible
 
 
 def _list(verbose: bool) -> int:
