@@ -49,7 +49,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 __all__ = ["solve", "pivots", "fourbar_loops", "limit_angles", "evaluate",
-           "refined_extreme", "time_ratio", "slider_drawing"]
+           "refined_extreme", "time_ratio", "slider_drawing", "slider_parts"]
 
 _TAU = 2.0 * math.pi
 _HALF_PI = 0.5 * math.pi
@@ -1642,16 +1642,16 @@ def slider_drawing(description: Mapping, params: Mapping[str, float], sweep: Map
 
     def guide(name: str, origin: str, mover: str, line: Callable) -> None:
         """The line through `origin` over the travel of the block on `mover`."""
-        (tx, ty), (dx, dy), (mx, my) = over[origin], line(over), over[mover]
+        (tx, ty), (dx, dy), (mx, my) = over[origin], line(sweep), over[mover]
         travel = np.asarray((mx - tx) * dx + (my - ty) * dy, dtype=float)
         travel = travel[np.isfinite(travel)]
         lo, hi = (travel.min(), travel.max()) if travel.size else (math.nan, math.nan)
-        (ox, oy), (ux, uy) = at[origin], line(at)
+        (ox, oy), (ux, uy) = at[origin], line(now)
         for k, reach in ((1, lo - half_long), (2, hi + half_long)):
             out[f"{name} {k}"] = (ox + reach * ux, oy + reach * uy)
 
     def block(centre: str, line: Callable) -> None:
-        (cx, cy), (dx, dy) = at[centre], line(at)
+        (cx, cy), (dx, dy) = at[centre], line(now)
         for k, (u, v) in enumerate(((-1, -1), (1, -1), (1, 1), (-1, 1)), start=1):
             out[f"{centre} block {k}"] = (cx + u * half_long * dx - v * half_across * dy,
                                           cy + u * half_long * dy + v * half_across * dx)
@@ -1674,6 +1674,21 @@ def slider_drawing(description: Mapping, params: Mapping[str, float], sweep: Map
     return out
 
 
+def slider_parts(description: Mapping) -> list[tuple[str, ...]]:
+    """The points of each guide and each block slider_drawing places, part by part: the points
+    of one part are joined (a guide is one line, a block one rigid body), whether or not the
+    block ever closes."""
+    parts: list[tuple[str, ...]] = []
+    for step in _steps(description):
+        kind, n = step["type"], step.get("point")
+        lines = {"slider": ("guide",), "slide": ("guide",), "slot": ("guide", "slot")}.get(kind)
+        if lines:
+            parts += [(f"{n} {line} 1", f"{n} {line} 2") for line in lines]
+            centre = step["p"] if kind == "slide" else n
+            parts.append(tuple(f"{centre} block {k}" for k in range(1, 5)))
+    return parts
+
+
 def _unit(x, y) -> tuple:
     r = np.hypot(x, y)
     return x / r, y / r
@@ -1684,35 +1699,29 @@ def _slider_line(step: Mapping, params: Mapping[str, float]) -> Callable:
     direction = _scalar(step.get("direction", 0.0), params)
     if "along" not in step:
         d = _cos_sin_deg(direction)
-        return lambda points: d
+        return lambda solved: d
     u, v = step["along"]
     c, s = _cos_sin_deg(direction)
 
-    def line(points):
+    def line(solved):
+        points = solved["points"]
         ex, ey = _unit(points[v][0] - points[u][0], points[v][1] - points[u][1])
         return ex * c - ey * s, ex * s + ey * c
     return line
 
 
 def _slide_line(step: Mapping, params: Mapping[str, float]) -> Callable:
-    """A slide's line: at right angles to the link pivot→B (B = pivot + offset·e), turned by
-    the branch towards P; with no offset B is the pivot, and the line runs B→P."""
-    offset = _scalar(step["offset"], params)
-    b = _branch(step.get("branch", 1), params, "branch")
-    pivot, n, p = step["pivot"], step["point"], step["p"]
-
-    def line(points):
-        if offset == 0.0:
-            return _unit(points[p][0] - points[n][0], points[p][1] - points[n][1])
-        ex, ey = ((points[n][0] - points[pivot][0]) / offset,
-                  (points[n][1] - points[pivot][1]) / offset)
-        return -b * ey, b * ex
-    return line
+    """A slide's line: the direction this module solved for it (θ + b·π/2, θ the link's angle),
+    which stays defined where B and P meet or the offset is zero."""
+    spec = (step.get("columns") or {}).get("theta_slide")
+    key = str(spec.get("key") or "") if isinstance(spec, Mapping) else ""
+    key = key or f"theta_slide_{step['point']}"
+    return lambda solved: (np.cos(solved[key]), np.sin(solved[key]))
 
 
 def _fixed_line(step: Mapping, params: Mapping[str, float]) -> Callable:
     d = _cos_sin_deg(_scalar(step.get("direction", 0.0), params))
-    return lambda points: d
+    return lambda solved: d
 
 
 def _slot_line(step: Mapping, params: Mapping[str, float]) -> Callable:
@@ -1720,7 +1729,8 @@ def _slot_line(step: Mapping, params: Mapping[str, float]) -> Callable:
     a, b = step["slot_frame"]
     c, s = _cos_sin_deg(_scalar(step.get("slot_angle", 0.0), params))
 
-    def line(points):
+    def line(solved):
+        points = solved["points"]
         fx, fy = _unit(points[b][0] - points[a][0], points[b][1] - points[a][1])
         return fx * c - fy * s, fx * s + fy * c
     return line

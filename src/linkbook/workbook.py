@@ -469,9 +469,11 @@ def _slider_parts(t: Template, model: Model, resolve: Resolver) -> list[dict]:
         for k, (fn, sign) in enumerate(((MIN_OF, -1), (MAX_OF, 1)), start=1):
             reach = _sum([(1, f"{AGGREGATE}({fn},{SKIP_ERRORS},{travel})", "1"),
                           (sign, half_long, "1")])
+            # a block that never closes over the sweep has no travel: no guide (#N/A)
             ends.append((f"{g.point} {g.kind} {k}",
-                         tuple("=" + _sum([(1, render(o, resolve), "1"),
-                                           (1, reach, render(c, resolve))])
+                         tuple(f"=IF(COUNT({travel}),"
+                               + _sum([(1, render(o, resolve), "1"),
+                                       (1, reach, render(c, resolve))]) + ",NA())"
                                for o, c in ((g.x, g.cos), (g.y, g.sin)))))
         parts.append({"kind": g.kind, "label": f"{g.kind} of {g.point}", "points": ends})
     for b in model.blocks:
