@@ -7,6 +7,7 @@ where each quantity lives, so `verify` can read an edited workbook back.
 """
 from __future__ import annotations
 
+import re
 import weakref
 from dataclasses import dataclass, field
 
@@ -512,9 +513,14 @@ def _has_sum(text: str) -> bool:
     depth = 0
     for i, ch in enumerate(text):
         depth += (ch == "(") - (ch == ")")
-        if depth == 0 and i > 0 and ch in "+-" and text[i - 1] not in "E*/^(":
+        if depth == 0 and i > 0 and ch in "+-" and text[i - 1] not in "*/^(" \
+                and not _EXPONENT.search(text[:i]):
             return True
     return text.startswith("-")
+
+
+# a number's exponent just before a sign (1.5E-3): the sign is the number's, not a sum's
+_EXPONENT = re.compile(r"(?<![\w$.])\d+(\.\d*)?E$")
 
 
 # ---------------------------------------------------------------- Sweep sheet
