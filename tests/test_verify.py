@@ -241,6 +241,22 @@ def test_a_slider_draws_its_guide_on_its_line_and_its_block_on_its_pin(tmp_path,
     assert code == 0, out
 
 
+def test_the_guide_and_block_follow_an_edited_offset(tmp_path, capsys):
+    """The slider line's offset a1 typed in as a user would: the guide moves onto y = 35 and
+    the block with the pin; verify still agrees."""
+    path = tmp_path / "sc.xlsx"
+    assert main(["build", "slider-crank", "-o", str(path)]) == 0
+    wb = openpyxl.load_workbook(path)
+    wb["Mechanism"]["C7"] = 35.0          # a1, the first input
+    wb.save(path)
+    points, _ = _drawn(path)
+    assert points["B guide 1"][1] == pytest.approx(35.0) == points["B guide 2"][1]
+    corners = np.array([points[f"B block {k}"] for k in range(1, 5)])
+    assert corners.mean(axis=0) == pytest.approx(points["B"])
+    code, out, _ = _verify(path, capsys=capsys)
+    assert code == 0, out
+
+
 def test_a_slide_draws_its_guide_through_the_block_on_the_moving_link(tmp_path, capsys):
     """The inverted slider-crank: the block at A slides on a line through B carried by link 4;
     the guide's ends, B and A lie on one line, at every input the book is set to."""
