@@ -32,6 +32,7 @@ Lengths are in the template's unit, angles in degrees. Exit status: 0 done, 2 ba
 
 
 def _parser() -> argparse.ArgumentParser:
+    from .office import PREVIEW_DPI     # standard library only: cheap to import
     ap = argparse.ArgumentParser(
         prog="linkbook",
         description="Turn a planar mechanism into an Excel workbook of live formulas: named "
@@ -138,8 +139,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="folder for the PDF and PNGs (default: BOOK_preview next to the book)")
     p.add_argument("--sheet", action="append", metavar="NAME", default=None,
                    help="a sheet to print (repeat for more; default: every visible sheet)")
-    p.add_argument("--dpi", type=_positive_int(30, 600), default=110,
-                   help="resolution of the PNGs (30-600, default 110)")
+    p.add_argument("--dpi", type=_positive_int(30, 600), default=PREVIEW_DPI,
+                   help=f"resolution of the PNGs (30-600, default {PREVIEW_DPI})")
     return ap
 
 

@@ -25,7 +25,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 TIMEOUT_S = 300
-PREVIEW_DPI = 80
+PREVIEW_DPI = 110          # a table's small print stays readable
 XLSX_FILTER = "xlsx:Calc MS Excel 2007 XML"
 PDF_FILTER = "pdf:calc_pdf_Export"
 ERROR_CODES = frozenset({"#NULL!", "#DIV/0!", "#VALUE!", "#REF!", "#NAME?", "#NUM!", "#N/A",
