@@ -1630,7 +1630,7 @@ def slider_drawing(description: Mapping, params: Mapping[str, float], sweep: Map
     """The drawn points of every sliding block and the line it slides on, measured on solved
     points: {name: (x, y)} at the positions of `now` (a solve() result), a line's extent taken
     from the block's travel over `sweep` (another). A guide runs along its line over the
-    block's smallest to largest position, half a block further each way; a block is a
+    block's smallest to largest position; a block is a
     rectangle centred on the point it is pivoted at, its long side along its line, corners
     counter-clockwise from behind-right ("B block 1" … "B block 4"). Slider R on a line through
     T: "R guide 1", "R guide 2"; slide B (the block at P): the line through B across the link,
@@ -1647,7 +1647,7 @@ def slider_drawing(description: Mapping, params: Mapping[str, float], sweep: Map
         travel = travel[np.isfinite(travel)]
         lo, hi = (travel.min(), travel.max()) if travel.size else (math.nan, math.nan)
         (ox, oy), (ux, uy) = at[origin], line(now)
-        for k, reach in ((1, lo - half_long), (2, hi + half_long)):
+        for k, reach in ((1, lo), (2, hi)):
             out[f"{name} {k}"] = (ox + reach * ux, oy + reach * uy)
 
     def block(centre: str, line: Callable) -> None:

@@ -451,8 +451,8 @@ def _joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
 
 
 # A block is BLOCK_SQUARES grid squares of the drawing (along its line, across it), so that it
-# reads the same at any size; a guide reaches half a block beyond the block's travel over the
-# sweep, so the block never leaves it.
+# reads the same at any size; a guide runs over the block's travel in the sweep, whose ends lie
+# inside the drawing's frame.
 BLOCK_SQUARES = (0.8, 0.4)
 BLOCK_CORNERS = ((-1, -1), (1, -1), (1, 1), (-1, 1), (-1, -1))    # closed, counter-clockwise
 
@@ -467,9 +467,8 @@ def _slider_parts(t: Template, model: Model, resolve: Resolver) -> list[dict]:
     for g in model.guides:
         travel = f"{SWEEP}!${letters[g.travel]}${first}:${letters[g.travel]}${last}"
         ends = []
-        for k, (fn, sign) in enumerate(((MIN_OF, -1), (MAX_OF, 1)), start=1):
-            reach = _sum([(1, f"{AGGREGATE}({fn},{SKIP_ERRORS},{travel})", "1"),
-                          (sign, half_long, "1")])
+        for k, fn in enumerate((MIN_OF, MAX_OF), start=1):
+            reach = f"{AGGREGATE}({fn},{SKIP_ERRORS},{travel})"
             # a block that never closes over the sweep has no travel: no guide (#N/A)
             ends.append((f"{g.point} {g.kind} {k}",
                          tuple(f"=IF(COUNT({travel}),"
