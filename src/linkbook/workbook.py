@@ -447,6 +447,10 @@ def _joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
             row += 1
         drawing.append({"joints": [name for name, _ in part["points"]], "rows": [first, row - 1],
                         "ground": False, "kind": part["kind"], "label": part["label"]})
+    for col in ("L", "M"):      # a slider's rows name longer points (`B guide 1`): shown whole
+        names = [ws[f"{col}{r}"].value for r in range(7, row)]
+        widest = max((text_width(n) for n in names if isinstance(n, str)), default=0.0)
+        ws.column_dimensions[col].width = max(ws.column_dimensions[col].width, round(widest, 1))
     return {"cells": cells, "drawing": drawing, "chart_row": row + 1}
 
 
