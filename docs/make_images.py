@@ -26,12 +26,9 @@ DPI = 110
 def pages(name: str, tmp: Path, sheets=("Mechanism",)) -> list[Path]:
     """The printed pages of the named sheets of a freshly built bundled book."""
     built, _ = builder.make(templates.load(name))
-    for ws in built.workbook.worksheets:
-        if ws.title not in sheets:
-            ws.sheet_state = "hidden"
     path = tmp / f"{name}.xlsx"
     built.workbook.save(path)
-    return office.preview(path, tmp / name, dpi=DPI)
+    return office.preview(path, tmp / name, dpi=DPI, sheets=list(sheets))
 
 
 def drawing_box(page: Image.Image) -> tuple[int, int, int, int] | None:

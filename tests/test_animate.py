@@ -17,7 +17,7 @@ from conftest import template
 from PIL import Image
 
 from linkbook import builder, cli, engine, verifier, workbook
-from linkbook.animate import AnimationError, frames_of, render, write_mp4
+from linkbook.animate import AnimationError, frame_at, frames_of, render, write_mp4
 
 BUNDLED = sorted(p.stem for p in Path(__file__).resolve().parents[1].glob("templates/*.toml"))
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")
@@ -161,8 +161,8 @@ def test_bad_requests_are_one_line(books, tmp_path, capsys, argv, message):
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
 
 
-@pytest.mark.parametrize("argv", [["--size", "601"], ["--size", "50"], ["--fps", "0"],
-                                  ["--step", "-5"], ["--step", "nan"]])
+@pytest.mark.parametrize("argv", [["--size", "50"], ["--fps", "0"], ["--step", "-5"],
+                                  ["--step", "nan"], ["--at", "nan"], ["--at", "x"]])
 def test_bad_options_exit_2(books, argv, capsys):
     with pytest.raises(SystemExit) as stop:
         cli.main(["animate", str(books["fourbar"])] + argv)
@@ -186,3 +186,56 @@ def test_a_sweep_with_a_shorter_last_step_still_loops(tmp_path):
     builder.build_file(template("fourbar", step=25), path)
     anim = frames_of(path)
     assert anim.whole_turn and [f.value for f in anim.frames][-2:] == [325.0, 350.0]
+
+
+def test_an_odd_size_makes_a_gif_and_is_refused_for_an_mp4_naming_it(books, tmp_path, capsys):
+    """Only an MP4's frames are made of 2 × 2 blocks: a GIF takes any size, and the refusal of
+    an odd MP4 names the .mp4, not "video frames" of a GIF."""
+    gif = tmp_path / "odd.gif"
+    assert cli.main(["animate", str(books["fourbar"]), "-o", str(gif), "--size", "601",
+                     "--step", "90"]) == 0
+    with Image.open(gif) as im:
+        assert im.size == (601, 601)
+    capsys.readouterr()
+    assert cli.main(["animate", str(books["fourbar"]), "-o", str(tmp_path / "odd.mp4"),
+                     "--size", "601"]) == 2
+    err = capsys.readouterr().err
+    assert "--size: must be even for an .mp4 (got 601)" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "odd.mp4").exists()
+
+
+def test_at_is_the_frame_of_that_input(books):
+    """--at evaluates the book's drawing at one value: the very frame the sweep has there."""
+    one = frame_at(books["slider-crank"], 60.0)
+    sweep = frames_of(books["slider-crank"])
+    assert len(one.frames) == 1
+    assert one.frames[0].links == next(f.links for f in sweep.frames if f.value == 60.0)
+    assert one.fixed == ["A0"]       # the sweep's joints that never move, not all of them
+
+
+def test_at_writes_a_png_and_an_svg_with_the_guide_and_block(books, tmp_path, capsys):
+    import xml.etree.ElementTree as ET
+    png, svg = tmp_path / "pos.png", tmp_path / "pos.svg"
+    for out in (png, svg):
+        assert cli.main(["animate", str(books["slider-crank"]), "--at", "60", "-o", str(out),
+                         "--size", "300"]) == 0
+        assert f"wrote {out}: the mechanism at θ12 = 60" in capsys.readouterr().out
+    with Image.open(png) as im:
+        assert im.size == (300, 300) and im.format == "PNG"
+    ns = {"s": "http://www.w3.org/2000/svg"}
+    root = ET.parse(svg).getroot()
+    polygons = root.findall("s:polygon", ns)
+    assert len(polygons) == 1 and len(polygons[0].get("points").split()) == 5   # the block
+    lines = root.findall("s:polyline", ns)
+    assert len(lines) == 3            # the guide, link 2, link 3
+    assert any("θ12 = 60°" in (t.text or "") for t in root.findall("s:text", ns))
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--at", "60", "-o", "x.gif"], "--output: with --at, a .png or .svg file"),
+    (["--at", "130"], "the loop cannot close at θ12 = 130"),
+])
+def test_bad_pictures_are_one_line(books, tmp_path, capsys, argv, message):
+    assert cli.main(["animate", str(books["non-grashof"])] + argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err

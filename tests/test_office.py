@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT / "src") not in sys.path:        # conftest does this too; kept for --noconftest
     sys.path.insert(0, str(ROOT / "src"))
 
-from linkbook import builder, cached, charts, office, package, templates, verifier, workbook  # noqa: E402
+from linkbook import builder, cached, charts, cli, office, package, templates, verifier, workbook  # noqa: E402
 
 REL_TOL = 1e-9          # LibreOffice stores 15 significant digits
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")      # cannot turn fully: #N/A rows
@@ -63,11 +63,12 @@ def _built_and_values(name: str, sets, tmp: Path):
 
 
 def _book_with_charts(name: str, tmp: Path, sets=()) -> Path:
-    """The full layout: the charts (framed live: they read no values), then the print setup."""
+    """The full layout: the charts (framed live: they read no values), then the print setup
+    every built book gets (the Mechanism sheet one page wide)."""
     t = _template(name, sets)
     b = workbook.build(t)
     charts.add_charts(b, t, b.model)
-    office.apply_print_setup(b.workbook)
+    builder._print_setup(b.workbook)
     path = tmp / f"{name}-charts.xlsx"
     b.workbook.save(path)
     return path
@@ -480,3 +481,54 @@ def test_preview_pages_are_pictures(name, tmp_path, monkeypatch):
     for page in pages:
         ink = _ink(page)
         assert 0.002 < ink < 0.6, f"{page.name}: {ink:.1%} ink, blank or black"
+
+
+# ---------------------------------------------------------------- preview by sheet
+def test_a_sheet_alone_is_the_only_visible_one_and_prints_no_other(tmp_path):
+    """The copy preview prints one sheet from: read back by openpyxl, only that sheet is
+    visible and active, and no hidden sheet keeps a print area (LibreOffice prints those)."""
+    book = _book_with_charts("fourbar", tmp_path)
+    assert office.visible_sheets(book) == [ws.title for ws in openpyxl.load_workbook(
+        book).worksheets if ws.sheet_state == "visible"]
+    assert {"Mechanism", "Drawing data"} < set(office.visible_sheets(book))
+    copy = office._only_sheets(book, ["Drawing data"], tmp_path / "one")
+    wb = openpyxl.load_workbook(copy)
+    assert [ws.title for ws in wb.worksheets if ws.sheet_state == "visible"] == ["Drawing data"]
+    assert wb.active.title == "Drawing data"
+    for ws in wb.worksheets:
+        if ws.title != "Drawing data":
+            assert not ws.print_area and not ws.print_title_rows, ws.title
+    assert wb["Drawing data"].print_title_rows.replace("$", "") == "3:4"
+    assert office._file_word("Drawing data") == "Drawing_data"
+
+
+@pytest.mark.libreoffice
+@pytest.mark.slow
+def test_preview_prints_the_chosen_sheets_named_by_sheet_with_the_pdf(tmp_path, capsys):
+    require_soffice()
+    book = _book_with_charts("fourbar", tmp_path)
+    out = tmp_path / "pictures"
+    assert cli.main(["preview", str(book), "--sheet", "Drawing data", "--sheet", "Mechanism",
+                     "--dpi", "40", "-o", str(out)]) == 0
+    pdf = out / f"{book.stem}.pdf"
+    pngs = sorted(p.name for p in out.glob("*.png"))
+    assert pdf.is_file() and pngs[0] == f"{book.stem}-Drawing_data-1.png"
+    assert f"{book.stem}-Mechanism-1.png" in pngs
+    assert all(re.fullmatch(rf"{book.stem}-(Mechanism|Drawing_data)-\d+\.png", p) for p in pngs)
+    # poppler reads the kept PDF: the two sheets in the book's order, no other, one PNG a page
+    text = subprocess.run(["pdftotext", str(pdf), "-"], capture_output=True, text=True,
+                          check=True).stdout
+    footers = re.findall(r"^(.+), page \d+ of \d+$", text, flags=re.M)
+    assert footers and set(footers) == {"Mechanism", "Drawing data"}
+    assert footers.index("Drawing data") > footers.index("Mechanism")
+    assert len(footers) == len(pngs)
+    width, height, _, _ = _png_rgb(out / f"{book.stem}-Mechanism-1.png")
+    assert abs(max(width, height) - 29.7 / 2.54 * 40) <= 2        # A4 at 40 dpi
+
+
+def test_preview_refuses_a_sheet_the_book_lacks_in_one_line(tmp_path, capsys):
+    book = _book_with_charts("fourbar", tmp_path)
+    assert cli.main(["preview", str(book), "--sheet", "Grid"]) == 2
+    err = capsys.readouterr().err
+    assert "--sheet: fourbar-charts.xlsx has no visible sheet 'Grid'" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "fourbar-charts_preview").exists()

@@ -7,6 +7,7 @@ import math
 import zipfile
 from pathlib import Path
 
+import numpy as np
 import openpyxl
 import pytest
 
@@ -207,3 +208,89 @@ def test_libreoffice_recalculates_every_bundled_book_like_the_reference(name, tm
     bad = [(c.name, m) for c in report.checks for m in c.mismatches[:2]]
     assert report.ok, bad[:5]
     assert report.cells == len(formula_cells(openpyxl.load_workbook(path)))
+
+
+# ---------------------------------------------------------------- sliders' guides and blocks
+def _drawn(path: Path) -> tuple[dict, dict]:
+    """{drawn point name: (x, y)} as the book computes it, and the frame's grid square."""
+    wb = openpyxl.load_workbook(path)
+    values = engine.evaluate(wb)
+    meta = builder.workbook.read_meta(wb)
+    pos, frame = meta["position"], meta["frames"]["frames"][0]
+    points = {name: (values[("Mechanism", f"N{link['rows'][0] + k}")],
+                     values[("Mechanism", f"O{link['rows'][0] + k}")])
+              for link in pos["drawing"] for k, name in enumerate(link["joints"])}
+    return points, values[(meta["frames"]["sheet"], frame["cells"]["square"])]
+
+
+def test_a_slider_draws_its_guide_on_its_line_and_its_block_on_its_pin(tmp_path, capsys):
+    """The slider-crank of Example 1 (offset a1 = 20 mm, published s14 = 273.9 at θ12 = 60°):
+    the guide lies on the line y = 20 and spans the pin's travel; the block is 0.8 × 0.4 grid
+    squares, centred on the pin B = (273.9, 20)."""
+    path = tmp_path / "sc.xlsx"
+    assert main(["build", "slider-crank", "-o", str(path)]) == 0
+    points, square = _drawn(path)
+    (x1, y1), (x2, y2) = points["B guide 1"], points["B guide 2"]
+    assert y1 == pytest.approx(20.0, abs=1e-9) and y2 == pytest.approx(20.0, abs=1e-9)
+    assert x1 < 273.9 < x2            # the pin's least and greatest x over the sweep
+    corners = np.array([points[f"B block {k}"] for k in range(1, 5)])
+    assert corners.mean(axis=0) == pytest.approx([273.9, 20.0], abs=0.05)
+    assert np.ptp(corners[:, 0]) == pytest.approx(0.8 * square)
+    assert np.ptp(corners[:, 1]) == pytest.approx(0.4 * square)
+    code, out, _ = _verify(path, capsys=capsys)
+    assert code == 0, out
+
+
+def test_the_guide_and_block_follow_an_edited_offset(tmp_path, capsys):
+    """The slider line's offset a1 typed in as a user would: the guide moves onto y = 35 and
+    the block with the pin; verify still agrees."""
+    path = tmp_path / "sc.xlsx"
+    assert main(["build", "slider-crank", "-o", str(path)]) == 0
+    wb = openpyxl.load_workbook(path)
+    wb["Mechanism"]["C7"] = 35.0          # a1, the first input
+    wb.save(path)
+    points, _ = _drawn(path)
+    assert points["B guide 1"][1] == pytest.approx(35.0) == points["B guide 2"][1]
+    corners = np.array([points[f"B block {k}"] for k in range(1, 5)])
+    assert corners.mean(axis=0) == pytest.approx(points["B"])
+    code, out, _ = _verify(path, capsys=capsys)
+    assert code == 0, out
+
+
+def test_a_slide_draws_its_guide_through_the_block_on_the_moving_link(tmp_path, capsys):
+    """The inverted slider-crank: the block at A slides on a line through B carried by link 4;
+    the guide's ends, B and A lie on one line, at every input the book is set to."""
+    path = tmp_path / "isc.xlsx"
+    assert main(["build", "inverted-slider-crank", "-o", str(path)]) == 0
+    for angle in (30.0, 200.0):
+        wb = openpyxl.load_workbook(path)
+        wb["Mechanism"]["I7"] = angle
+        wb.save(path)
+        points, _ = _drawn(path)
+        (ax, ay), (bx, by) = points["A"], points["B"]
+        for end in ("B guide 1", "B guide 2"):
+            gx, gy = points[end]
+            cross = (gx - bx) * (ay - by) - (gy - by) * (ax - bx)
+            assert abs(cross) < 1e-9 * 100 ** 2, (angle, end)
+        code, out, _ = _verify(path, capsys=capsys)
+        assert code == 0, out
+
+
+@pytest.mark.parametrize("name, point, column, old, new", [
+    ("toggle-press", "C block 2", "O", "+0.4*", "-0.4*"),      # a sign in the block's formula
+    ("slider-crank", "B guide 1", "N", "AGGREGATE(5,", "AGGREGATE(4,"),   # the guide's reach
+    ("inverted-slider-crank", "A block 3", "N", "-0.2*", "+0.2*")])
+def test_verify_finds_a_broken_guide_or_block_formula(name, point, column, old, new, tmp_path,
+                                                      capsys):
+    path = tmp_path / f"{name}.xlsx"
+    assert main(["build", name, "-o", str(path)]) == 0
+    wb = openpyxl.load_workbook(path)
+    ws = wb["Mechanism"]
+    row = next(r for r in range(1, ws.max_row + 1) if ws[f"M{r}"].value == point)
+    cell = ws[f"{column}{row}"]
+    assert old in cell.value, f"{point}: no {old!r} in {cell.value}"
+    cell.value = cell.value.replace(old, new, 1)
+    wb.save(path)
+    code, out, _ = _verify(path, capsys=capsys)
+    assert code == 1, out
+    assert f"Mechanism!{column}{row}" in out and "likely cause" in out

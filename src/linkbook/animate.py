@@ -48,6 +48,9 @@ class Animation:
     frames: list[Frame]
     whole_turn: bool = True       # else the GIF plays forward, then back
     link_colours: list[str] = field(default_factory=list)   # hex, one per link (the chart's)
+    link_kinds: list[str] = field(default_factory=list)     # "link", or a slider's "guide",
+                                                            # "slot" or "block"
+    fixed: list[str] | None = None    # the joints that never move over the sweep
 
 
     @property
@@ -55,28 +58,36 @@ class Animation:
         return [f for f in self.frames if f.links is not None]
 
 
-def frames_of(path: Path, step: float | None = None) -> Animation:
+def frames_of(path: Path, step: float | None = None, at: float | None = None) -> Animation:
     """Evaluate the book at every input value of its sweep (or from the sweep's start to its end
-    by `step`) and read the drawing data of each."""
+    by `step`, or at the one value `at`) and read the drawing data of each."""
     from .safety import load_workbook_safely
     wb = load_workbook_safely(path)
     meta = layout.read_meta(wb)
     if meta is None or "position" not in meta or "sweep" not in meta:
         raise AnimationError(f"{path}: not a linkbook workbook (no build record sheet)")
     try:
-        return _frames(path, wb, meta, step)
+        return _frames(path, wb, meta, step, at)
     except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
         raise AnimationError(f"{path}: the build record (sheet {layout.META}) does not match "
                              f"the workbook ({type(exc).__name__}: {exc})") from None
 
 
-def _frames(path: Path, wb, meta: dict, step: float | None) -> Animation:
+def frame_at(path: Path, value: float) -> Animation:
+    """The book's drawing at one input value: an Animation of one frame."""
+    return frames_of(path, at=value)
+
+
+def _frames(path: Path, wb, meta: dict, step: float | None, at: float | None = None
+            ) -> Animation:
     pos, sweep = meta["position"], meta["sweep"]
     sheet, cell = pos["sheet"], pos["input_cell"]
     if sheet not in wb.sheetnames:
         raise AnimationError(f"{path}: the sheet {sheet!r} is missing")
     column = _sweep_column(wb, sweep)
     inputs = _input_values(column, step, _input_label(wb, sheet, cell, meta)[1] == "deg")
+    if at is not None:      # the sweep too: which joints never move (the pivots to mark)
+        inputs = [at, *inputs]
     x_col, y_col = layout.DRAWING_COLUMNS
     read = [(sheet, f"{col}{r}") for link in pos["drawing"] for r in range(link["rows"][0],
                                                                         link["rows"][1] + 1)
@@ -89,12 +100,15 @@ def _frames(path: Path, wb, meta: dict, step: float | None) -> Animation:
     symbol, unit = _input_label(wb, sheet, cell, meta)
     # a whole turn loops: by --step, or the sweep's own rows over 360° (its last step may be
     # shorter, when the step does not divide the turn)
-    whole_turn = unit == "deg" and (
+    whole_turn = at is None and unit == "deg" and (
         abs(inputs[-1] + (inputs[1] - inputs[0]) - inputs[0] - 360.0) < 1e-9
-        or (step is None and abs(column[-1] - column[0] - 360.0) < 1e-9))
+        or (step is None and len(inputs) > 1 and abs(column[-1] - column[0] - 360.0) < 1e-9))
+    fixed = _fixed_points([f for f in frames if f.links is not None] or frames)
     return Animation(meta.get("title", path.stem), symbol, unit, meta.get("length_unit", ""),
-                     _link_names(pos), pos.get("traced"), frames, whole_turn=whole_turn,
-                     link_colours=drawing_colours(pos["drawing"]))
+                     _link_names(pos), pos.get("traced"), frames[:1] if at is not None else frames,
+                     whole_turn=whole_turn, link_colours=drawing_colours(pos["drawing"]),
+                     link_kinds=[link.get("kind", "link") for link in pos["drawing"]],
+                     fixed=fixed)
 
 
 def _sweep_column(wb, sweep: dict) -> list[float]:
@@ -203,7 +217,7 @@ def render(anim: Animation, size: int = DEFAULT_SIZE, progress=None) -> list:
     legend_h = int(size * 0.06) * ((len(anim.link_names) + (1 if anim.traced else 0) + 2) // 3)
     plot = (margin_l, margin_t, size - int(size * 0.04), size - int(size * 0.09) - legend_h)
     view = _View(drawn, plot)
-    fixed = _fixed_points(drawn)
+    fixed = anim.fixed if anim.fixed is not None else _fixed_points(drawn)
     skipped = len(anim.frames) - len(drawn)
     background = _background(Image, ImageDraw, anim, view, size, font, small, skipped, legend_h)
     pieces: list[list[tuple[float, float]]] = [[]]    # the path, cut where frames are left out
@@ -220,14 +234,7 @@ def render(anim: Animation, size: int = DEFAULT_SIZE, progress=None) -> list:
             for piece in pieces:
                 if len(piece) > 1:
                     d.line(piece, fill=PATH_COLOUR_RGB, width=max(1, size // 300))
-        width = max(2, size // 120)
-        for k, link in enumerate(frame.links):
-            colour = _rgb(anim.link_colours[k])
-            pts = [view(x, y) for x, y in link]
-            d.line(pts, fill=colour, width=width, joint="curve")
-            r = width * 1.3
-            for px, py in pts:
-                d.ellipse((px - r, py - r, px + r, py + r), fill=colour)
+        _draw_links(d, anim, frame, view, size)
         for name in fixed:
             _ground_mark(d, view(*drawn[0].points[name]), size)
         d.text((plot[0] + 6, plot[1] + 4), f"{anim.symbol} = {_format_input(frame.value, anim.unit)}",
@@ -238,6 +245,26 @@ def render(anim: Animation, size: int = DEFAULT_SIZE, progress=None) -> list:
     if not anim.whole_turn and len(images) > 2:
         images += images[-2:0:-1]         # an actuator's stroke, or part of a turn: and back
     return images
+
+
+def _draw_links(d, anim: Animation, frame: Frame, view: _View, size: int) -> None:
+    """Guides first, then blocks (filled light, so the links show on them), then the links with
+    a dot on each joint."""
+    width = max(2, size // 120)
+    kinds = anim.link_kinds or ["link"] * len(frame.links)
+    order = {"guide": 0, "slot": 0, "block": 1}
+    for k in sorted(range(len(frame.links)), key=lambda k: order.get(kinds[k], 2)):
+        colour = _rgb(anim.link_colours[k])
+        pts = [view(x, y) for x, y in frame.links[k]]
+        if kinds[k] in ("guide", "slot"):
+            d.line(pts, fill=colour, width=max(1, width // 2))
+        elif kinds[k] == "block":
+            d.polygon(pts, fill=(225, 225, 225), outline=colour, width=width)
+        else:
+            d.line(pts, fill=colour, width=width, joint="curve")
+            r = width * 1.3
+            for px, py in pts:
+                d.ellipse((px - r, py - r, px + r, py + r), fill=colour)
 
 
 def _rgb(hex6: str) -> tuple[int, int, int]:
@@ -326,6 +353,59 @@ def _background(Image, ImageDraw, anim: Animation, view: _View, size: int, font,
                                       "out: the loop cannot close there", fill=(170, 0, 0),
                font=small, anchor="mm")
     return im
+
+
+def write_svg(anim: Animation, out: Path, size: int = DEFAULT_SIZE) -> None:
+    """The first drawn frame as SVG: links, guides and blocks in the book's colours at equal
+    scales, joints as dots, the title and the input value; a grid line every nice step."""
+    frame = anim.drawn[0] if anim.drawn else None
+    if frame is None:
+        raise AnimationError("the loop cannot close at this input value: nothing to draw")
+    margin = size * 0.08
+    view = _View([frame], (margin, margin * 1.4, size - margin, size - margin))
+    left, top, right, bottom = view.box
+    out_lines = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{size}" height="{size}" '
+                 f'viewBox="0 0 {size} {size}" font-family="DejaVu Sans, sans-serif">',
+                 f'<rect width="{size}" height="{size}" fill="white"/>']
+    step = nice_step(min(view.hi_x - view.lo_x, view.hi_y - view.lo_y))
+    for lo, hi, vertical in ((view.lo_x, view.hi_x, True), (view.lo_y, view.hi_y, False)):
+        v = math.ceil(lo / step) * step
+        while v <= hi + 1e-12 * step:
+            p = view(v, v)
+            a, b = ((p[0], top), (p[0], bottom)) if vertical else ((left, p[1]), (right, p[1]))
+            out_lines.append(f'<line x1="{a[0]:.2f}" y1="{a[1]:.2f}" x2="{b[0]:.2f}" '
+                             f'y2="{b[1]:.2f}" stroke="#e1e1e1"/>')
+            v += step
+    width = max(2, size // 120)
+    kinds = anim.link_kinds or ["link"] * len(frame.links)
+    order = {"guide": 0, "slot": 0, "block": 1}
+    for k in sorted(range(len(frame.links)), key=lambda k: order.get(kinds[k], 2)):
+        colour = "#" + anim.link_colours[k]
+        pts = " ".join(f"{x:.2f},{y:.2f}" for x, y in (view(*p) for p in frame.links[k]))
+        if kinds[k] == "block":
+            out_lines.append(f'<polygon points="{pts}" fill="#e1e1e1" stroke="{colour}" '
+                             f'stroke-width="{width}"/>')
+            continue
+        thin = kinds[k] in ("guide", "slot")
+        out_lines.append(f'<polyline points="{pts}" fill="none" stroke="{colour}" '
+                         f'stroke-width="{max(1, width // 2) if thin else width}" '
+                         'stroke-linejoin="round"/>')
+        if not thin:
+            out_lines += [f'<circle cx="{x:.2f}" cy="{y:.2f}" r="{width * 1.3:.2f}" '
+                          f'fill="{colour}"/>' for x, y in (view(*p) for p in frame.links[k])]
+    title = f"{anim.title}: {anim.symbol} = {_format_input(frame.value, anim.unit)}"
+    out_lines += [f'<rect x="{left}" y="{top}" width="{right - left}" height="{bottom - top}" '
+                  'fill="none" stroke="#969696"/>',
+                  f'<text x="{size / 2}" y="{margin * 0.8:.2f}" text-anchor="middle" '
+                  f'font-size="{max(11, size // 45)}">{_xml_text(title)}</text>',
+                  f'<text x="{right}" y="{size - margin * 0.4:.2f}" text-anchor="end" '
+                  f'font-size="{max(10, size // 55)}">grid {_tick(step, step)} '
+                  f'{_xml_text(anim.length_unit)}</text>', "</svg>"]
+    out.write_text("\n".join(out_lines) + "\n", encoding="utf-8")
+
+
+def _xml_text(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
 def write_video(images: list, out: Path, fps: int, kind: str) -> None:

@@ -30,6 +30,8 @@ DRAWING_CM = 15.0
 LINK_COLOURS = ("4F81BD", "C0504D", "9BBB59", "F79646", "4BACC6", "1F497D", "948A54")
 PATH_COLOUR = "8064A2"
 GROUND_COLOUR = "7F7F7F"
+# a slider's guide: a thin grey line; its block: a dark outline (neither takes a link's colour)
+PART_COLOURS = {"guide": GROUND_COLOUR, "slot": GROUND_COLOUR, "block": "404040"}
 SWEEP_CHART_CM = 18         # the width of the Charts sheet's charts
 SIDE, WIDTH_RATIO = 0.75, 1.45    # a framed chart: square plot area, legend on the right
 GRID_COLOUR = "9DC3E6"     # the frame's gridlines, one per grid square: light blue paper
@@ -41,6 +43,8 @@ def drawing_colours(drawing: list[dict]) -> list[str]:
     for link in drawing:
         if link.get("ground"):
             colours.append(GROUND_COLOUR)
+        elif link.get("kind") in PART_COLOURS:
+            colours.append(PART_COLOURS[link["kind"]])
         else:
             colours.append(LINK_COLOURS[k % len(LINK_COLOURS)])
             k += 1
@@ -167,11 +171,14 @@ def _drawing(wb, t, model: Model, meta: dict) -> None:
     links, *path = frame["series"]
     colours = drawing_colours(pos["drawing"])
     for i, link in enumerate(pos["drawing"], start=1):
+        part = link.get("kind") in PART_COLOURS      # a guide or a block: a line, no joints
         series = _mapped(ws_frame, links, tuple(link["rows"]), link_label(link, i),
-                         markers=True, width=38000, colour=colours[i - 1])
+                         markers=not part, width=38000, colour=colours[i - 1])
         if link.get("ground"):       # fixed pivots: triangles on a thinner grey line
             series.marker.symbol, series.marker.size = "triangle", 10
             series.graphicalProperties.line.width = 19050
+        elif part:
+            series.graphicalProperties.line.width = 25400 if link["kind"] == "block" else 12700
         chart.series.append(series)
     for p in path:
         chart.series.append(_mapped(ws_frame, p, tuple(p["rows"]), p["title"], width=12700,

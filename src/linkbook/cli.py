@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from pathlib import Path
@@ -53,6 +54,7 @@ VERIFY_OUTPUT = """output:
 
 
 def _parser() -> argparse.ArgumentParser:
+    from .office import PREVIEW_DPI     # standard library only: cheap to import
     ap = argparse.ArgumentParser(
         prog="linkbook",
         description="Turn a planar mechanism into an Excel workbook of live formulas: named "
@@ -159,21 +161,34 @@ def _parser() -> argparse.ArgumentParser:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     a.add_argument("book", metavar="BOOK.xlsx")
     a.add_argument("-o", "--output", metavar="OUT.gif",
-                   help="where to write, .gif or .mp4 (default: BOOK.gif next to the book)")
+                   help="where to write, .gif or .mp4; with --at a .png or .svg (default: "
+                        "BOOK.gif, or BOOK-at-VALUE.png, next to the book)")
+    a.add_argument("--at", type=_finite_float, default=None, metavar="VALUE",
+                   help="one picture of the mechanism at this input value (degrees, or the "
+                        "length unit for a linear actuator) instead of a moving one")
     a.add_argument("--fps", type=_positive_int(1, 100), default=20,
                    help="frames per second (1-100, default 20)")
-    a.add_argument("--size", type=_even_size, default=600,
-                   help="width and height in pixels (an even number, 100-4000, default 600)")
+    a.add_argument("--size", type=_positive_int(100, 4000), default=600,
+                   help="width and height in pixels (100-4000, default 600; even for an .mp4)")
     a.add_argument("--step", type=_positive_float, default=None,
                    help="input step between frames (degrees, or the length unit for a linear "
                         "actuator; default: the book's sweep step)")
 
-    p = sub.add_parser("preview", help="render every sheet and chart of a workbook to PNG",
-                       description="Convert a workbook to PDF with LibreOffice and each page to "
-                                   "PNG with pdftoppm (needs soffice and poppler-utils).")
+    p = sub.add_parser("preview", help="print a workbook's sheets to PDF and PNG",
+                       description="Print the workbook with LibreOffice to BOOK.pdf, and each "
+                                   "printed page to BOOK-SHEET-N.png with pdftoppm (needs "
+                                   "soffice and poppler-utils).",
+                       epilog="examples:\n  linkbook preview fourbar.xlsx --sheet Mechanism "
+                              "--dpi 150\n  linkbook preview pump.xlsx --sheet Grid --sheet "
+                              "Charts -o pictures/",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("book", metavar="BOOK.xlsx")
     p.add_argument("-o", "--outdir", metavar="DIR", default=None,
-                   help="folder for the PNGs (default: BOOK_preview next to the book)")
+                   help="folder for the PDF and PNGs (default: BOOK_preview next to the book)")
+    p.add_argument("--sheet", action="append", metavar="NAME", default=None,
+                   help="a sheet to print (repeat for more; default: every visible sheet)")
+    p.add_argument("--dpi", type=_positive_int(30, 600), default=PREVIEW_DPI,
+                   help=f"resolution of the PNGs (30-600, default {PREVIEW_DPI})")
     return ap
 
 
@@ -408,11 +423,13 @@ def _positive_int(lo: int, hi: int):
     return parse
 
 
-def _even_size(text: str) -> int:
-    value = _positive_int(100, 4000)(text)
-    if value % 2:
-        raise argparse.ArgumentTypeError(f"must be even (got {value}): video frames are "
-                                          "made of 2 × 2 blocks")
+def _finite_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number (got {text})")
     return value
 
 
@@ -431,10 +448,16 @@ def _animate(args) -> int:
     from .files import write_atomic
     from .safety import UnsafeFile
     book = Path(args.book)
+    if args.at is not None:
+        return _picture(args, book)
     out = Path(args.output) if args.output else book.with_suffix(".gif")
     kind = out.suffix.lower().lstrip(".")
     if kind not in ("gif", "mp4"):
-        raise InputError("--output", f"a .gif or .mp4 file (got {out.name})")
+        raise InputError("--output", f"a .gif or .mp4 file (got {out.name}; a .png or .svg "
+                                     "is one picture: give --at VALUE)")
+    if kind == "mp4" and args.size % 2:
+        raise InputError("--size", f"must be even for an .mp4 (got {args.size}): its frames "
+                                   "are made of 2 × 2 blocks")
     try:
         if not book.is_file():
             raise AnimationError(f"{book}: no such file")
@@ -453,21 +476,63 @@ def _animate(args) -> int:
     return 0
 
 
+def _picture(args, book: Path) -> int:
+    """`animate --at VALUE`: the mechanism at one input value, as PNG or SVG."""
+    from .animate import AnimationError, frame_at, render, write_svg
+    from .files import write_atomic
+    from .safety import UnsafeFile
+    out = Path(args.output) if args.output else book.with_name(f"{book.stem}-at-{args.at:g}.png")
+    kind = out.suffix.lower().lstrip(".")
+    if kind not in ("png", "svg"):
+        raise InputError("--output", f"with --at, a .png or .svg file (got {out.name})")
+    try:
+        if not book.is_file():
+            raise AnimationError(f"{book}: no such file")
+        anim = frame_at(book, args.at)
+        if not anim.drawn:
+            raise AnimationError(f"{book}: the loop cannot close at {anim.symbol} = {args.at:g}")
+        if kind == "svg":
+            write_atomic(out, lambda tmp: write_svg(anim, tmp, args.size))
+        else:
+            image = render(anim, args.size)[0]
+            write_atomic(out, lambda tmp: image.save(tmp, format="PNG"))
+    except OSError as exc:
+        print(f"linkbook: error: cannot write {out}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except (AnimationError, UnsafeFile) as exc:
+        print(f"linkbook: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"wrote {out}: the mechanism at {anim.symbol} = {args.at:g} {anim.unit}".rstrip())
+    return 0
+
+
 def _preview(args) -> int:
     from .files import ensure_folder
-    from .office import OfficeUnavailable, preview
+    from .office import OfficeUnavailable, preview, visible_sheets
     from .safety import UnsafeFile, check_zip
     book = Path(args.book)
     try:
         check_zip(book)
+        sheets = _chosen_sheets(book, args.sheet, visible_sheets(book))
         outdir = ensure_folder(Path(args.outdir) if args.outdir
                                else book.with_name(book.stem + "_preview"), "--outdir")
-        for png in preview(book, outdir):
+        pictures = preview(book, outdir, dpi=args.dpi, sheets=sheets)
+        print(f"wrote {outdir / (book.stem + '.pdf')}")
+        for png in pictures:
             print(f"wrote {png}")
     except (UnsafeFile, OfficeUnavailable) as exc:
         print(f"linkbook: error: {exc}", file=sys.stderr)
         return 2
     return 0
+
+
+def _chosen_sheets(book: Path, asked: list[str] | None, visible: list[str]) -> list[str]:
+    """The sheets --sheet names, in the book's order, each a visible sheet of the book."""
+    for name in asked or []:
+        if name not in visible:
+            raise InputError("--sheet", f"{book.name} has no visible sheet {name!r} (it has "
+                                        f"{', '.join(visible)})")
+    return [name for name in visible if name in asked] if asked else visible
 
 
 def _list(verbose: bool) -> int:

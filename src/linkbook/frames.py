@@ -30,6 +30,10 @@ FRAME_CELLS = (("xmin", "x min", True), ("xmax", "x max", True), ("ymin", "y min
                ("need", "size needed per grid square", True),
                ("decade", "its power of ten", True), ("square", "grid square", True),
                ("label", "legend of the scale bar", False))
+# The drawing's grid square (its frame is the sheet's first block: labels in A, values in B);
+# the Mechanism sheet sizes the sliders' blocks in it.
+SQUARE_CELL = (f"{quote_sheetname(SHEET)}!$B$"
+               f"{FIRST_ROW + [key for key, _, _ in FRAME_CELLS].index('square')}")
 MAPPED_FORMAT = "0.0000"
 MAPPED_WIDTH = 14        # a header's longest word, "[squares]", in bold
 

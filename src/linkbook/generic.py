@@ -49,7 +49,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 import numpy as np
 
 __all__ = ["solve", "pivots", "fourbar_loops", "limit_angles", "evaluate",
-           "refined_extreme", "time_ratio"]
+           "refined_extreme", "time_ratio", "slider_drawing", "slider_parts"]
 
 _TAU = 2.0 * math.pi
 _HALF_PI = 0.5 * math.pi
@@ -1616,6 +1616,124 @@ def time_ratio(description: Mapping, params: Mapping[str, float], key: str) -> f
     low, _ = refined_extreme(description, params, key, angles, values, np.argmin, rounds=5)
     one = (low - top) % 360.0
     return max(one, 360.0 - one) / min(one, 360.0 - one)
+
+
+# --------------------------------------------------------------------------------------------
+# The drawing's sliders: guides and blocks (docs/mechanisms.md, "Drawings")
+# --------------------------------------------------------------------------------------------
+
+BLOCK = (0.8, 0.4)     # a block's length along its line and its width, in grid squares
+
+
+def slider_drawing(description: Mapping, params: Mapping[str, float], sweep: Mapping,
+                   now: Mapping, square: float) -> dict[str, Point]:
+    """The drawn points of every sliding block and the line it slides on, measured on solved
+    points: {name: (x, y)} at the positions of `now` (a solve() result), a line's extent taken
+    from the block's travel over `sweep` (another). A guide runs along its line over the
+    block's smallest to largest position; a block is a
+    rectangle centred on the point it is pivoted at, its long side along its line, corners
+    counter-clockwise from behind-right ("B block 1" … "B block 4"). Slider R on a line through
+    T: "R guide 1", "R guide 2"; slide B (the block at P): the line through B across the link,
+    on P's side; slot P: its fixed line ("P guide") and the slot ("P slot"), the block along
+    the fixed line."""
+    half_long, half_across = BLOCK[0] / 2 * square, BLOCK[1] / 2 * square
+    at, over = now["points"], sweep["points"]
+    out: dict[str, Point] = {}
+
+    def guide(name: str, origin: str, mover: str, line: Callable) -> None:
+        """The line through `origin` over the travel of the block on `mover`."""
+        (tx, ty), (dx, dy), (mx, my) = over[origin], line(sweep), over[mover]
+        travel = np.asarray((mx - tx) * dx + (my - ty) * dy, dtype=float)
+        travel = travel[np.isfinite(travel)]
+        lo, hi = (travel.min(), travel.max()) if travel.size else (math.nan, math.nan)
+        (ox, oy), (ux, uy) = at[origin], line(now)
+        for k, reach in ((1, lo), (2, hi)):
+            out[f"{name} {k}"] = (ox + reach * ux, oy + reach * uy)
+
+    def block(centre: str, line: Callable) -> None:
+        (cx, cy), (dx, dy) = at[centre], line(now)
+        for k, (u, v) in enumerate(((-1, -1), (1, -1), (1, 1), (-1, 1)), start=1):
+            out[f"{centre} block {k}"] = (cx + u * half_long * dx - v * half_across * dy,
+                                          cy + u * half_long * dy + v * half_across * dx)
+
+    for step in _steps(description):
+        kind, n = step["type"], step.get("point")
+        if kind == "slider":
+            line = _slider_line(step, params)
+            guide(f"{n} guide", step["through"], n, line)
+            block(n, line)
+        elif kind == "slide":
+            line = _slide_line(step, params)
+            guide(f"{n} guide", n, step["p"], line)
+            block(step["p"], line)
+        elif kind == "slot":
+            fixed = _fixed_line(step, params)
+            guide(f"{n} guide", step["through"], n, fixed)
+            guide(f"{n} slot", step["slot_through"], n, _slot_line(step, params))
+            block(n, fixed)
+    return out
+
+
+def slider_parts(description: Mapping) -> list[tuple[str, ...]]:
+    """The points of each guide and each block slider_drawing places, part by part: the points
+    of one part are joined (a guide is one line, a block one rigid body), whether or not the
+    block ever closes."""
+    parts: list[tuple[str, ...]] = []
+    for step in _steps(description):
+        kind, n = step["type"], step.get("point")
+        lines = {"slider": ("guide",), "slide": ("guide",), "slot": ("guide", "slot")}.get(kind)
+        if lines:
+            parts += [(f"{n} {line} 1", f"{n} {line} 2") for line in lines]
+            centre = step["p"] if kind == "slide" else n
+            parts.append(tuple(f"{centre} block {k}" for k in range(1, 5)))
+    return parts
+
+
+def _unit(x, y) -> tuple:
+    r = np.hypot(x, y)
+    return x / r, y / r
+
+
+def _slider_line(step: Mapping, params: Mapping[str, float]) -> Callable:
+    """A slider's line direction: fixed at `direction` degrees, or along its link U→V."""
+    direction = _scalar(step.get("direction", 0.0), params)
+    if "along" not in step:
+        d = _cos_sin_deg(direction)
+        return lambda solved: d
+    u, v = step["along"]
+    c, s = _cos_sin_deg(direction)
+
+    def line(solved):
+        points = solved["points"]
+        ex, ey = _unit(points[v][0] - points[u][0], points[v][1] - points[u][1])
+        return ex * c - ey * s, ex * s + ey * c
+    return line
+
+
+def _slide_line(step: Mapping, params: Mapping[str, float]) -> Callable:
+    """A slide's line: the direction this module solved for it (θ + b·π/2, θ the link's angle),
+    which stays defined where B and P meet or the offset is zero."""
+    spec = (step.get("columns") or {}).get("theta_slide")
+    key = str(spec.get("key") or "") if isinstance(spec, Mapping) else ""
+    key = key or f"theta_slide_{step['point']}"
+    return lambda solved: (np.cos(solved[key]), np.sin(solved[key]))
+
+
+def _fixed_line(step: Mapping, params: Mapping[str, float]) -> Callable:
+    d = _cos_sin_deg(_scalar(step.get("direction", 0.0), params))
+    return lambda solved: d
+
+
+def _slot_line(step: Mapping, params: Mapping[str, float]) -> Callable:
+    """A slot's direction: angle(A→B) of its frame plus slot_angle."""
+    a, b = step["slot_frame"]
+    c, s = _cos_sin_deg(_scalar(step.get("slot_angle", 0.0), params))
+
+    def line(solved):
+        points = solved["points"]
+        fx, fy = _unit(points[b][0] - points[a][0], points[b][1] - points[a][1])
+        return fx * c - fy * s, fx * s + fy * c
+    return line
 
 
 def solve(description: Mapping, params: Mapping[str, float], angles_deg) -> dict:

@@ -16,8 +16,8 @@ from fractions import Fraction
 
 from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism, on_loop)
-from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Chart, FourBarLoop, Joint, Model,
-                    Quantity, _one_group, references)
+from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Block, Chart, FourBarLoop, Guide,
+                    Joint, Model, Quantity, _one_group, references)
 from .schema import keys_of, schema, step_schemas
 from .steps import Sym, acos_or_na, input_angle, offset_slide, polar, slider, triangle
 
@@ -624,6 +624,19 @@ class Compiler:
                                 sy.label))
         self.points[name] = (key(sx.key), key(sy.key))
 
+    def slides_on(self, n: str, kind: str, origin: str, direction: tuple[str, str],
+                  travel: Sym) -> None:
+        """The line a block of step `n` slides on, drawn over the block's travel: the sweep's
+        column of its position along the line from `origin` (a hidden column: no guide)."""
+        if travel.shown:
+            ox, oy = self.points[origin]
+            self.model.guides.append(Guide(n, kind, ox.text, oy.text, *direction, travel.key))
+
+    def block(self, centre: str, direction: tuple[str, str]) -> None:
+        """A block pivoted on the point `centre`, its long side along the line it slides on."""
+        cx, cy = self.points[centre]
+        self.model.blocks.append(Block(centre, cx.text, cy.text, *direction))
+
     def angle_of(self, a: str, b: str) -> Expr:
         """angle(A→B) as Excel text: a known link's angle column, or ATAN2 of the points."""
         if (a, b) in self.rigid:
@@ -854,6 +867,8 @@ class Compiler:
         self.rigid[(n, p)] = (length, key(cols["theta"].key))
         self.witness(field, cols, ("theta", "s", "x", "y"))
         line_dir = ((f"COS({d})", f"SIN({d})") if along or not direction.zero else ("1", "0"))
+        self.slides_on(n, "guide", through, line_dir, cols["s"])
+        self.block(n, line_dir)
         self.records.append({"type": "slider", "point": n, "p": p, "through": through,
                              "along": along, "line": cols.get("line"), "direction": line_dir,
                              "theta": cols["theta"], "s": cols["s"]})
@@ -888,6 +903,9 @@ class Compiler:
                        plus(qx, f"{r}*COS({{{t}}})"), plus(qy, f"{r}*SIN({{{t}}})"))
         self.rigid[(n, p)] = (None, key(cols["theta_slide"].key))
         self.witness(field, cols, ("theta", "travel", "x", "y", "psi"))
+        slide = (f"COS({{{cols['theta_slide'].key}}})", f"SIN({{{cols['theta_slide'].key}}})")
+        self.slides_on(n, "guide", n, slide, cols["travel"])
+        self.block(p, slide)
         self.records.append({"type": "slide", "point": n, "p": p, "pivot": pivot,
                              "theta": cols["theta"], "theta_slide": cols["theta_slide"],
                              "travel": cols["travel"]})
@@ -995,6 +1013,9 @@ class Compiler:
             combine([times(ty, "1"), times(key(pos), ds)]).text
         self.add_point(field, n, cols["x"], cols["y"], x, y)
         self.witness(field, cols, ("s", "s_slot", "x", "y"))
+        self.slides_on(n, "guide", through, (dc, ds), cols["s"])
+        self.slides_on(n, "slot", e, (uc, us), cols["s_slot"])
+        self.block(n, (dc, ds))
         self.records.append({"type": "slot", "point": n, "slot_through": e, "frame": (a, b),
                              "through": through, "slot_dir": (uc, us), "direction": (dc, ds),
                              "s_slot": cols["s_slot"], "s": cols["s"]})

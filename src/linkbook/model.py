@@ -53,6 +53,31 @@ class Joint:
 
 
 @dataclass(frozen=True)
+class Guide:
+    """The line a block slides on, drawn over the block's travel. x, y: a point of the line
+    (expressions); cos, sin: its direction; travel: the sweep column of the block's signed
+    position along the line from that point."""
+    point: str          # the step's new point: the drawn points are named after it
+    kind: str           # "guide" (the line the block slides on) or "slot" (a slot's line)
+    x: str
+    y: str
+    cos: str
+    sin: str
+    travel: str
+
+
+@dataclass(frozen=True)
+class Block:
+    """A sliding block: a rectangle centred on the point (x, y), its long side along
+    (cos, sin)."""
+    point: str          # the point the block is pivoted on: the drawn corners are named after it
+    x: str
+    y: str
+    cos: str
+    sin: str
+
+
+@dataclass(frozen=True)
 class Chart:
     """An XY chart of sweep columns (keys of quantities; `_deg` suffix = the degree column)."""
     title: str
@@ -90,6 +115,8 @@ class Model:
     output: str = ""          # the main output, whose swing the summary reports
     transmissions: tuple[str, ...] = ()   # transmission angles whose range the summary reports
     fourbars: tuple[FourBarLoop, ...] = ()  # four-bar loops on the ground (Grashof, limit angles)
+    guides: list[Guide] = field(default_factory=list)    # drawn under the links
+    blocks: list[Block] = field(default_factory=list)
 
     def add(self, *quantities: Quantity) -> None:
         known = {q.key for q in self.quantities}

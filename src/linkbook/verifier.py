@@ -367,19 +367,27 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         x_cell, y_cell = pos["joints"][joint.name]
         run("joints", joint.name, pos["sheet"], [x_cell, y_cell],
             np.array(joint_values[joint.name]), "length")
+    joints = {j.name: joint_values[j.name] for j in model.joints}   # the joints table's
+    # the sliders' guides and blocks: the reference's, sized in the drawing's grid square
+    drawn, over_sweep = dict(joint_values), ref
+    if "frames" in meta:
+        square = _drawing_square(meta, values, ref, joints)
+        sliders = generic.slider_drawing(solver.description, params, ref, one, square)
+        drawn.update({name: (float(x[0]), float(y[0])) for name, (x, y) in sliders.items()})
+        over_sweep = {**ref, "points": {**ref["points"], **generic.slider_drawing(
+            solver.description, params, ref, ref, square)}}
     drawing_cells, drawing_expected = [], []
     for link in pos["drawing"]:
         for i, name in enumerate(link["joints"]):
             r = link["rows"][0] + i
             drawing_cells += [f"N{r}", f"O{r}"]
-            drawing_expected += list(joint_values[name])
+            drawing_expected += list(drawn.get(name, (math.nan, math.nan)))
     run("joints", "drawing rows", pos["sheet"], drawing_cells, np.array(drawing_expected),
         "length")
-    checks.append(_check_links(pos, solver.description, ref, size))
+    checks.append(_check_links(pos, solver.description, over_sweep, size))
     if "frames" in meta:
-        drawn = {j.name: joint_values[j.name] for j in model.joints}   # the joints table's
-        checks += _check_frames(meta, values, ref, drawn, slopes, size, is_error, error_code,
-                                tol, relative)
+        checks += _check_frames(meta, values, ref, joints, drawn, slopes, size, is_error,
+                                error_code, tol, relative)
     checks += _check_degree_windows(model, mech.input_column, sweep, pos, ref, values, size)
 
     # Derived constants: a time ratio from the reversals of its output (the reference's own
@@ -418,9 +426,11 @@ def time_ratios(description: dict) -> dict[str, str]:
 def joined_pairs(description: dict, ref: dict, size: float) -> set[frozenset]:
     """Pairs of points the reference knows are joined, found without the description's list of
     links: a step's new point and each point the step names (a crank's pivot, a dyad's two
-    ends, a slider's line, an actuator's ends; a vector's two ends), and any two points whose
-    distance never changes over the sweep (a rigid link, the ground)."""
-    pairs = set()
+    ends, a slider's line, an actuator's ends; a vector's two ends), any two points of one
+    slider's guide or of one block (generic.slider_parts), and any two points whose distance
+    never changes over the sweep (a rigid link, the ground)."""
+    pairs = {frozenset((a, b)) for part in generic.slider_parts(description)
+             for a in part for b in part if a != b}
     for step in description.get("steps", []):
         if not isinstance(step, dict):
             continue
@@ -488,27 +498,45 @@ def frame_squares(need: float) -> list[tuple[float, float]]:
     return out
 
 
-def _check_frames(meta, values, ref, joint_values, slopes, size, is_error, error_code, tol,
-                  relative) -> list[Check]:
+def _frame_extents(frame: dict, ref: dict, joint_values: dict) -> tuple[dict, dict, float]:
+    """The least and greatest x and y of what a frame holds (the reference's), and the size
+    needed per grid square."""
+    ext = frame["extent"]
+    lo, hi = {}, {}
+    for i, axis in enumerate("xy"):
+        parts = [_expected(ref, key) for key in ext[axis]]
+        if ext["position"]:
+            parts.append(np.array([xy[i] for xy in joint_values.values()]))
+        v = np.concatenate(parts) if parts else np.array([])
+        v = v[np.isfinite(v)]
+        lo[axis], hi[axis] = (float(v.min()), float(v.max())) if v.size else (0.0, 0.0)
+    need = max(hi["x"] - lo["x"], hi["y"] - lo["y"], 1e-12) * FRAME_MARGIN / (2 * FRAME_HALF)
+    return lo, hi, need
+
+
+def _drawing_square(meta: dict, values: dict, ref: dict, joint_values: dict) -> float:
+    """The drawing's grid square by the rule, from the reference's extents (where the need is
+    within rounding of a step, the one the book chose)."""
+    frame = meta["frames"]["frames"][0]
+    options = [square for _, square in frame_squares(_frame_extents(frame, ref,
+                                                                    joint_values)[2])]
+    got = values.get((meta["frames"]["sheet"], frame["cells"]["square"]))
+    return next((o for o in options if isinstance(got, (int, float))
+                 and abs(got - o) <= 1e-12 * o), options[0])
+
+
+def _check_frames(meta, values, ref, joint_values, drawn, slopes, size, is_error, error_code,
+                  tol, relative) -> list[Check]:
     """Each equal-scale chart's frame (extents, centre, grid square, the scale bar's legend)
-    from the reference's points, and each mapped cell: the reference's coordinate in squares
-    of that frame."""
+    from the reference's points (`joint_values`: the joints table's), and each mapped cell:
+    the reference's coordinate in squares of that frame (`drawn`: every drawn point's)."""
     sheet, pos = meta["frames"]["sheet"], meta["position"]
     unit = meta.get("length_unit", "mm")
     checks = []
     for frame in meta["frames"]["frames"]:
         name = "drawing" if "chart" not in frame else f"chart {frame['chart'] + 1}"
         cells = frame["cells"]
-        ext = frame["extent"]
-        lo, hi = {}, {}
-        for i, axis in enumerate("xy"):
-            parts = [_expected(ref, key) for key in ext[axis]]
-            if ext["position"]:
-                parts.append(np.array([xy[i] for xy in joint_values.values()]))
-            v = np.concatenate(parts) if parts else np.array([])
-            v = v[np.isfinite(v)]
-            lo[axis], hi[axis] = (float(v.min()), float(v.max())) if v.size else (0.0, 0.0)
-        need = max(hi["x"] - lo["x"], hi["y"] - lo["y"], 1e-12) * FRAME_MARGIN / (2 * FRAME_HALF)
+        lo, hi, need = _frame_extents(frame, ref, joint_values)
         centre = {"x": (lo["x"] + hi["x"]) / 2, "y": (lo["y"] + hi["y"]) / 2}
         expected = {"xmin": lo["x"], "xmax": hi["x"], "ymin": lo["y"], "ymax": hi["y"],
                     "cx": centre["x"], "cy": centre["y"], "need": need}
@@ -522,7 +550,7 @@ def _check_frames(meta, values, ref, joint_values, slopes, size, is_error, error
         square_check, g = _check_square(sheet, cells, values, need, size, unit, name)
         checks.append(square_check)
         for s in frame["series"]:
-            checks += _check_mapped(sheet, s, pos, values, ref, joint_values, slopes, centre,
+            checks += _check_mapped(sheet, s, pos, values, ref, drawn, slopes, centre,
                                     g, f"{name}: {s['title']}", size, is_error, error_code,
                                     tol, relative)
     return checks
@@ -565,7 +593,8 @@ def _check_mapped(sheet, series, pos, values, ref, joint_values, slopes, centre,
             world = np.full(len(cells), np.nan)
             for link in pos["drawing"]:
                 for k, joint in enumerate(link["joints"]):
-                    world[link["rows"][0] + k - series["rows"][0]] = joint_values[joint][i]
+                    world[link["rows"][0] + k - series["rows"][0]] = \
+                        joint_values.get(joint, (math.nan, math.nan))[i]
         else:
             key = series[axis]
             world = _expected(ref, key)

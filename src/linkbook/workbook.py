@@ -7,6 +7,7 @@ where each quantity lives, so `verify` can read an edited workbook back.
 """
 from __future__ import annotations
 
+import re
 import weakref
 from dataclasses import dataclass, field
 
@@ -20,7 +21,7 @@ from openpyxl.worksheet.datavalidation import DataValidation
 from . import __version__
 from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS
 from .model import (ACCEL, ANG_ACCEL, ANG_SPEED, AREA, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
-                    SPEED, Model, Resolver, header, render, unit_text)
+                    SPEED, Model, Resolver, header, parenthesize, render, unit_text)
 from .controls import control_record
 from .domain import INPUT_ANGLE_LIMIT
 from .package import Formula
@@ -449,7 +450,94 @@ def _joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
         body = link[:-1] if len(link) > 2 and link[0] == link[-1] else link
         drawing.append({"joints": list(link), "rows": [first, row - 1], "ground": ground,
                         "label": f"link {i}: " + ("ground" if ground else "".join(body))})
+    for part in _slider_parts(t, model, resolve):
+        first = row
+        for name, (x, y) in part["points"]:
+            _text(ws, f"L{row}", part["kind"])
+            _text(ws, f"M{row}", name)
+            ws[f"{x_col}{row}"], ws[f"{y_col}{row}"] = x, y
+            for col in DRAWING_COLUMNS:
+                ws[f"{col}{row}"].number_format = number_format(LENGTH, t.length_unit)
+            row += 1
+        drawing.append({"joints": [name for name, _ in part["points"]], "rows": [first, row - 1],
+                        "ground": False, "kind": part["kind"], "label": part["label"]})
+    for col in ("L", "M"):      # a slider's rows name longer points (`B guide 1`): shown whole
+        names = [ws[f"{col}{r}"].value for r in range(7, row)]
+        widest = max((text_width(n) for n in names if isinstance(n, str)), default=0.0)
+        ws.column_dimensions[col].width = max(ws.column_dimensions[col].width, round(widest, 1))
     return {"cells": cells, "drawing": drawing, "chart_row": row + 1}
+
+
+# A block is BLOCK_SQUARES grid squares of the drawing (along its line, across it), so that it
+# reads the same at any size; a guide runs over the block's travel in the sweep, whose ends lie
+# inside the drawing's frame.
+BLOCK_SQUARES = (0.8, 0.4)
+BLOCK_CORNERS = ((-1, -1), (1, -1), (1, 1), (-1, 1), (-1, -1))    # closed, counter-clockwise
+
+
+def _slider_parts(t: Template, model: Model, resolve: Resolver) -> list[dict]:
+    """The guides and blocks of the drawing: {kind, label, points: [(name, (x, y))]}, each
+    coordinate a formula at the current position sized in the drawing's grid squares."""
+    from .frames import SQUARE_CELL      # frames.py lays its cells out with this module's helpers
+    letters, first, last = _sweep_place(t, model)
+    half_long, half_across = (f"{b / 2:g}*{SQUARE_CELL}" for b in BLOCK_SQUARES)
+    parts = []
+    for g in model.guides:
+        travel = f"{SWEEP}!${letters[g.travel]}${first}:${letters[g.travel]}${last}"
+        ends = []
+        for k, fn in enumerate((MIN_OF, MAX_OF), start=1):
+            reach = f"{AGGREGATE}({fn},{SKIP_ERRORS},{travel})"
+            # a block that never closes over the sweep has no travel: no guide (#N/A)
+            ends.append((f"{g.point} {g.kind} {k}",
+                         tuple(f"=IF(COUNT({travel}),"
+                               + _sum([(1, render(o, resolve), "1"),
+                                       (1, reach, render(c, resolve))]) + ",NA())"
+                               for o, c in ((g.x, g.cos), (g.y, g.sin)))))
+        parts.append({"kind": g.kind, "label": f"{g.kind} of {g.point}", "points": ends})
+    for b in model.blocks:
+        x, y, cos, sin = (render(e, resolve) for e in (b.x, b.y, b.cos, b.sin))
+        corners = []
+        for k, (u, v) in enumerate(BLOCK_CORNERS[:-1], start=1):
+            # the corner u·(half length)·d + v·(half width)·n, n = d turned +90°
+            corners.append((f"{b.point} block {k}", (
+                "=" + _sum([(1, x, "1"), (u, half_long, cos), (-v, half_across, sin)]),
+                "=" + _sum([(1, y, "1"), (u, half_long, sin), (v, half_across, cos)]))))
+        parts.append({"kind": "block", "label": f"block at {b.point}",
+                      "points": corners + corners[:1]})
+    return parts
+
+
+def _sum(terms: list[tuple[int, str, str]]) -> str:
+    """Σ sign·term·factor as formula text; a factor 0 drops its term, 1 and −1 are written into
+    its sign (a horizontal line's formulas carry no ×0 or ×1)."""
+    out = ""
+    for sign, term, factor in terms:
+        f = factor.strip()
+        if f in ("0", "-0", "(0)") or term in ("0", "(0)"):
+            continue
+        if f in ("-1", "(-1)"):
+            sign, f = -sign, "1"
+        if f not in ("1", "(1)") or sign < 0:
+            term = f"({term})" if _has_sum(term) else term
+        text = term if f in ("1", "(1)") else f"{term}*{parenthesize(f)}"
+        out += ("-" if sign < 0 else ("+" if out else "")) + text
+    return out or "0"
+
+
+def _has_sum(text: str) -> bool:
+    """A + or − outside brackets (after the first character): the text needs brackets to be
+    multiplied or subtracted."""
+    depth = 0
+    for i, ch in enumerate(text):
+        depth += (ch == "(") - (ch == ")")
+        if depth == 0 and i > 0 and ch in "+-" and text[i - 1] not in "*/^(" \
+                and not _EXPONENT.search(text[:i]):
+            return True
+    return text.startswith("-")
+
+
+# a number's exponent just before a sign (1.5E-3): the sign is the number's, not a sum's
+_EXPONENT = re.compile(r"(?<![\w$.])\d+(\.\d*)?E$")
 
 
 # ---------------------------------------------------------------- Sweep sheet
@@ -493,15 +581,25 @@ def _degree_formula(q, ref: str, lo: float | None = None) -> str:
     return f"=MOD(DEGREES({ref}){shift},360){back}"
 
 
+def _sweep_place(t: Template, model: Model) -> tuple[dict[str, str], int, int]:
+    """The Sweep sheet's column letters by key, its first and last row of numbers."""
+    columns = _sweep_columns(model, t.mechanism.input_column)
+    letters = {key: get_column_letter(i) for i, (key, _) in enumerate(columns, start=1)}
+    return letters, SWEEP_FIRST_ROW, SWEEP_FIRST_ROW + len(t.sweep.angles()) - 1
+
+
+SWEEP_FIRST_ROW = 5
+
+
 def _sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
     mech = t.mechanism
     angles = t.sweep.angles()
     columns = _sweep_columns(model, mech.input_column)
-    letters = {key: get_column_letter(i) for i, (key, _) in enumerate(columns, start=1)}
+    letters = _sweep_place(t, model)[0]
     _text(ws, "A1", f"{t.title}: one row per {mech.input_symbol}", TITLE)
     _text(ws, "A2", f"Formulas read the named inputs on sheet Mechanism; #N/A marks "
                     f"{mech.input_word}s where the loop cannot close.", NOTE)
-    head_row, first = 4, 5
+    head_row, first = 4, SWEEP_FIRST_ROW
     formulas: dict[str, str] = {}
     resolve = Resolver(model, names, {k: f"{letters[k]}{ROW}" for k, _ in columns})
     for i, (key, q) in enumerate(columns, start=1):
