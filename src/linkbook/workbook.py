@@ -455,7 +455,8 @@ def _joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
         for name, (x, y) in part["points"]:
             _text(ws, f"L{row}", part["kind"])
             _text(ws, f"M{row}", name)
-            ws[f"{x_col}{row}"], ws[f"{y_col}{row}"] = x, y
+            set_formula(ws[f"{x_col}{row}"], x)
+            set_formula(ws[f"{y_col}{row}"], y)
             for col in DRAWING_COLUMNS:
                 ws[f"{col}{row}"].number_format = number_format(LENGTH, t.length_unit)
             row += 1
