@@ -358,6 +358,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         checks += _check_frames(meta, values, ref, drawn, slopes, size, is_error, error_code,
                                 tol, relative)
     checks += _check_degree_windows(model, mech.input_column, sweep, pos, ref, values, size)
+    checks += _check_numbers_only(meta, model, values, ref, joint_values, size)
 
     # Derived constants: a time ratio from the reversals of its output (the reference's own
     # motion, not the template's formula); any other from the reference.
@@ -553,6 +554,30 @@ def _check_mapped(sheet, series, pos, values, ref, joint_values, slopes, centre,
                 (world - centre[axis]) / square, "-", is_error, error_code, tol, relative, slope)
         out.append(c)
     return out
+
+
+def _check_numbers_only(meta, model, values, ref, joint_values, size) -> list[Check]:
+    """Each numbers-only column (what MIN and MAX read for an extent): the reference's value of
+    its source, a sweep column or a joint of the current position, or a dash where the
+    reference has none (the loop cannot close, or no joint in that row)."""
+    checks = []
+    for column in meta.get("numbers_only", []):
+        first, last = column["rows"]
+        cells = [f"{column['column']}{r}" for r in range(first, last + 1)]
+        if "sweep" in column:
+            name, unit = column["sweep"], column_unit(model, column["sweep"])
+            expected = list(_expected(ref, name))
+        else:
+            axis, unit = column["axis"], "length"
+            name = f"joints {'xy'[axis]}"
+            expected = [joint_values[j][axis] if j else math.nan for j in column["joints"]]
+        c = Check(column["sheet"], f"{name} numbers only", size)
+        compare_exact(c, column["sheet"], cells,
+                      [values.get((column["sheet"], x)) for x in cells],
+                      [float(e) if math.isfinite(e) else DASH for e in expected],
+                      units=[unit] * len(cells))
+        checks.append(c)
+    return checks
 
 
 WINDOW_STARTS = (-180.0, 180.0)   # where a degree view's 360° window may start

@@ -86,7 +86,9 @@ def build(t: Template) -> Built:
         meta["motion"] = _motion_table(ws_motion, t, model, names, meta["sweep"],
                                        meta["position"])
         _position_motion(ws_mech, t, model, meta["position"], meta["motion"])
-    meta["summary"] = _summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1)
+    meta["numbers_only"] = []
+    meta["summary"] = _summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1,
+                                     meta["numbers_only"])
     _top_align_tall_rows(ws_mech)
     meta["controls"] = {MECH: _controls(ws_mech, t, meta["inputs"])}
     if t.mechanism.grid:
@@ -633,16 +635,31 @@ def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int,
     return {"closes": closes, "gap_from": start, "gap_to": end}
 
 
-# Excel 2010's AGGREGATE: MIN (5) or MAX (4) with option 6, which skips error values (the #N/A
-# rows of a column). Functions newer than Excel 2007 are stored with the _xlfn. prefix; without
-# it Excel and LibreOffice show #NAME?. (MINIFS/MAXIFS would need Excel 2019.)
-AGGREGATE, MIN_OF, MAX_OF, SKIP_ERRORS = "_xlfn.AGGREGATE", 5, 4, 6
+def numbers_only(ws, col: int, head_row: int, sources: list[str | None], head: str,
+                 number_format: str) -> str:
+    """A column, from row head_row + 1 on, that holds each source cell's number, or a dash
+    where the source holds #N/A (the loop cannot close) or nothing (None). MIN, MAX and COUNT
+    skip text in a range in every spreadsheet application, so the smallest and largest values
+    of a column with #N/A in it are read from such a column. (AGGREGATE would skip the errors
+    itself, but it is Excel 2010's: Gnumeric and IronCalc show #NAME?.) Returns its letter."""
+    letter = get_column_letter(col)
+    _head(ws, head_row, col, head)
+    style = table_style(ws, number_format)
+    for r, src in enumerate(sources, start=head_row + 1):
+        value = f'=IF(ISNUMBER({src}),{src},"{DASH}")' if src else f'="{DASH}"'
+        put(ws, r, col, value, style)
+    return letter
 
 
-def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row: int) -> dict:
+def column_range(sheet: str, letter: str, first: int, last: int) -> str:
+    return f"{quote_sheetname(sheet)}!${letter}${first}:${letter}${last}"
+
+
+def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row: int,
+                   numbers: list) -> dict:
     """Geometry honesty, as live formulas: where the mechanism assembles, its swing, the range
     of every transmission angle, and for every four-bar loop on the ground its Grashof class and
-    the input's limit angles."""
+    the input's limit angles. The numbers-only columns it reads are listed in `numbers`."""
     if not model.closes:
         return {}
     cols, (r0, r1) = sweep["columns"], sweep["rows"]
@@ -683,21 +700,40 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         add(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"{DASH}")',
             t.mechanism.input_unit, "number_or_dash")
 
-    def extremes(prefix: str, what: str, column: str, unit: str, convert: str = "") -> None:
-        # over numbers only: the #N/A rows of a column are skipped
-        for suffix, fn, word in (("min", MIN_OF, "smallest"), ("max", MAX_OF, "largest")):
-            value = f"{AGGREGATE}({fn},{SKIP_ERRORS},{column})"
+    ws_sweep = ws.parent[SWEEP]
+
+    def numbers_of(key: str) -> str:
+        """The range of a numbers-only copy of sweep column `key`, beside the sweep table."""
+        q = model.get(key)
+        col = ws_sweep.max_column + 1
+        letter = get_column_letter(col)
+        ws_sweep.column_dimensions[letter].width = 12
+        _text(ws_sweep, f"{letter}3", f"{q.symbol}'s numbers, {DASH} at #N/A: the summary's "
+                                      "MIN and MAX read these", NOTE)
+        ws_sweep[f"{letter}3"].alignment = Alignment(wrap_text=True, vertical="top")
+        numbers_only(ws_sweep, col, r0 - 1, [f"{cols[key]}{r}" for r in range(r0, r1 + 1)],
+                     f"{q.symbol} numbers [{unit_text(q.unit, t.length_unit)}]",
+                     number_format(q.unit, t.length_unit))
+        _fit_labels(ws_sweep, 3, [get_column_letter(c) for c in range(1, col + 1)],
+                    heads=r0 - 1)
+        numbers.append({"sheet": SWEEP, "column": letter, "rows": [r0, r1], "sweep": key})
+        return column_range(SWEEP, letter, r0, r1)
+
+    def extremes(prefix: str, what: str, key: str, unit: str, convert: str = "") -> None:
+        column = numbers_of(key)
+        for suffix, fn, word in (("min", "MIN", "smallest"), ("max", "MAX", "largest")):
+            value = f"{fn}({column})"
             value = f"{convert}({value})" if convert else value
             add(f"{prefix}_{suffix}", f"{word} {what}",
                 f'=IF(COUNT({column})=0,"{DASH}",{value})', unit, "number_or_dash")
 
     if model.output:
         q = model.get(model.output)
-        extremes("output", f"{q.symbol} ({q.label})", rng(model.output), q.unit)
+        extremes("output", f"{q.symbol} ({q.label})", model.output, q.unit)
     for i, key in enumerate(model.transmissions, start=1):
         # read in radians: a degree view's window moves with the data, μ lies in [0, π]
         extremes(summary_prefix("mu", i), f"transmission angle {model.get(key).symbol}",
-                 rng(key), DEG, convert="DEGREES")
+                 key, DEG, convert="DEGREES")
     for i, loop in enumerate(model.fourbars, start=1):
         _fourbar_summary(add, loop, summary_prefix("", i), Resolver(model, names, {}))
     return cells
