@@ -15,7 +15,8 @@ from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, O
                          RATE_KIND, Mechanism, on_loop)
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Chart, FourBarLoop, Joint, Model,
                     Quantity, _one_group, references)
-from .steps import Sym, acos_or_na, input_angle, offset_slide, polar, slider, triangle
+from .steps import (OUTSIDE_DOMAIN, Sym, acos_or_na, in_domain_or_na, input_angle,
+                    offset_slide, polar, slider, triangle)
 
 KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND)
 _IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -116,8 +117,10 @@ def _emit(field: str, node: ast.AST, symbols: set[str]) -> Expr:
             raise DescriptionError(field, f"{name}() takes "
                                           f"{count if count is not None else 'one or more'} "
                                           "argument(s)")
-        args = ",".join(_emit(field, a, symbols).text for a in node.args)
-        return Expr(f"{name}({args})")
+        args = [_emit(field, a, symbols) for a in node.args]
+        if name in OUTSIDE_DOMAIN:    # ACOS(2) is an error in some applications, 0 in others
+            return Expr(in_domain_or_na(name, args[0].at_least(SUM)))
+        return Expr(f"{name}({','.join(a.text for a in args)})")
     raise DescriptionError(field, "may hold only numbers, symbols, + - * / ^, comparisons, "
                                   "parentheses and " + ", ".join(FUNCTIONS))
 

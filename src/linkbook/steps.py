@@ -4,7 +4,9 @@ A mechanism is an ordered list of these steps, described as data (docs/language.
 by language.py. Formulas are Excel text with
 {key} placeholders; model.render resolves them. Guards: an ACOS/ASIN whose argument leaves [-1, 1]
 means the loop cannot close, so it becomes #N/A (never #NUM!, never a clamped wrong number), and
-#N/A then propagates to every cell that depends on it.
+#N/A then propagates to every cell that depends on it. The argument's domain is tested before
+the function is called, not caught after: spreadsheet applications do not agree on what ACOS(2)
+is (an error in Excel, LibreOffice and Gnumeric, a NaN that reads as 0 in IronCalc).
 """
 from __future__ import annotations
 
@@ -29,12 +31,28 @@ def _q(sym: Sym, unit: str, formula: str) -> Quantity:
                     label=sym.label, in_degrees=sym.deg and sym.shown, wrap_360=sym.wrap)
 
 
+# Where a function is undefined, as Excel text with {x} for its argument (a comparison binds
+# last in Excel: a sum needs no brackets before <0).
+OUTSIDE_DOMAIN = {"ACOS": "ABS({x})>1", "ASIN": "ABS({x})>1", "SQRT": "{x}<0"}
+
+
+def outside_domain(function: str, arg: str) -> str:
+    """The test, as Excel text, that `arg` is outside `function`'s domain."""
+    return OUTSIDE_DOMAIN[function].format(x=arg)
+
+
+def in_domain_or_na(function: str, arg: str) -> str:
+    """function(arg), or #N/A where arg is outside its domain (tested, not caught)."""
+    return f"IF({outside_domain(function, arg)},NA(),{function}({arg}))"
+
+
 def acos_or_na(arg: str) -> str:
-    return f"IFERROR(ACOS({arg}),NA())"
+    # IFERROR: a zero side length makes the cosine rule's argument #DIV/0!; that too is #N/A
+    return f"IFERROR({in_domain_or_na('ACOS', arg)},NA())"
 
 
 def asin_or_na(arg: str) -> str:
-    return f"IFERROR(ASIN({arg}),NA())"
+    return f"IFERROR({in_domain_or_na('ASIN', arg)},NA())"
 
 
 def input_angle(model: Model, key: str, symbol: str) -> None:
