@@ -474,6 +474,29 @@ def set_degree_windows(built: Built, windows: dict[str, float]) -> None:
             ws_sweep.cell(r, col).value = _degree_formula(q, f"{source}{r}", windows[q.key])
 
 
+def set_radian_windows(built: Built, windows: dict[str, float]) -> None:
+    """Rewrite the radian cells (current position and sweep) of the ATAN2 angles whose window
+    start (degrees) `windows` gives, where it is not ATAN2's own (-180°, 180°]."""
+    position, sweep = built.meta["position"], built.meta["sweep"]
+    r0, r1 = sweep["rows"]
+    ws_mech, ws_sweep = built.workbook[MECH], built.workbook[SWEEP]
+    for key, lo in windows.items():
+        if lo == -180.0:
+            continue
+        cell = position["cells"][key]
+        ws_mech[cell] = _radian_window(ws_mech[cell].value, lo)
+        col = column_index_from_string(sweep["columns"][key])
+        for r in range(r0, r1 + 1):
+            ws_sweep.cell(r, col).value = _radian_window(ws_sweep.cell(r, col).value, lo)
+
+
+def _radian_window(formula: str, lo: float) -> str:
+    """An angle formula's value shown in [lo°, lo° + 360°), in radians."""
+    shift = f"-RADIANS({lo:g})" if lo > 0 else f"+RADIANS({-lo:g})" if lo < 0 else ""
+    back = f"+RADIANS({lo:g})" if lo > 0 else f"-RADIANS({-lo:g})" if lo < 0 else ""
+    return f"=MOD({formula[1:]}{shift},2*PI()){back}"
+
+
 def _degree_formula(q, ref: str, lo: float | None = None) -> str:
     """The degree view of a radian cell, shown in [lo, lo + 360) (by default q's window)."""
     lo = default_window(q) if lo is None else lo
