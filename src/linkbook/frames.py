@@ -14,8 +14,8 @@ from openpyxl.utils import get_column_letter, quote_sheetname
 
 from .model import LENGTH, Model
 from .templates import Template
-from .workbook import (BOLD, DERIVED_FILL, DRAWING_COLUMNS, LINE_HEIGHT, MECH, NOTE, SWEEP,
-                       TITLE, _head, _text, column_range, label_lines, number_format,
+from .workbook import (BOLD, DASH, DERIVED_FILL, DRAWING_COLUMNS, LINE_HEIGHT, MECH, NOTE,
+                       SWEEP, TITLE, _head, _text, column_range, label_lines, number_format,
                        numbers_only, put, table_style, text_width, unit_text)
 
 SHEET = "Drawing data"
@@ -136,7 +136,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
     _head(ws, 4, col, "Frame")
     _head(ws, 4, col + 1, f"Value [{t.length_unit}]")
     cells = {k: f"{value}{FIRST_ROW + i}" for i, (k, _, _) in enumerate(FRAME_CELLS)}
-    ref = {k: f"${c[0]}${c[1:]}" for k, c in cells.items()}
+    ref = {k: f"${value}${FIRST_ROW + i}" for i, (k, _, _) in enumerate(FRAME_CELLS)}
     c = col + 2
     for s in series:
         x_letter, y_letter = get_column_letter(c), get_column_letter(c + 1)
@@ -154,6 +154,8 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
         s["columns"] = [x_letter, y_letter]
         s["mapped_rows"] = [FIRST_ROW, FIRST_ROW + s["rows"][1] - s["rows"][0]]
         c += 2
+    _text(ws, f"{get_column_letter(c)}3", f"What the frame must hold, as numbers ({DASH} where "
+          "a coordinate is #N/A): the extents' MIN and MAX read these", NOTE)
     ranges = []
     for axis in sources:
         ranges.append([])

@@ -15,8 +15,8 @@ from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, O
                          RATE_KIND, Mechanism, on_loop)
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Chart, FourBarLoop, Joint, Model,
                     Quantity, _one_group, references)
-from .steps import (OUTSIDE_DOMAIN, Sym, acos_or_na, in_domain_or_na, input_angle,
-                    offset_slide, polar, slider, triangle)
+from .steps import (OUTSIDE_DOMAIN, Sym, angle_of_triangle_or_na, in_domain_or_na,
+                    input_angle, offset_slide, polar, slider, triangle)
 
 KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND)
 _IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -710,8 +710,7 @@ class Compiler:
                 k_ab, k_a, k_b = (self.operand(f"{h}_{n}", e) for h, e in
                                   (("frame_length", ab), ("distance_a", da), ("distance_b", db)))
                 g = cols["gamma"]
-                gamma = acos_or_na(f"({{{k_ab}}}^2+{{{k_a}}}^2-{{{k_b}}}^2)"
-                                   f"/(2*{{{k_ab}}}*{{{k_a}}})")
+                gamma = angle_of_triangle_or_na(k_ab, k_a, k_b, once=k_ab)
                 self.model.add(Quantity(g.key, g.symbol, RAD, gamma, self.role(gamma, g),
                                         g.label))
                 turn = f"+{{{g.key}}}" if side == "_plus_one" else \

@@ -46,6 +46,21 @@ def in_domain_or_na(function: str, arg: str) -> str:
     return f"IF({outside_domain(function, arg)},NA(),{function}({arg}))"
 
 
+def angle_of_triangle_or_na(adjacent1: str, adjacent2: str, opposite: str, once: str) -> str:
+    """The cosine rule: the angle between sides {adjacent1} and {adjacent2} (keys), or #N/A
+    where the three sides make no triangle. That test is the domain of the ACOS's argument,
+    |b - c| <= a <= b + c, written with side {once} appearing once: in a grid's
+    self-contained formula a side is a whole formula, and ABS(argument)>1 would write the
+    argument, and each side in it, twice more in every nested step."""
+    a, b = (k for k in (adjacent1, adjacent2, opposite) if k != once)
+    fails = f"ABS({{{once}}}-MAX({{{a}}},{{{b}}}))>MIN({{{a}}},{{{b}}})"
+    cosine = (f"({{{adjacent1}}}^2+{{{adjacent2}}}^2-{{{opposite}}}^2)"
+              f"/(2*{{{adjacent1}}}*{{{adjacent2}}})")
+    # IFERROR: a zero side divides by zero, and rounding at an exact limit position can put
+    # the cosine a hair beyond 1; both are #N/A too
+    return f"IFERROR(IF({fails},NA(),ACOS({cosine})),NA())"
+
+
 def acos_or_na(arg: str) -> str:
     # IFERROR: a zero side length makes the cosine rule's argument #DIV/0!; that too is #N/A
     return f"IFERROR({in_domain_or_na('ACOS', arg)},NA())"
@@ -81,8 +96,7 @@ def triangle(model: Model, *, side: str, angle: str, p: str, q: str, branch: str
     angle(Q→R) − branch·μ, or angle(Q→P) + π + branch·∠QPR when the angle at P is the one shown.
     """
     def cosine_rule(adjacent1: str, adjacent2: str, opposite: str) -> str:
-        return acos_or_na(f"({{{adjacent1}}}^2+{{{adjacent2}}}^2-{{{opposite}}}^2)"
-                          f"/(2*{{{adjacent1}}}*{{{adjacent2}}})")
+        return angle_of_triangle_or_na(adjacent1, adjacent2, opposite, once=side)
 
     model.add(_q(psi, RAD, cosine_rule(q, side, p)))
     if mu is not None:
