@@ -154,6 +154,10 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
         s["columns"] = [x_letter, y_letter]
         s["mapped_rows"] = [FIRST_ROW, FIRST_ROW + s["rows"][1] - s["rows"][0]]
         c += 2
+    # An empty column before the copies: LibreOffice computes adjacent formula columns of the
+    # same rows as one block, and took the mapped columns (which read the grid square, which
+    # reads the copies' MIN and MAX) and the copies beside them for a circular reference.
+    c += 1
     _text(ws, f"{get_column_letter(c)}3", f"What the frame must hold, as numbers ({DASH} where "
           "a coordinate is #N/A): the extents' MIN and MAX read these", NOTE)
     ranges = []
