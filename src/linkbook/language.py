@@ -118,7 +118,7 @@ def _emit(field: str, node: ast.AST, symbols: set[str]) -> Expr:
                                           f"{count if count is not None else 'one or more'} "
                                           "argument(s)")
         args = [_emit(field, a, symbols) for a in node.args]
-        if name in OUTSIDE_DOMAIN:    # ACOS(2) is an error in some applications, 0 in others
+        if name in OUTSIDE_DOMAIN:    # ACOS(2): an error in most applications, NaN in IronCalc
             return Expr(in_domain_or_na(name, args[0].at_least(SUM)))
         return Expr(f"{name}({','.join(a.text for a in args)})")
     raise DescriptionError(field, "may hold only numbers, symbols, + - * / ^, comparisons, "

@@ -62,7 +62,7 @@ def angle_of_triangle_or_na(adjacent1: str, adjacent2: str, opposite: str, once:
 
 
 def acos_or_na(arg: str) -> str:
-    # IFERROR: a zero side length makes the cosine rule's argument #DIV/0!; that too is #N/A
+    # IFERROR: a zero length divides by zero; that too is #N/A
     return f"IFERROR({in_domain_or_na('ACOS', arg)},NA())"
 
 

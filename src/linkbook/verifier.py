@@ -358,7 +358,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         checks += _check_frames(meta, values, ref, drawn, slopes, size, is_error, error_code,
                                 tol, relative)
     checks += _check_degree_windows(model, mech.input_column, sweep, pos, ref, values, size)
-    checks += _check_numbers_only(meta, model, values, ref, joint_values, size)
+    checks += _check_numbers_only(meta, values, size)
 
     # Derived constants: a time ratio from the reversals of its output (the reference's own
     # motion, not the template's formula); any other from the reference.
@@ -556,26 +556,34 @@ def _check_mapped(sheet, series, pos, values, ref, joint_values, slopes, centre,
     return out
 
 
-def _check_numbers_only(meta, model, values, ref, joint_values, size) -> list[Check]:
-    """Each numbers-only column (what MIN and MAX read for an extent): the reference's value of
-    its source, a sweep column or a joint of the current position, or a dash where the
-    reference has none (the loop cannot close, or no joint in that row)."""
+def _check_numbers_only(meta, values, size) -> list[Check]:
+    """Each numbers-only column (what MIN and MAX read for an extent) holds its source cell's
+    own number, or a dash where the source is not a number (#N/A: the loop cannot close) or
+    there is no source (no joint in that row). The sources, a sweep column and the joints
+    table, are judged against the reference themselves, with their own allowances."""
+    sweep, joints = meta["sweep"], meta["position"]["joints"]
     checks = []
     for column in meta.get("numbers_only", []):
         first, last = column["rows"]
-        cells = [f"{column['column']}{r}" for r in range(first, last + 1)]
         if "sweep" in column:
-            name, unit = column["sweep"], column_unit(model, column["sweep"])
-            expected = list(_expected(ref, name))
+            letter, (r0, r1) = sweep["columns"][column["sweep"]], sweep["rows"]
+            sources = [(sweep["sheet"], f"{letter}{r}") for r in range(r0, r1 + 1)]
+            name = column["sweep"]
         else:
-            axis, unit = column["axis"], "length"
-            name = f"joints {'xy'[axis]}"
-            expected = [joint_values[j][axis] if j else math.nan for j in column["joints"]]
+            sources = [(meta["position"]["sheet"], joints[j][column["axis"]]) if j else None
+                       for j in column["joints"]]
+            name = f"joints {'xy'[column['axis']]}"
         c = Check(column["sheet"], f"{name} numbers only", size)
-        compare_exact(c, column["sheet"], cells,
-                      [values.get((column["sheet"], x)) for x in cells],
-                      [float(e) if math.isfinite(e) else DASH for e in expected],
-                      units=[unit] * len(cells))
+        for r, source in zip(range(first, last + 1), sources):
+            cell = f"{column['column']}{r}"
+            want = values.get(source) if source else None
+            if not isinstance(want, (int, float)) or isinstance(want, bool):
+                want = DASH
+            got = values.get((column["sheet"], cell))
+            c.cells += 1
+            c.judged.add((column["sheet"], cell))
+            if got != want or isinstance(got, bool):
+                c.mismatches.append(Mismatch(column["sheet"], cell, want, got))
         checks.append(c)
     return checks
 

@@ -19,12 +19,12 @@ from openpyxl.worksheet.datavalidation import DataValidation
 
 from . import __version__
 from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS
-from .steps import outside_domain
 from .model import (ACCEL, ANG_ACCEL, ANG_SPEED, AREA, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
                     SPEED, Model, Resolver, header, render, unit_text)
 from .controls import control_record
 from .sheets import (CHARTS, DASH, DRAWING_COLUMNS, FORMAT_VERSION, GAPS_SHOWN, GRID, MECH,  # noqa: F401
                      META, MOTION_SHEET, STROKE, SWEEP, read_meta, summary_prefix, write_meta)
+from .steps import outside_domain
 from .templates import Template
 
 ROW = "\x00"   # stands for the row number in a rendered sweep formula
@@ -822,7 +822,8 @@ def _fourbar_summary(add, fb, n: str, resolve) -> None:
         cosine = f"({g}^2+{c}^2-{length}^2)/(2*{g}*{c})"
         lo = f"MOD(DEGREES({ground_angle}-ACOS({cosine})),360)"
         hi = f"MOD(DEGREES({ground_angle}+ACOS({cosine})),360)"
-        # the cosine's domain tested, not ACOS's error caught (IronCalc's ACOS(2) is 0);
+        # the cosine's domain tested, not ACOS's error caught (IronCalc's ACOS(2) is a NaN
+        # that IFERROR lets through);
         # IFERROR: a length edited to 0 divides by zero, and there is no limit angle either
         none = outside_domain("ACOS", cosine)
         add(f"limit{n}_{name}_1", f"{what}: input limit angle, coupler and output link {name}",
