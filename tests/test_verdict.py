@@ -100,14 +100,15 @@ def test_a_link_between_points_nothing_joins_disagrees(fourbar, tmp_path, capsys
 
 @pytest.mark.parametrize("window", ["raw", "shifted"])
 def test_a_degree_view_outside_its_window_disagrees(fourbar, tmp_path, capsys, window):
-    """θ13's degree view as plain DEGREES() (no window: ϕ − ψ reaches below -180°), or moved a
-    whole turn down (every value right modulo 360°, but the window starts below -180°): verify
-    names a cell of the column."""
+    """θ13's degree view as plain DEGREES() of radians a turn lower (no window: as θ13 would be
+    from an ATAN2 with its cut elsewhere, it reaches below -180°), or moved a whole turn down
+    (every value right modulo 360°, but the window starts below -180°): verify names a cell of
+    the column."""
     def edit(wb, meta):
         letter, source = meta["sweep"]["columns"]["theta13_deg"], meta["sweep"]["columns"]["theta13"]
         first, last = meta["sweep"]["rows"]
         for r in range(first, last + 1):
-            wb["Sweep"][f"{letter}{r}"] = (f"=DEGREES({source}{r})" if window == "raw" else
+            wb["Sweep"][f"{letter}{r}"] = (f"=DEGREES({source}{r}-2*PI())" if window == "raw" else
                                            wb["Sweep"][f"{letter}{r}"].value + "-360")
     code = cli.main(["verify", str(_edited(fourbar, tmp_path / f"{window}.xlsx", edit))])
     out = capsys.readouterr().out

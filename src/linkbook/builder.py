@@ -9,7 +9,7 @@ from pathlib import Path
 from . import charts, domain, engine, package, workbook
 from .controls import Control
 from .files import write_atomic
-from .model import COLUMN
+from .model import COLUMN, _one_group
 from .pause import gc_paused
 from .templates import Sweep, Template
 from .xlsx import column_letter, xml_text
@@ -30,6 +30,7 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
                              only=degree_window_sources(built) | loop_witness_cells(built))
     workbook.set_degree_windows(built, degree_windows(built, angles))
     built.warnings += closure_warnings(built, t, angles)
+    workbook.set_radian_windows(built, radian_windows(built, angles))
     values = engine.evaluate(built.workbook) if values_needed else None
     charts.add_charts(built, t, built.model)
     _print_setup(built.workbook)
@@ -49,12 +50,23 @@ def _angle_columns(built: workbook.Built):
     return [(q, columns[q.key]) for q in built.model.of_role(COLUMN) if q.in_degrees]
 
 
+def _cut_columns(built: workbook.Built):
+    """(quantity, its sweep column letter) of every angle that is one ATAN2: its cut at ±180°
+    can fall on a sample (the crank at 180° puts a pin on the ground line), where the sign of
+    a rounding error in a sine, which applications do not share, would pick +π or −π."""
+    columns = built.meta["sweep"]["columns"]
+    return [(q, columns[q.key]) for q in built.model.of_role(COLUMN)
+            if q.formula.startswith("ATAN2(") and _one_group(q.formula)]
+
+
 def degree_window_sources(built: workbook.Built) -> set[tuple[str, str]]:
-    """The sweep cells whose values choose the degree windows."""
+    """The sweep cells whose values choose the degree windows (and the radian windows of the
+    ATAN2 columns)."""
     sweep = built.meta["sweep"]
     r0, r1 = sweep["rows"]
-    return {(sweep["sheet"], f"{letter}{r}") for q, letter in _angle_columns(built)
-            if not q.wrap_360 for r in range(r0, r1 + 1)}
+    columns = [(q, letter) for q, letter in _angle_columns(built) if not q.wrap_360]
+    return {(sweep["sheet"], f"{letter}{r}") for q, letter in columns + _cut_columns(built)
+            for r in range(r0, r1 + 1)}
 
 
 def loop_witness_cells(built: workbook.Built) -> set[tuple[str, str]]:
@@ -111,20 +123,35 @@ def degree_windows(built: workbook.Built, values: dict) -> dict[str, float]:
         if q.wrap_360:
             out[q.key] = 0.0
             continue
-        degs = sorted(math.degrees(v) % 360.0 for r in range(r0, r1 + 1)
-                      if isinstance(v := values.get((sweep["sheet"], f"{letter}{r}")), float)
-                      and math.isfinite(v))
-        out[q.key] = _cut(degs)
+        out[q.key] = _cut(_sampled_degrees(built, values, letter))
     return out
 
 
-def _cut(degs: list[float]) -> float:
+def radian_windows(built: workbook.Built, values: dict) -> dict[str, float]:
+    """For each ATAN2 column: the start of a 360° window (degrees) for its radian values that
+    puts the cut in the widest empty arc of its samples, also for an angle that turns all the
+    way round, so that no sample sits on the cut."""
+    return {q.key: _cut(_sampled_degrees(built, values, letter), full_turn=None)
+            for q, letter in _cut_columns(built)}
+
+
+def _sampled_degrees(built: workbook.Built, values: dict, letter: str) -> list[float]:
+    sweep = built.meta["sweep"]
+    r0, r1 = sweep["rows"]
+    return sorted(math.degrees(v) % 360.0 for r in range(r0, r1 + 1)
+                  if isinstance(v := values.get((sweep["sheet"], f"{letter}{r}")), float)
+                  and math.isfinite(v))
+
+
+def _cut(degs: list[float], full_turn: float | None = 0.0) -> float:
+    """A window start in the widest gap of `degs` (a multiple of 10° where one fits); for an
+    angle that turns all the way round (no gap of 20°), `full_turn` (None: in the gap too)."""
     if not degs:
         return -180.0
     gaps = [(b - a, a, b) for a, b in zip(degs, degs[1:] + [degs[0] + 360.0])]
     width, a, b = max(gaps)
-    if width < 20.0:       # the angle turns all the way round: any window has a jump
-        return 0.0
+    if width < 20.0 and full_turn is not None:   # any window has a jump
+        return full_turn
     lo = math.floor((a + b) / 2 / 10.0) * 10.0
     if not a < lo < b:
         lo = (a + b) / 2

@@ -14,9 +14,10 @@ from openpyxl.utils import get_column_letter, quote_sheetname
 
 from .model import LENGTH, Model
 from .templates import Template
-from .workbook import (AGGREGATE, BOLD, DERIVED_FILL, DRAWING_COLUMNS, LINE_HEIGHT, MAX_OF,
-                       MECH, MIN_OF, NOTE, SKIP_ERRORS, SWEEP, TITLE, _head, _text, label_lines,
-                       Formula, number_format, put, set_formula, table_style, text_width)
+from .workbook import (BOLD, DASH, DERIVED_FILL, DRAWING_COLUMNS, LINE_HEIGHT, MECH, NOTE,
+                       SWEEP, TITLE, Formula, _head, _text, column_range, label_lines,
+                       number_format, numbers_only, put, set_formula, table_style, text_width,
+                       unit_text)
 
 SHEET = "Drawing data"
 HALF = 5                 # the frame: -HALF … HALF grid squares on both axes
@@ -56,8 +57,8 @@ def frames_sheet(wb, t: Template, model: Model, meta: dict) -> dict:
     frames, col = [], 1
     extent = _drawing_extent(model, sweep)
     frames.append(_block(ws, t, col, "The mechanism (sheet Mechanism)", extent,
-                         [_ranges(extent, a, pos, sweep) for a in "xy"],
-                         _drawing_series(model, pos, sweep)))
+                         [_sources(extent, a, pos, sweep) for a in "xy"],
+                         _drawing_series(model, pos, sweep), meta["numbers_only"]))
     for i, spec in enumerate(model.charts):
         if not spec.equal_axes:
             continue
@@ -67,7 +68,8 @@ def frames_sheet(wb, t: Template, model: Model, meta: dict) -> dict:
                    "source": [sweep["columns"][spec.x], sweep["columns"][k]],
                    "rows": list(sweep["rows"])} for k in spec.ys]
         frame = _block(ws, t, col, f"{spec.title} (sheet Charts)", extent,
-                       [_ranges(extent, a, pos, sweep) for a in "xy"], series)
+                       [_sources(extent, a, pos, sweep) for a in "xy"], series,
+                       meta["numbers_only"])
         frame["chart"] = i
         frames.append(frame)
     for f in frames:
@@ -82,12 +84,6 @@ def _path_title(model: Model, x: str, y: str) -> str:
     return f"path of {joint}" if joint else f"{y} ({x})"
 
 
-def _sweep_range(sweep: dict, key: str) -> str:
-    letter = sweep["columns"][key]
-    r0, r1 = sweep["rows"]
-    return f"{SWEEP}!${letter}${r0}:${letter}${r1}"
-
-
 def _drawing_extent(model: Model, sweep: dict) -> dict:
     """What the drawing's frame must hold: every joint at the current position (the joints
     table), and over the sweep every joint whose coordinates are sweep columns."""
@@ -100,12 +96,24 @@ def _drawing_extent(model: Model, sweep: dict) -> dict:
     return out
 
 
-def _ranges(extent: dict, axis: str, pos: dict, sweep: dict) -> list[str]:
-    out = [_sweep_range(sweep, key) for key in extent[axis]]
+def _sources(extent: dict, axis: str, pos: dict, sweep: dict) -> list[dict]:
+    """What a frame must hold on one axis, one entry per column of cells: its header, the
+    source cells (None where the joints table has no joint) and what they are, for verify."""
+    i = "xy".index(axis)
+    out = []
     if extent["position"]:
-        col = DRAWING_COLUMNS[0 if axis == "x" else 1]
-        rows = sorted(int(cells[0][1:]) for cells in pos["joints"].values())
-        out.insert(0, f"{MECH}!${col}${rows[0]}:${col}${rows[-1]}")
+        col = DRAWING_COLUMNS[i]
+        at_row = {int(cells[i][1:]): name for name, cells in pos["joints"].items()}
+        rows = range(min(at_row), max(at_row) + 1)
+        out.append({"head": f"joints {axis}", "cells": [
+            f"{quote_sheetname(MECH)}!{col}{r}" if r in at_row else None for r in rows],
+            "of": {"joints": [at_row.get(r) for r in rows], "axis": i}})
+    r0, r1 = sweep["rows"]
+    for key in extent[axis]:
+        letter = sweep["columns"][key]
+        out.append({"head": key, "cells": [f"{quote_sheetname(SWEEP)}!{letter}{r}"
+                                               for r in range(r0, r1 + 1)],
+                    "of": {"sweep": key}})
     return out
 
 
@@ -122,9 +130,10 @@ def _drawing_series(model: Model, pos: dict, sweep: dict) -> list[dict]:
     return series
 
 
-def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[list[str]],
-           series: list[dict]) -> dict:
-    """A frame's cells (label, value) and its mapped columns, from column `col` on."""
+def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[list[dict]],
+           series: list[dict], numbers: list) -> dict:
+    """A frame's cells (label, value), its mapped columns and the numbers-only copies of what
+    it must hold (their extents), from column `col` on; those copies are listed in `numbers`."""
     label, value = get_column_letter(col), get_column_letter(col + 1)
     ws.column_dimensions[label].width = max(text_width(text) for _, text, _ in FRAME_CELLS)
     ws.column_dimensions[value].width = 22     # the scale bar's legend: grid square 0.005 mm
@@ -132,27 +141,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
     _head(ws, 4, col, "Frame")
     _head(ws, 4, col + 1, f"Value [{t.length_unit}]")
     cells = {k: f"{value}{FIRST_ROW + i}" for i, (k, _, _) in enumerate(FRAME_CELLS)}
-    ref = {k: f"${c[0]}${c[1:]}" for k, c in cells.items()}
-    formulas = {
-        "xmin": _extreme("MIN", MIN_OF, ranges[0]), "xmax": _extreme("MAX", MAX_OF, ranges[0]),
-        "ymin": _extreme("MIN", MIN_OF, ranges[1]), "ymax": _extreme("MAX", MAX_OF, ranges[1]),
-        "cx": f"=({ref['xmin']}+{ref['xmax']})/2", "cy": f"=({ref['ymin']}+{ref['ymax']})/2",
-        "need": f"=MAX({ref['xmax']}-{ref['xmin']},{ref['ymax']}-{ref['ymin']},1E-12)"
-                f"*{MARGIN}/{2 * HALF}",
-        "decade": f"=10^INT(LOG10({ref['need']}))",
-        "square": "={d}*IF({n}<={d},1,IF({n}<=2*{d},2,IF({n}<=5*{d},5,10)))".format(
-            d=ref["decade"], n=ref["need"]),
-        "label": square_label(ref["square"], t.length_unit),
-    }
-    for i, (key, text, is_length) in enumerate(FRAME_CELLS):
-        r = FIRST_ROW + i
-        _text(ws, f"{label}{r}", text)
-        set_formula(ws[f"{value}{r}"], formulas[key])
-        ws[f"{value}{r}"].fill = DERIVED_FILL
-        if is_length:
-            ws[f"{value}{r}"].number_format = number_format(LENGTH, t.length_unit)
-        else:
-            ws[f"{value}{r}"].alignment = Alignment(horizontal="right")
+    ref = {k: f"${value}${FIRST_ROW + i}" for i, (k, _, _) in enumerate(FRAME_CELLS)}
     c = col + 2
     for s in series:
         x_letter, y_letter = get_column_letter(c), get_column_letter(c + 1)
@@ -171,6 +160,45 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
         s["columns"] = [x_letter, y_letter]
         s["mapped_rows"] = [FIRST_ROW, FIRST_ROW + s["rows"][1] - s["rows"][0]]
         c += 2
+    # An empty column before the copies: LibreOffice computes adjacent formula columns of the
+    # same rows as one block, and took the mapped columns (which read the grid square, which
+    # reads the copies' MIN and MAX) and the copies beside them for a circular reference.
+    c += 1
+    _text(ws, f"{get_column_letter(c)}3", f"What the frame must hold, as numbers ({DASH} where "
+          "a coordinate is #N/A): the extents' MIN and MAX read these", NOTE)
+    ranges = []
+    for axis in sources:
+        ranges.append([])
+        for source in axis:
+            numbers_only(ws, c, 4, source["cells"],
+                         f"{source['head']} numbers [{unit_text(LENGTH, t.length_unit)}]",
+                         number_format(LENGTH, t.length_unit))
+            ws.column_dimensions[get_column_letter(c)].width = MAPPED_WIDTH
+            last = FIRST_ROW + len(source["cells"]) - 1
+            numbers.append({"sheet": SHEET, "column": get_column_letter(c),
+                            "rows": [FIRST_ROW, last], **source["of"]})
+            ranges[-1].append(column_range(SHEET, get_column_letter(c), FIRST_ROW, last))
+            c += 1
+    formulas = {
+        "xmin": _extreme("MIN", ranges[0]), "xmax": _extreme("MAX", ranges[0]),
+        "ymin": _extreme("MIN", ranges[1]), "ymax": _extreme("MAX", ranges[1]),
+        "cx": f"=({ref['xmin']}+{ref['xmax']})/2", "cy": f"=({ref['ymin']}+{ref['ymax']})/2",
+        "need": f"=MAX({ref['xmax']}-{ref['xmin']},{ref['ymax']}-{ref['ymin']},1E-12)"
+                f"*{MARGIN}/{2 * HALF}",
+        "decade": f"=10^INT(LOG10({ref['need']}))",
+        "square": "={d}*IF({n}<={d},1,IF({n}<=2*{d},2,IF({n}<=5*{d},5,10)))".format(
+            d=ref["decade"], n=ref["need"]),
+        "label": square_label(ref["square"], t.length_unit),
+    }
+    for i, (key, text, is_length) in enumerate(FRAME_CELLS):
+        r = FIRST_ROW + i
+        _text(ws, f"{label}{r}", text)
+        set_formula(ws[f"{value}{r}"], formulas[key])
+        ws[f"{value}{r}"].fill = DERIVED_FILL
+        if is_length:
+            ws[f"{value}{r}"].number_format = number_format(LENGTH, t.length_unit)
+        else:
+            ws[f"{value}{r}"].alignment = Alignment(horizontal="right")
     # the scale bar's two points under the frame's cells, in its two columns
     bar_head = FIRST_ROW + len(FRAME_CELLS) + 1
     lines = 1
@@ -191,6 +219,6 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, ranges: list[lis
             "next_column": c}
 
 
-def _extreme(fn: str, code: int, ranges: list[str]) -> str:
-    """The least or greatest number in the ranges, skipping #N/A (no assembly)."""
-    return f"={fn}(" + ",".join(f"{AGGREGATE}({code},{SKIP_ERRORS},{r})" for r in ranges) + ")"
+def _extreme(fn: str, ranges: list[str]) -> str:
+    """The least or greatest number in the numbers-only ranges (0 where they hold none)."""
+    return f"={fn}(" + ",".join(ranges) + ")"

@@ -19,7 +19,8 @@ from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, O
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Block, Chart, FourBarLoop, Guide,
                     Joint, Model, Quantity, _one_group, references)
 from .schema import keys_of, schema, step_schemas
-from .steps import Sym, acos_or_na, input_angle, offset_slide, polar, slider, triangle
+from .steps import (OUTSIDE_DOMAIN, Sym, angle_of_triangle_or_na, in_domain_or_na,
+                    input_angle, offset_slide, polar, slider, triangle)
 
 KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND)
 _IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -120,8 +121,10 @@ def _emit(field: str, node: ast.AST, symbols: set[str]) -> Expr:
             raise DescriptionError(field, f"{name}() takes "
                                           f"{count if count is not None else 'one or more'} "
                                           "argument(s)")
-        args = ",".join(_emit(field, a, symbols).text for a in node.args)
-        return Expr(f"{name}({args})")
+        args = [_emit(field, a, symbols) for a in node.args]
+        if name in OUTSIDE_DOMAIN:    # ACOS(2): an error in most applications, NaN in IronCalc
+            return Expr(in_domain_or_na(name, args[0].at_least(SUM)))
+        return Expr(f"{name}({','.join(a.text for a in args)})")
     raise DescriptionError(field, "may hold only numbers, symbols, + - * / ^, comparisons, "
                                   "parentheses and " + ", ".join(FUNCTIONS))
 
@@ -955,8 +958,7 @@ class Compiler:
                 k_a, k_b = (self.length_operand(f"{field}.distances[{i}]", f"{h}_{n}", e, pair[i])
                             for i, (h, e) in enumerate((("distance_a", da), ("distance_b", db))))
                 g = cols["gamma"]
-                gamma = acos_or_na(f"({{{k_ab}}}^2+{{{k_a}}}^2-{{{k_b}}}^2)"
-                                   f"/(2*{{{k_ab}}}*{{{k_a}}})")
+                gamma = angle_of_triangle_or_na(k_ab, k_a, k_b, once=k_ab)
                 self.model.add(Quantity(g.key, g.symbol, RAD, gamma, self.role(gamma, g),
                                         g.label))
                 turn = f"+{{{g.key}}}" if side == "_plus_one" else \

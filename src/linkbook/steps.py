@@ -4,7 +4,9 @@ A mechanism is an ordered list of these steps, described as data (docs/language.
 by language.py. Formulas are Excel text with
 {key} placeholders; model.render resolves them. Guards: an ACOS/ASIN whose argument leaves [-1, 1]
 means the loop cannot close, so it becomes #N/A (never #NUM!, never a clamped wrong number), and
-#N/A then propagates to every cell that depends on it.
+#N/A then propagates to every cell that depends on it. The argument's domain is tested before
+the function is called, not caught after: spreadsheet applications do not agree on what ACOS(2)
+is (an error in Excel, LibreOffice and Gnumeric, a NaN that reads as 0 in IronCalc).
 """
 from __future__ import annotations
 
@@ -29,12 +31,43 @@ def _q(sym: Sym, unit: str, formula: str) -> Quantity:
                     label=sym.label, in_degrees=sym.deg and sym.shown, wrap_360=sym.wrap)
 
 
+# Where a function is undefined, as Excel text with {x} for its argument (a comparison binds
+# last in Excel: a sum needs no brackets before <0).
+OUTSIDE_DOMAIN = {"ACOS": "ABS({x})>1", "ASIN": "ABS({x})>1", "SQRT": "{x}<0"}
+
+
+def outside_domain(function: str, arg: str) -> str:
+    """The test, as Excel text, that `arg` is outside `function`'s domain."""
+    return OUTSIDE_DOMAIN[function].format(x=arg)
+
+
+def in_domain_or_na(function: str, arg: str) -> str:
+    """function(arg), or #N/A where arg is outside its domain (tested, not caught)."""
+    return f"IF({outside_domain(function, arg)},NA(),{function}({arg}))"
+
+
+def angle_of_triangle_or_na(adjacent1: str, adjacent2: str, opposite: str, once: str) -> str:
+    """The cosine rule: the angle between sides {adjacent1} and {adjacent2} (keys), or #N/A
+    where the three sides make no triangle. That test is the domain of the ACOS's argument,
+    |b - c| <= a <= b + c, written with side {once} appearing once: in a grid's
+    self-contained formula a side is a whole formula, and ABS(argument)>1 would write the
+    argument, and each side in it, twice more in every nested step."""
+    a, b = (k for k in (adjacent1, adjacent2, opposite) if k != once)
+    fails = f"ABS({{{once}}}-MAX({{{a}}},{{{b}}}))>MIN({{{a}}},{{{b}}})"
+    cosine = (f"({{{adjacent1}}}^2+{{{adjacent2}}}^2-{{{opposite}}}^2)"
+              f"/(2*{{{adjacent1}}}*{{{adjacent2}}})")
+    # IFERROR: a zero side divides by zero, and rounding at an exact limit position can put
+    # the cosine a hair beyond 1; both are #N/A too
+    return f"IFERROR(IF({fails},NA(),ACOS({cosine})),NA())"
+
+
 def acos_or_na(arg: str) -> str:
-    return f"IFERROR(ACOS({arg}),NA())"
+    # IFERROR: a zero length divides by zero; that too is #N/A
+    return f"IFERROR({in_domain_or_na('ACOS', arg)},NA())"
 
 
 def asin_or_na(arg: str) -> str:
-    return f"IFERROR(ASIN({arg}),NA())"
+    return f"IFERROR({in_domain_or_na('ASIN', arg)},NA())"
 
 
 def input_angle(model: Model, key: str, symbol: str) -> None:
@@ -63,8 +96,7 @@ def triangle(model: Model, *, side: str, angle: str, p: str, q: str, branch: str
     angle(Q→R) − branch·μ, or angle(Q→P) + π + branch·∠QPR when the angle at P is the one shown.
     """
     def cosine_rule(adjacent1: str, adjacent2: str, opposite: str) -> str:
-        return acos_or_na(f"({{{adjacent1}}}^2+{{{adjacent2}}}^2-{{{opposite}}}^2)"
-                          f"/(2*{{{adjacent1}}}*{{{adjacent2}}})")
+        return angle_of_triangle_or_na(adjacent1, adjacent2, opposite, once=side)
 
     model.add(_q(psi, RAD, cosine_rule(q, side, p)))
     if mu is not None:

@@ -389,6 +389,7 @@ def check_book(wb, meta: dict, values: dict, is_error, error_code, *, tol: float
         checks += _check_frames(meta, values, ref, joints, drawn, slopes, size, is_error,
                                 error_code, tol, relative)
     checks += _check_degree_windows(model, mech.input_column, sweep, pos, ref, values, size)
+    checks += _check_numbers_only(meta, values, size)
 
     # Derived constants: a time ratio from the reversals of its output (the reference's own
     # motion, not the template's formula); any other from the reference.
@@ -605,6 +606,38 @@ def _check_mapped(sheet, series, pos, values, ref, joint_values, slopes, centre,
                 (world - centre[axis]) / square, "-", is_error, error_code, tol, relative, slope)
         out.append(c)
     return out
+
+
+def _check_numbers_only(meta, values, size) -> list[Check]:
+    """Each numbers-only column (what MIN and MAX read for an extent) holds its source cell's
+    own number, or a dash where the source is not a number (#N/A: the loop cannot close) or
+    there is no source (no joint in that row). The sources, a sweep column and the joints
+    table, are judged against the reference themselves, with their own allowances."""
+    sweep, joints = meta["sweep"], meta["position"]["joints"]
+    checks = []
+    for column in meta.get("numbers_only", []):
+        first, last = column["rows"]
+        if "sweep" in column:
+            letter, (r0, r1) = sweep["columns"][column["sweep"]], sweep["rows"]
+            sources = [(sweep["sheet"], f"{letter}{r}") for r in range(r0, r1 + 1)]
+            name = column["sweep"]
+        else:
+            sources = [(meta["position"]["sheet"], joints[j][column["axis"]]) if j else None
+                       for j in column["joints"]]
+            name = f"joints {'xy'[column['axis']]}"
+        c = Check(column["sheet"], f"{name} numbers only", size)
+        for r, source in zip(range(first, last + 1), sources):
+            cell = f"{column['column']}{r}"
+            want = values.get(source) if source else None
+            if not isinstance(want, (int, float)) or isinstance(want, bool):
+                want = DASH
+            got = values.get((column["sheet"], cell))
+            c.cells += 1
+            c.judged.add((column["sheet"], cell))
+            if got != want or isinstance(got, bool):
+                c.mismatches.append(Mismatch(column["sheet"], cell, want, got))
+        checks.append(c)
+    return checks
 
 
 WINDOW_STARTS = (-180.0, 180.0)   # where a degree view's 360° window may start

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 import weakref
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from openpyxl import Workbook
 from openpyxl.cell.cell import Cell
@@ -27,6 +27,7 @@ from .domain import INPUT_ANGLE_LIMIT
 from .package import Formula
 from .sheets import (CHARTS, DASH, DRAWING_COLUMNS, FORMAT_VERSION, GAPS_SHOWN, GRID, MECH,  # noqa: F401
                      META, MOTION_SHEET, STROKE, SWEEP, read_meta, summary_prefix, write_meta)
+from .steps import outside_domain
 from .templates import Template
 
 ROW = "\x00"   # stands for the row number in a rendered sweep formula
@@ -92,6 +93,7 @@ def build(t: Template) -> Built:
         meta["motion"] = _motion_table(ws_motion, t, model, names, meta["sweep"],
                                        meta["position"])
         _position_motion(ws_mech, t, model, meta["position"], meta["motion"])
+    meta["numbers_only"] = sweep_numbers_only(ws_sweep, t, model, meta["sweep"])
     meta["summary"] = _summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1)
     _top_align_tall_rows(ws_mech)
     meta["controls"] = {MECH: _controls(ws_mech, t, meta["inputs"])}
@@ -480,14 +482,14 @@ def _slider_parts(t: Template, model: Model, resolve: Resolver) -> list[dict]:
     """The guides and blocks of the drawing: {kind, label, points: [(name, (x, y))]}, each
     coordinate a formula at the current position sized in the drawing's grid squares."""
     from .frames import SQUARE_CELL      # frames.py lays its cells out with this module's helpers
-    letters, first, last = _sweep_place(t, model)
+    copies, first, last = _numbers_place(t, model)
     half_long, half_across = (f"{b / 2:g}*{SQUARE_CELL}" for b in BLOCK_SQUARES)
     parts = []
     for g in model.guides:
-        travel = f"{SWEEP}!${letters[g.travel]}${first}:${letters[g.travel]}${last}"
+        travel = column_range(SWEEP, copies[g.travel], first, last)   # numbers only
         ends = []
-        for k, fn in enumerate((MIN_OF, MAX_OF), start=1):
-            reach = f"{AGGREGATE}({fn},{SKIP_ERRORS},{travel})"
+        for k, fn in enumerate(("MIN", "MAX"), start=1):
+            reach = f"{fn}({travel})"
             # a block that never closes over the sweep has no travel: no guide (#N/A)
             ends.append((f"{g.point} {g.kind} {k}",
                          tuple(f"=IF(COUNT({travel}),"
@@ -572,6 +574,29 @@ def set_degree_windows(built: Built, windows: dict[str, float]) -> None:
         col = column_index_from_string(letter)
         for r in range(r0, r1 + 1):
             set_formula(ws_sweep.cell(r, col), _degree_formula(q, f"{source}{r}", windows[q.key]))
+
+
+def set_radian_windows(built: Built, windows: dict[str, float]) -> None:
+    """Rewrite the radian cells (current position and sweep) of the ATAN2 angles whose window
+    start (degrees) `windows` gives, where it is not ATAN2's own (-180°, 180°]."""
+    position, sweep = built.meta["position"], built.meta["sweep"]
+    r0, r1 = sweep["rows"]
+    ws_mech, ws_sweep = built.workbook[MECH], built.workbook[SWEEP]
+    for key, lo in windows.items():
+        if lo == -180.0:
+            continue
+        cell = position["cells"][key]
+        ws_mech[cell] = _radian_window(ws_mech[cell].value, lo)
+        col = column_index_from_string(sweep["columns"][key])
+        for r in range(r0, r1 + 1):
+            ws_sweep.cell(r, col).value = _radian_window(ws_sweep.cell(r, col).value, lo)
+
+
+def _radian_window(formula: str, lo: float) -> str:
+    """An angle formula's value shown in [lo°, lo° + 360°), in radians."""
+    shift = f"-RADIANS({lo:g})" if lo > 0 else f"+RADIANS({-lo:g})" if lo < 0 else ""
+    back = f"+RADIANS({lo:g})" if lo > 0 else f"-RADIANS({-lo:g})" if lo < 0 else ""
+    return f"=MOD({formula[1:]}{shift},2*PI()){back}"
 
 
 def _degree_formula(q, ref: str, lo: float | None = None) -> str:
@@ -746,16 +771,76 @@ def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int,
     return {"closes": closes, "gap_from": start, "gap_to": end}
 
 
-# Excel 2010's AGGREGATE: MIN (5) or MAX (4) with option 6, which skips error values (the #N/A
-# rows of a column). Functions newer than Excel 2007 are stored with the _xlfn. prefix; without
-# it Excel and LibreOffice show #NAME?. (MINIFS/MAXIFS would need Excel 2019.)
-AGGREGATE, MIN_OF, MAX_OF, SKIP_ERRORS = "_xlfn.AGGREGATE", 5, 4, 6
+def numbers_only(ws, col: int, head_row: int, sources: list[str | None], head: str,
+                 number_format: str) -> str:
+    """A column, from row head_row + 1 on, that holds each source cell's number, or a dash
+    where the source holds #N/A (the loop cannot close) or nothing (None). MIN, MAX and COUNT
+    skip text in a range in every spreadsheet application, so the smallest and largest values
+    of a column with #N/A in it are read from such a column. (AGGREGATE would skip the errors
+    itself, but it is Excel 2010's: Gnumeric and IronCalc show #NAME?.) Returns its letter."""
+    letter = get_column_letter(col)
+    _head(ws, head_row, col, head)
+    style = table_style(ws, number_format)
+    for r, src in enumerate(sources, start=head_row + 1):
+        value = f'=IF(ISNUMBER({src}),{src},"{DASH}")' if src else f'="{DASH}"'
+        put(ws, r, col, Formula(value), style)
+    return letter
+
+
+def column_range(sheet: str, letter: str, first: int, last: int) -> str:
+    return f"{quote_sheetname(sheet)}!${letter}${first}:${letter}${last}"
+
+
+def _numbers_keys(model: Model) -> list[str]:
+    """The sweep columns whose smallest and largest values a formula reads, in the order their
+    numbers-only copies stand beside the sweep table: each slider's travel (its guide's ends),
+    then the summary's output and transmission angles."""
+    keys = [g.travel for g in model.guides]
+    if model.closes:
+        if model.output:
+            q = model.get(model.output)
+            keys.append(f"{q.key}_deg" if q.unit == RAD else q.key)
+        keys += model.transmissions
+    return list(dict.fromkeys(keys))
+
+
+def _numbers_place(t: Template, model: Model) -> tuple[dict[str, str], int, int]:
+    """The column letter of each numbers-only copy (_numbers_keys) right of the sweep table,
+    and the sweep's first and last row: known before the sweep is laid out, so the drawing's
+    guides can read them."""
+    letters, first, last = _sweep_place(t, model)
+    start = len(letters) + 1
+    return ({key: get_column_letter(start + i) for i, key in enumerate(_numbers_keys(model))},
+            first, last)
+
+
+def sweep_numbers_only(ws_sweep, t: Template, model: Model, sweep: dict) -> list[dict]:
+    """Every numbers-only copy beside the sweep table (_numbers_place), each with a note over
+    it; their records for the build record's numbers_only."""
+    cols, (r0, r1) = sweep["columns"], sweep["rows"]
+    records = []
+    for key, letter in _numbers_place(t, model)[0].items():
+        q = replace(model.get(key[:-4]), unit=DEG) if key.endswith("_deg") else model.get(key)
+        ws_sweep.column_dimensions[letter].width = 12
+        _text(ws_sweep, f"{letter}3", f"{q.symbol}'s numbers, {DASH} at #N/A: MIN and MAX "
+                                      "read these", NOTE)
+        ws_sweep[f"{letter}3"].alignment = Alignment(wrap_text=True, vertical="top")
+        numbers_only(ws_sweep, column_index_from_string(letter), r0 - 1,
+                     [f"{cols[key]}{r}" for r in range(r0, r1 + 1)],
+                     f"{q.symbol} numbers [{unit_text(q.unit, t.length_unit)}]",
+                     number_format(q.unit, t.length_unit))
+        records.append({"sheet": SWEEP, "column": letter, "rows": [r0, r1], "sweep": key})
+    if records:
+        _fit_labels(ws_sweep, 3, [get_column_letter(c) for c in range(1, ws_sweep.max_column + 1)],
+                    heads=r0 - 1)
+    return records
 
 
 def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row: int) -> dict:
     """Geometry honesty, as live formulas: where the mechanism assembles, its swing, the range
     of every transmission angle, and for every four-bar loop on the ground its Grashof class and
-    the input's limit angles."""
+    the input's limit angles. Ranges are read from the numbers-only copies beside the sweep
+    table (sweep_numbers_only)."""
     if not model.closes:
         return {}
     cols, (r0, r1) = sweep["columns"], sweep["rows"]
@@ -800,11 +885,17 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         add(f"gap{k}_to", f"gap {k}: … to", f'=IFERROR(SMALL({rng("gap_to")},{k}),"{DASH}")',
             t.mechanism.input_unit, "number_or_dash")
 
-    def extremes(prefix: str, what: str, column: str, unit: str, convert: str = "") -> list[str]:
-        # over numbers only: the #N/A rows of a column are skipped
+    copies = _numbers_place(t, model)[0]
+
+    def numbers_of(key: str) -> str:
+        """The range of the numbers-only copy of sweep column `key` (sweep_numbers_only)."""
+        return column_range(SWEEP, copies[key], r0, r1)
+
+    def extremes(prefix: str, what: str, key: str, unit: str, convert: str = "") -> list[str]:
+        column = numbers_of(key)
         cells = []
-        for suffix, fn, word in (("min", MIN_OF, "smallest"), ("max", MAX_OF, "largest")):
-            value = f"{AGGREGATE}({fn},{SKIP_ERRORS},{column})"
+        for suffix, fn, word in (("min", "MIN", "smallest"), ("max", "MAX", "largest")):
+            value = f"{fn}({column})"
             value = f"{convert}({value})" if convert else value
             cells.append(add(f"{prefix}_{suffix}", f"{word} {what}",
                              f'=IF(COUNT({column})=0,"{DASH}",{value})', unit, "number_or_dash"))
@@ -814,15 +905,15 @@ def _summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row:
         q = model.get(model.output)
         if q.unit == RAD:
             # an angle (a rocker's): its degree view, whose window keeps the swing in one piece
-            low, high = extremes("output", f"{q.symbol} ({q.label})", rng(f"{q.key}_deg"), DEG)
+            low, high = extremes("output", f"{q.symbol} ({q.label})", f"{q.key}_deg", DEG)
             add("output_swing", f"swing of {q.symbol} (largest − smallest)",
                 f'=IF(ISNUMBER({low}),{high}-{low},"{DASH}")', DEG, "number_or_dash")
         else:
-            extremes("output", f"{q.symbol} ({q.label})", rng(model.output), q.unit)
+            extremes("output", f"{q.symbol} ({q.label})", model.output, q.unit)
     for i, key in enumerate(model.transmissions, start=1):
         # read in radians: a degree view's window moves with the data, μ lies in [0, π]
         extremes(summary_prefix("mu", i), f"transmission angle {model.get(key).symbol}",
-                 rng(key), DEG, convert="DEGREES")
+                 key, DEG, convert="DEGREES")
     for i, loop in enumerate(model.fourbars, start=1):
         _fourbar_summary(add, loop, summary_prefix("", i), Resolver(model, names, {}))
     return cells
@@ -887,10 +978,14 @@ def _fourbar_summary(add, fb, n: str, resolve) -> None:
         cosine = f"({g}^2+{c}^2-{length}^2)/(2*{g}*{c})"
         lo = f"MOD(DEGREES({ground_angle}-ACOS({cosine})),360)"
         hi = f"MOD(DEGREES({ground_angle}+ACOS({cosine})),360)"
+        # the cosine's domain tested, not ACOS's error caught (IronCalc's ACOS(2) is a NaN
+        # that IFERROR lets through);
+        # IFERROR: a length edited to 0 divides by zero, and there is no limit angle either
+        none = outside_domain("ACOS", cosine)
         add(f"limit{n}_{name}_1", f"{what}: input limit angle, coupler and output link {name}",
-            f'=IFERROR(MIN({lo},{hi}),"none")', DEG, "number_or_none")
+            f'=IFERROR(IF({none},"none",MIN({lo},{hi})),"none")', DEG, "number_or_none")
         add(f"limit{n}_{name}_2", "… and the other one",
-            f'=IFERROR(MAX({lo},{hi}),"none")', DEG, "number_or_none")
+            f'=IFERROR(IF({none},"none",MAX({lo},{hi})),"none")', DEG, "number_or_none")
 
 
 # ---------------------------------------------------------------- grid (pump)
