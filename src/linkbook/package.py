@@ -8,9 +8,6 @@ One streaming copy of the zip does all of it:
   default font's `color` after `family`);
 - drawings and charts declare their namespaces on the root element (see namespaces_on_root);
 - form controls (controls.py) are added to the sheets that have them;
-- in every drawing and chart part, the namespace prefixes openpyxl declares on inner elements
-  (`a:`, `c:`, `r:`) are declared once on the part's root element instead: Gnumeric's reader
-  knows only the prefixes declared there, and dropped every chart;
 - with `values`, every formula cell gets its cached value (cached.py);
 - with `cells` (from `cells_held_back`), every sheet's `<sheetData>` is written here: openpyxl
   saves the book with its worksheets emptied of cells, and this module writes the cells as
@@ -58,8 +55,6 @@ class Formula(str):
 # An inline-string cell as openpyxl writes it (no namespace prefix, `t` after `r` and `s`).
 INLINE = re.compile(rb'<c( [^>]*?) t="inlineStr"([^>]*)><is>(.*?)</is></c>', re.S)
 # The DrawingML parts: a sheet's drawing (its charts' anchors) and each chart.
-DRAWING_PART = re.compile(r"xl/(drawings|charts)/[^/]+\.xml")
-PREFIX_DECLARATION = re.compile(rb'\s+xmlns:([A-Za-z_][A-Za-z0-9_.-]*)="([^"]*)"')
 # CT_Font's children in the schema's order.
 FONT_ORDER = ("b", "i", "strike", "condense", "extend", "outline", "shadow", "u", "vertAlign",
               "sz", "color", "name", "family", "charset", "scheme")
@@ -115,13 +110,8 @@ def finish(path_in, path_out, *, values: dict | None = None,
                                                           "sharedStrings.xml")])
                     elif name == "xl/styles.xml" and tidy:
                         data = fonts_in_order(data)
-<<<<<<< HEAD
                     elif tidy and _DRAWING_PART.fullmatch(name):
                         data = namespaces_on_root(data)
-=======
-                    elif DRAWING_PART.fullmatch(name) and tidy:
-                        data = prefixes_on_the_root(data)
->>>>>>> h1
                     elif name == "xl/workbook.xml" and values is not None:
                         data = cached.full_calc_on_load(data)
                     elif (owner := _rels_owner(name)) in rels_added:
@@ -534,20 +524,3 @@ def fonts_in_order(styles: bytes) -> bytes:
         return m.group(1) + b"".join(e for _, e in ordered) + m.group(3)
 
     return re.sub(rb"(<font>)(.*?)(</font>)", order, styles, flags=re.S)
-
-
-def prefixes_on_the_root(xml: bytes) -> bytes:
-    """The part with every `xmlns:prefix` declaration moved onto its root element (the same
-    document: each prefix keeps its one namespace). A part that binds a prefix to two
-    namespaces is returned unchanged."""
-    start = xml.index(b"<", xml.index(b"?>") + 2) if xml.startswith(b"<?xml") else xml.index(b"<")
-    end = xml.index(b">", start)
-    bound: dict[bytes, bytes] = {}
-    for m in PREFIX_DECLARATION.finditer(xml, start):
-        if bound.setdefault(m[1], m[2]) != m[2]:
-            return xml
-    root = PREFIX_DECLARATION.sub(b"", xml[start:end])
-    empty = root.endswith(b"/")
-    declared = b"".join(b' xmlns:%s="%s"' % item for item in bound.items())
-    return (xml[:start] + root.rstrip(b"/") + declared + (b"/" if empty else b"")
-            + PREFIX_DECLARATION.sub(b"", xml[end:]))

@@ -586,10 +586,10 @@ def set_radian_windows(built: Built, windows: dict[str, float]) -> None:
         if lo == -180.0:
             continue
         cell = position["cells"][key]
-        ws_mech[cell] = _radian_window(ws_mech[cell].value, lo)
+        set_formula(ws_mech[cell], _radian_window(ws_mech[cell].value, lo))
         col = column_index_from_string(sweep["columns"][key])
         for r in range(r0, r1 + 1):
-            ws_sweep.cell(r, col).value = _radian_window(ws_sweep.cell(r, col).value, lo)
+            set_formula(ws_sweep.cell(r, col), _radian_window(ws_sweep.cell(r, col).value, lo))
 
 
 def _radian_window(formula: str, lo: float) -> str:
@@ -748,11 +748,14 @@ def _position_motion(ws, t: Template, model: Model, position: dict, motion: dict
     position["motion_cells"] = cells
 
 
+ASSEMBLY_COLUMNS = 3     # closes, gap from, gap to: right of the sweep's own columns
+
+
 def _assembly_columns(ws, letters: dict, witnesses: tuple[str, ...], first: int, last: int,
                       head_row: int, unit: str, word: str) -> dict:
     """Bookkeeping for the summary: does the row close (1/0), and where do gaps start and end."""
     col = len(letters) + 1
-    closes, start, end = (get_column_letter(col + i) for i in range(3))
+    closes, start, end = (get_column_letter(col + i) for i in range(ASSEMBLY_COLUMNS))
     for i, (text, label) in enumerate((("closes [1/0]", "1 where every loop closes"),
                                        (f"gap from [{unit}]", f"first {word} of a gap"),
                                        (f"gap to [{unit}]", f"last {word} of a gap"))):
@@ -809,7 +812,7 @@ def _numbers_place(t: Template, model: Model) -> tuple[dict[str, str], int, int]
     and the sweep's first and last row: known before the sweep is laid out, so the drawing's
     guides can read them."""
     letters, first, last = _sweep_place(t, model)
-    start = len(letters) + 1
+    start = len(letters) + 1 + (ASSEMBLY_COLUMNS if model.closes else 0)
     return ({key: get_column_letter(start + i) for i, key in enumerate(_numbers_keys(model))},
             first, last)
 
