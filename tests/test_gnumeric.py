@@ -168,34 +168,17 @@ def test_gnumeric_computes_the_sweep_and_motion_as_the_reference(case, tmp_path)
     assert len(judged) > 1000
 
 
-def _aggregate_causes(path: Path, report: dict) -> list[str]:
-    """The likely causes whose formula calls AGGREGATE, which Gnumeric does not know."""
-    wb = openpyxl.load_workbook(path)
-    found = []
-    for where in report["likely_causes"]:
-        sheet, cell = where.split("!")
-        if "AGGREGATE(" in str(wb[sheet][cell].value):
-            found.append(where)
-    return found
-
-
 @pytest.mark.gnumeric
 @pytest.mark.parametrize("name", BUNDLED)
 def test_gnumeric_recalculates_every_bundled_book_like_the_reference(name, tmp_path, capsys):
-    """The goal: every formula cell of every bundled book, recalculated by Gnumeric, agrees
-    with the reference (1e-9 relative, as LibreOffice). Until the books stop calling
-    _xlfn.AGGREGATE (#NAME? in Gnumeric), a book whose every disagreement starts at such a
-    call is an expected failure; any other disagreement fails."""
+    """Every formula cell of every bundled book, recalculated by Gnumeric, agrees with the
+    reference (1e-9 relative, as LibreOffice)."""
     require_ssconvert()
     path = _book(name, tmp_path)
     status = main(["verify", str(path), "--engine", "gnumeric", "--json"])
     [report] = json.loads(capsys.readouterr().out)
     assert report["engine"] == "gnumeric" and report["status"] == status
     assert report["formula_cells"] == report["cells"] > 0 and not report["unjudged"]
-    if status == 1 and report["likely_causes"] \
-            and _aggregate_causes(path, report) == report["likely_causes"]:
-        pytest.xfail(f"Gnumeric has no AGGREGATE: {report['mismatches']} cells differ, "
-                     f"all downstream of {', '.join(report['likely_causes'])}")
     assert status == 0, report["likely_causes"][:6]
 
 
