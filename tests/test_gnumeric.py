@@ -201,3 +201,47 @@ def test_gnumeric_reads_every_bundled_book_and_its_charts(name, tmp_path):
 def _charts(path: Path) -> int:
     with zipfile.ZipFile(path) as z:
         return sum(1 for n in z.namelist() if re.fullmatch(r"xl/charts/chart\d+\.xml", n))
+
+
+# The same books in other length units: every header, number format and the --unit conversion of
+# the lengths, recalculated by Gnumeric and judged as above.
+UNIT_VARIANTS = [("fourbar", "in"), ("jansen", "m"), ("boom-cylinder", "cm"), ("pump", "ft")]
+
+
+@pytest.mark.gnumeric
+@pytest.mark.parametrize("name,unit", UNIT_VARIANTS, ids=[f"{n}-{u}" for n, u in UNIT_VARIANTS])
+def test_gnumeric_recalculates_unit_variants_like_the_reference(name, unit, tmp_path):
+    require_ssconvert()
+    path = tmp_path / f"{name}-{unit}.xlsx"
+    builder.build_file(templates.with_unit(templates.load(name), unit), path)
+    report = verifier.verify(path, "gnumeric")
+    assert report.status == 0, [f"{m.sheet}!{m.cell}: {m.expected!r} vs {m.got!r}"
+                                for c in report.checks for m in c.mismatches][:6]
+    assert report.formula_cells == report.cells > 0
+
+
+GNUMERIC_EXAMPLES = int(os.environ.get("LINKBOOK_GNUMERIC_EXAMPLES", "2"))
+
+
+@pytest.mark.gnumeric
+@pytest.mark.parametrize("family", BUNDLED)
+def test_gnumeric_recalculates_random_dimensions_like_the_reference(family, tmp_path):
+    """Random dimensions of every bundled mechanism (test_properties' draws: crossed branches,
+    non-Grashof linkages, loops that close over part of the sweep), recalculated by Gnumeric."""
+    require_ssconvert()
+    from hypothesis import HealthCheck, given, settings
+    from test_properties import dimensions, with_values
+    base = templates.load(family)
+
+    @settings(max_examples=GNUMERIC_EXAMPLES, deadline=None, derandomize=True, database=None,
+              suppress_health_check=[HealthCheck.too_slow])
+    @given(dimensions(base))
+    def check(values):
+        path = tmp_path / "random.xlsx"
+        builder.build_file(with_values(base, values), path)
+        report = verifier.verify(path, "gnumeric")
+        bad = [f"{m.sheet}!{m.cell}: {m.expected!r} vs {m.got!r}"
+               for c in report.checks for m in c.mismatches]
+        assert report.status == 0, (values, bad[:6])
+
+    check()
