@@ -14,7 +14,6 @@ import sys
 import zipfile
 from pathlib import Path
 
-import openpyxl
 import pytest
 from openpyxl import Workbook
 
@@ -22,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT / "src") not in sys.path:        # conftest does this too; kept for --noconftest
     sys.path.insert(0, str(ROOT / "src"))
 
-from linkbook import builder, cached, office, templates, verifier  # noqa: E402
+from linkbook import builder, office, templates, verifier  # noqa: E402
 from linkbook.cli import main  # noqa: E402
 
 BUNDLED = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
@@ -124,21 +123,8 @@ def test_errors_as_gnumeric_computes_them(tmp_path):
 def test_stale_cached_values_are_recalculated(tmp_path):
     """A wrong cached value and no fullCalcOnLoad: --recalc must compute it again."""
     require_ssconvert()
-    wb = Workbook()
-    wb.active["A1"] = 2
-    wb.active["B1"] = "=A1*3"
-    wb.save(tmp_path / "fresh.xlsx")
-    cached.add_cached_values(tmp_path / "fresh.xlsx", tmp_path / "cached.xlsx",
-                             {("Sheet", "B1"): 42.0})
-    with zipfile.ZipFile(tmp_path / "cached.xlsx") as zin, \
-            zipfile.ZipFile(tmp_path / "stale.xlsx", "w", zipfile.ZIP_DEFLATED) as zout:
-        for name in zin.namelist():
-            data = zin.read(name)
-            if name == "xl/workbook.xml":
-                data = data.replace(b' fullCalcOnLoad="1"', b"")
-            zout.writestr(name, data)
-    assert openpyxl.load_workbook(tmp_path / "stale.xlsx", data_only=True).active["B1"].value == 42
-    assert office.recalculated_values(tmp_path / "stale.xlsx", "gnumeric")[("Sheet", "B1")] == 6.0
+    from test_office import stale_book
+    assert office.recalculated_values(stale_book(tmp_path), "gnumeric")[("Sheet", "B1")] == 6.0
 
 
 @pytest.mark.gnumeric

@@ -338,6 +338,12 @@ def test_stale_cached_values_are_recalculated(tmp_path):
     """A wrong cached value and no fullCalcOnLoad: LibreOffice's default profile keeps the 42
     (measured); the private profile (OOXMLRecalcMode = 0) must recalculate."""
     require_soffice()
+    assert office.recalculated_values(stale_book(tmp_path))[("Sheet", "B1")] == 6.0
+
+
+def stale_book(tmp_path) -> Path:
+    """B1 = A1*3 with A1 = 2, its cached value a wrong 42, and no fullCalcOnLoad: an
+    application that shows the cache shows 42."""
     wb = Workbook()
     wb.active["A1"] = 2
     wb.active["B1"] = "=A1*3"
@@ -352,7 +358,7 @@ def test_stale_cached_values_are_recalculated(tmp_path):
                 data = data.replace(b' fullCalcOnLoad="1"', b"")
             zout.writestr(name, data)
     assert openpyxl.load_workbook(tmp_path / "stale.xlsx", data_only=True).active["B1"].value == 42
-    assert office.recalculated_values(tmp_path / "stale.xlsx")[("Sheet", "B1")] == 6.0
+    return tmp_path / "stale.xlsx"
 
 
 @pytest.mark.libreoffice

@@ -444,9 +444,8 @@ def _positive_float(text: str) -> float:
 
 
 def _animate(args) -> int:
-    from .animate import AnimationError, frames_of, render, terminal_progress, write_video
+    from .animate import frames_of, render, terminal_progress, write_video
     from .files import write_atomic
-    from .safety import UnsafeFile
     book = Path(args.book)
     if args.at is not None:
         return _picture(args, book)
@@ -458,36 +457,47 @@ def _animate(args) -> int:
     if kind == "mp4" and args.size % 2:
         raise InputError("--size", f"must be even for an .mp4 (got {args.size}): its frames "
                                    "are made of 2 × 2 blocks")
-    try:
-        if not book.is_file():
-            raise AnimationError(f"{book}: no such file")
+
+    def work():
         anim = frames_of(book, args.step)
         images = render(anim, args.size, terminal_progress())
         write_atomic(out, lambda tmp: write_video(images, tmp, args.fps, kind))
-    except OSError as exc:
-        print(f"linkbook: error: cannot write {out}: {exc.strerror or exc}", file=sys.stderr)
+        return anim, images
+    done = _drawing(book, out, work)
+    if done is None:
         return 2
-    except (AnimationError, UnsafeFile) as exc:
-        print(f"linkbook: error: {exc}", file=sys.stderr)
-        return 2
+    anim, images = done
     skipped = len(anim.frames) - len(anim.drawn)
     note = f" ({skipped} left out: the loop cannot close there)" if skipped else ""
     print(f"wrote {out}: {len(images)} frames{note}")
     return 0
 
 
+def _drawing(book: Path, out: Path, work):
+    """What work() returns, or None after one error line: the book missing or unusable, or
+    `out` not written. Shared by the animation and the single picture."""
+    from .animate import AnimationError
+    from .safety import UnsafeFile
+    try:
+        if not book.is_file():
+            raise AnimationError(f"{book}: no such file")
+        return work()
+    except OSError as exc:
+        print(f"linkbook: error: cannot write {out}: {exc.strerror or exc}", file=sys.stderr)
+    except (AnimationError, UnsafeFile) as exc:
+        print(f"linkbook: error: {exc}", file=sys.stderr)
+    return None
+
+
 def _picture(args, book: Path) -> int:
     """`animate --at VALUE`: the mechanism at one input value, as PNG or SVG."""
     from .animate import AnimationError, frame_at, render, write_svg
     from .files import write_atomic
-    from .safety import UnsafeFile
     out = Path(args.output) if args.output else book.with_name(f"{book.stem}-at-{args.at:g}.png")
     kind = out.suffix.lower().lstrip(".")
     if kind not in ("png", "svg"):
         raise InputError("--output", f"with --at, a .png or .svg file (got {out.name})")
-    try:
-        if not book.is_file():
-            raise AnimationError(f"{book}: no such file")
+    def work():
         anim = frame_at(book, args.at)
         if not anim.drawn:
             raise AnimationError(f"{book}: the loop cannot close at {anim.symbol} = {args.at:g}")
@@ -496,11 +506,9 @@ def _picture(args, book: Path) -> int:
         else:
             image = render(anim, args.size)[0]
             write_atomic(out, lambda tmp: image.save(tmp, format="PNG"))
-    except OSError as exc:
-        print(f"linkbook: error: cannot write {out}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
-    except (AnimationError, UnsafeFile) as exc:
-        print(f"linkbook: error: {exc}", file=sys.stderr)
+        return anim
+    anim = _drawing(book, out, work)
+    if anim is None:
         return 2
     print(f"wrote {out}: the mechanism at {anim.symbol} = {args.at:g} {anim.unit}".rstrip())
     return 0

@@ -10,7 +10,7 @@ from typing import Callable
 
 from .model import Model
 
-# Kinds of parameter, each with its own check (templates.check_value) and input validation.
+# Kinds of parameter, each with its own check (domain.check_value) and input validation.
 LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND = "length", "offset", "angle", "branch"
 RATE_KIND = "rate"     # the input's speed or acceleration: any number
 

@@ -12,11 +12,10 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from .domain import (BRANCH_WORDS, LENGTH_RANGE, LENGTH_SPAN, RATE_LIMIT,  # noqa: F401
-                     InputError, check_input, check_lengths_together, check_value,
-                     check_written_lengths, parse_number, written_lengths)
-from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND,
-                         RATE_KIND, Mechanism)
+from .domain import (BRANCH_WORDS, InputError, check_input, check_lengths_together,
+                     check_value, check_written_lengths, parse_number)
+from .mechanisms import (ANGLE_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND, RATE_KIND,
+                         Mechanism)
 
 def _template_dir() -> Path:
     """Installed: templates/ is packaged inside linkbook; from a checkout: the repo's templates/."""
