@@ -121,6 +121,15 @@ def test_the_text_fits_80_columns_and_names_units(tmp_path):
     assert any(line.split()[:1] == ["θ14"] and line.rstrip().endswith("deg") for line in lines)
 
 
+def test_a_long_label_is_wrapped_not_cut(tmp_path):
+    """The slider-crank's branch label is longer than the line has room for: all of it shows."""
+    done = run("info", "slider-crank", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert max(map(len, done.stdout.splitlines())) < 80
+    label = next(p.label for p in template("slider-crank").parameters if p.symbol == "branch")
+    assert " ".join(done.stdout.split()).count(" ".join(label.split())) == 1
+
+
 @pytest.mark.parametrize("target, says", [("missing.xlsx", "no such file"),
                                           ("no-such-template", "no-such-template")])
 def test_bad_input_is_one_line(tmp_path, target, says):

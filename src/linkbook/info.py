@@ -15,6 +15,7 @@ from .xlsx import coordinate_to_tuple
 # Motion columns whose largest magnitude the summary reports: angular velocities and
 # accelerations, the sliders' speeds and accelerations, the traced point's speed and acceleration
 PEAK_PREFIXES = ("omega_", "alpha_", "v_", "acc_", "vmag_", "amag_")
+WIDTH = 79      # a terminal's 80 columns, the last left free
 
 
 @dataclass
@@ -210,25 +211,32 @@ def _g(x) -> str:
     return layout.DASH if x is None else f"{x:.6g}"
 
 
+def _fit(line: str, indent: int = 4) -> list[str]:
+    """A line of at most WIDTH characters; a longer one wrapped, its rest indented."""
+    import textwrap
+    return textwrap.wrap(line, WIDTH, subsequent_indent=" " * indent) or [line]
+
+
 def lines(data: dict) -> list[str]:
     """The summary as text, each line under 80 characters."""
     inp = data["input"]
-    out = [f"{data['book']}: {data['mechanism']} — {data['title']}"[:79], "", "Inputs"]
+    out = [*_fit(f"{data['book']}: {data['mechanism']} — {data['title']}"), "", "Inputs"]
     for r in data["inputs"]:
         value = _g(r["value"]) if number(r["value"]) is not None else str(r["value"])
-        out.append(f"  {r['symbol']:10} {value:>12} {r['unit']:7} {r['quantity']}"[:79])
+        out += _fit(f"  {r['symbol']:10} {value:>12} {r['unit']:7} {r['quantity']}", 34)
     if data["fourbar_loops"]:
         out += ["", "Four-bar loops"]
-        out += [f"  {r['loop']}: {r['grashof']}"[:79] for r in data["fourbar_loops"]]
+        for r in data["fourbar_loops"]:
+            out += _fit(f"  {r['loop']}: {r['grashof']}")
     ranges = data["output"] + data["angles"]
     if ranges:
         out += ["", f"Over the {inp['symbol']} sweep (smallest … largest)"]
-        out += [f"  {r['what']:28} {_g(r['min']):>12} … {_g(r['max']):<12} {r['unit']}"[:79]
-                for r in ranges]
+        for r in ranges:
+            out += _fit(f"  {r['what']:28} {_g(r['min']):>12} … {_g(r['max']):<12} {r['unit']}")
     if data["transmission_angles"]:
         out += ["", "Transmission angles (smallest … largest)"]
-        out += [f"  {r['what']:28} {_g(r['min']):>12} … {_g(r['max']):<12} {r['unit']}"[:79]
-                for r in data["transmission_angles"]]
+        for r in data["transmission_angles"]:
+            out += _fit(f"  {r['what']:28} {_g(r['min']):>12} … {_g(r['max']):<12} {r['unit']}")
     out += ["", "Where the loop cannot close"]
     if data["gaps"]:
         out += [f"  from {_g(g['from'])} to {_g(g['to'])} {inp['unit']}" for g in data["gaps"]]
@@ -236,6 +244,7 @@ def lines(data: dict) -> list[str]:
         out.append(f"  it closes at every {inp['symbol']} of the sweep")
     if data["peaks"]:
         out += ["", f"Motion: largest magnitude over the sweep (at {inp['symbol']})"]
-        out += [f"  {'|' + p['what'] + '|':12} {_g(p['peak']):>12} {p['unit']:9} at "
-                f"{_g(p['at'])} {inp['unit']}"[:79] for p in data["peaks"]]
+        for p in data["peaks"]:
+            out += _fit(f"  {'|' + p['what'] + '|':12} {_g(p['peak']):>12} {p['unit']:9} at "
+                        f"{_g(p['at'])} {inp['unit']}")
     return out
