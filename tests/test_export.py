@@ -13,7 +13,7 @@ from test_cli import run
 from linkbook import engine
 from linkbook.export import tables, table_text
 from linkbook.info import Book
-from linkbook.sheets import read_meta
+from linkbook.sheets import read_meta, write_meta
 from linkbook.xlsx import column_letter
 
 
@@ -131,3 +131,20 @@ def test_a_missing_book_is_one_line(tmp_path):
     assert done.returncode == 2 and len(done.stderr.splitlines()) == 1
     assert "no such file" in done.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_record_that_does_not_match_the_book_is_one_line(tmp_path):
+    """The build record without its sweep entry: named as verify names it, nothing written."""
+    book = tmp_path / "fourbar.xlsx"
+    assert run("build", "fourbar", "-o", str(book)).returncode == 0
+    wb = openpyxl.load_workbook(book)
+    meta = read_meta(wb)
+    del meta["sweep"]
+    write_meta(wb["linkbook"], meta)
+    wb.save(book)
+    for command in (("export", str(book), "-o", str(tmp_path / "csv")), ("info", str(book))):
+        done = run(*command)
+        assert done.returncode == 2 and done.stdout == ""
+        assert len(done.stderr.splitlines()) == 1
+        assert "the build record (sheet linkbook) does not match the workbook" in done.stderr
+    assert not (tmp_path / "csv").exists()

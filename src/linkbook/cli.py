@@ -491,7 +491,7 @@ def _info(args) -> int:
     try:
         book = (info.open_book(Path(args.book)) if args.book.lower().endswith(".xlsx")
                 else info.built_book(args.book))
-        data = info.summary(book)
+        data = info.read_record(book, info.summary)
     except UnusableFile as exc:
         _error(exc)
         return 2
@@ -501,19 +501,19 @@ def _info(args) -> int:
 
 
 def _export(args) -> int:
-    from .export import export
+    from .export import export, table_texts
     from .files import ensure_folder
-    from .info import open_book
+    from .info import open_book, read_record
     from .verifier import UnusableFile
     book = Path(args.book)
     try:
-        opened = open_book(book)
+        texts = read_record(open_book(book), table_texts)
     except UnusableFile as exc:
         _error(exc)
         return 2
     outdir = ensure_folder(Path(args.outdir) if args.outdir
                            else book.with_name(book.stem + "_csv"), "--outdir")
-    for path in export(opened, outdir):
+    for path in export(texts, book.stem, outdir):
         print(f"wrote {path}")
     return 0
 

@@ -92,13 +92,19 @@ def file_name(book_stem: str, sheet: str) -> str:
     return f"{book_stem}-{sheet.replace(' ', '-')}.csv"
 
 
-def export(book: Book, outdir: Path) -> list[Path]:
-    """Write every table of `book` to OUTDIR/BOOK-SHEET.csv (UTF-8 with a byte-order mark, so
-    that Excel reads θ and μ right); each file written whole or not at all."""
+def table_texts(book: Book) -> list[tuple[str, str]]:
+    """(sheet, CSV text) of every table: all computed before any file is written."""
+    return [(table.sheet, table_text(book, table)) for table in tables(book)]
+
+
+def export(texts: list[tuple[str, str]], book_stem: str, outdir: Path) -> list[Path]:
+    """Write each table's text to OUTDIR/BOOK-SHEET.csv (UTF-8 with a byte-order mark, so that
+    Excel reads θ and μ right); each file written whole or not at all."""
     from .files import write_atomic
-    texts = [(outdir / file_name(Path(book.name).stem, table.sheet), table_text(book, table))
-             for table in tables(book)]    # every table computed before any file is written
-    for path, text in texts:
+    written = []
+    for sheet, text in texts:
+        path = outdir / file_name(book_stem, sheet)
         write_atomic(path, lambda tmp, text=text: Path(tmp).write_text(text,
                                                                         encoding="utf-8-sig"))
-    return [path for path, _ in texts]
+        written.append(path)
+    return written

@@ -55,6 +55,16 @@ def built_book(name_or_toml: str) -> Book:
     return Book(name_or_toml, built.workbook, built.meta, values)
 
 
+def read_record(book: Book, read):
+    """read(book), with a build record that does not match the book (a key missing, a cell
+    moved) turned into the one line verify gives for it."""
+    from .verifier import UnusableFile, _record_mismatch
+    try:
+        return read(book)
+    except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
+        raise UnusableFile(_record_mismatch(Path(book.name), exc)) from None
+
+
 def number(value) -> float | None:
     """A cell's value as a finite float, or None (an error, a text such as "—", empty)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
