@@ -72,6 +72,11 @@ def number(value) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
+def _plain(value):
+    """A number as it is; anything else (a text typed over a number, an error) as its text."""
+    return value if value is None or number(value) is not None else str(value)
+
+
 def column_values(book: Book, sheet: str, letter: str, rows) -> list:
     return [book.values.get((sheet, f"{letter}{r}")) for r in range(rows[0], rows[1] + 1)]
 
@@ -101,7 +106,7 @@ def _inputs(book: Book) -> list[dict]:
     rows = sorted(_row_of(info["cell"]) for info in book.meta["inputs"].values())
     return [{"quantity": _text(book, layout.MECH, f"A{row}"),
              "symbol": _text(book, layout.MECH, f"B{row}"),
-             "value": book.values.get((layout.MECH, f"C{row}")),
+             "value": _plain(book.values.get((layout.MECH, f"C{row}"))),
              "unit": _text(book, layout.MECH, f"D{row}")} for row in rows]
 
 
