@@ -28,6 +28,8 @@ EPILOG = """examples:
   linkbook build --all --outdir output          # every bundled template
   linkbook verify fourbar.xlsx                  # every formula against the reference
   linkbook animate fourbar.xlsx                 # fourbar.gif: the mechanism moving
+  linkbook info fourbar.xlsx                    # its numbers: ranges, Grashof class, peaks
+  linkbook export fourbar.xlsx -o tables/       # its tables as CSV files
 
 KEY in --set is the parameter's symbol as `linkbook list -v` shows it (a2, gamma3, ...).
 Lengths are in the template's unit, angles in degrees. Exit status: 0 done, 2 bad input or a
@@ -195,24 +197,31 @@ def _parser() -> argparse.ArgumentParser:
 
 def _info_parsers(sub) -> None:
     """`info` and `export`: a book's numbers, as its own formulas compute them."""
+    from textwrap import fill
     i = sub.add_parser("info", help="a summary of a book's (or a template's) numbers",
-                       description="Summarise a workbook, or a template built in memory (nothing "
+                       description=fill("Summarise a workbook, or a template built in memory (nothing "
                                    "is written): its inputs with units, the Grashof class of "
                                    "each four-bar loop, the range of the output and of each "
                                    "angle over the sweep, each transmission angle's range, the "
                                    "gaps where the loop cannot close, and the largest |ω|, |α|, "
                                    "speed and acceleration of the Motion sheet. Every number is "
                                    "computed by linkbook's engine from the book's own formulas, "
-                                   "so a book edited in Excel reports its edited values.",
+                                   "so a book edited in Excel reports its edited values.", 79),
                        epilog="examples:\n  linkbook info fourbar.xlsx\n  linkbook info "
-                              "fourbar\n  linkbook info mine.toml --json",
+                              "fourbar\n  linkbook info mine.toml --json\n\n"
+                              + fill("--json prints one object: book, mechanism, title, input "
+                                     "(symbol, unit), inputs, fourbar_loops, output, angles, "
+                                     "transmission_angles (each: what, unit, min, max), "
+                                     "not_closing, gaps (from, to), peaks (what, unit, peak, "
+                                     "at).", 79),
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     i.add_argument("book", metavar="BOOK.xlsx|NAME_OR_TOML",
                    help="a workbook, a bundled template name or a .toml file")
     i.add_argument("--json", action="store_true", help="print the summary as a JSON object")
     e = sub.add_parser("export", help="write a book's tables as CSV files",
-                       description="Write each table sheet of a workbook (Sweep, Motion, Grid, "
-                                   "Stroke sweep: those it has) to DIR/BOOK-SHEET.csv: the "
+                       description=fill("Write each table sheet of a workbook (Sweep, Motion, Grid, "
+                                   "Stroke sweep: those it has) to DIR/BOOK-SHEET.csv (a "
+                                   "space in a sheet's name written as -): the "
                                    "header rows as in the book, then one line per row, with "
                                    "the values linkbook's engine computes from the book's "
                                    "formulas (a book saved without values exports numbers "
@@ -221,7 +230,7 @@ def _info_parsers(sub) -> None:
                                    "text that starts with =, +, -, @, a tab or a carriage "
                                    "return prefixed with ' (so that no spreadsheet opening the "
                                    "CSV runs it as a formula); UTF-8 with a byte-order mark, "
-                                   "comma-separated.",
+                                   "comma-separated.", 79),
                        epilog="examples:\n  linkbook export fourbar.xlsx -o tables/",
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     e.add_argument("book", metavar="BOOK.xlsx")
