@@ -60,6 +60,14 @@ def test_fourbar_numbers_are_the_reference_numbers(tmp_path):
     assert abs(mu["max"] - np.degrees(np.nanmax(ref["mu"]))) <= DEG_TOL
     assert data["gaps"] == []
 
+    printed = run("info", str(book)).stdout.splitlines()
+    line = next(x for x in printed if x.split()[:1] == ["θ14"])
+    assert line.split()[1:] == [f"{shown['min']:.6g}", "…", f"{shown['max']:.6g}", "deg"]
+    line = next(x for x in printed if x.strip().startswith("transmission angle μ"))
+    assert line.split()[-4:] == [f"{mu['min']:.6g}", "…", f"{mu['max']:.6g}", "deg"]
+    assert f"four-bar loop A0 A B B0: {generic.grashof_class(*loop)}" in printed[
+        printed.index("Four-bar loops") + 1]
+
     omega = next(p for p in data["peaks"] if p["what"] == "ω14")
     assert omega["unit"] == "rad/s"
     ref_omega = np.abs(ref["omega_theta14"])
