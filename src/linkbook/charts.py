@@ -240,19 +240,55 @@ def _motion_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:
     specs = [("Angular velocities", omegas, ANG_SPEED), ("Angular accelerations", alphas,
                                                            ANG_ACCEL)]
     specs += [(f"{by_key[k].symbol}: {by_key[k].label}", [k], by_key[k].unit) for k in pair]
+    reference = _reference_sweep(t)
     for title, keys, unit in specs:
         if not keys:
             continue
         y_title = (header(by_key[keys[0]].symbol, unit, t.length_unit) if len(keys) == 1
                    else f"[{unit_text(unit, t.length_unit)}]")
         chart = _chart(title, x_title, y_title)
+        alike = coinciding(keys, reference)
         for k in keys:
-            chart.series.append(_series(ws_data, "A", letters[k], rows, by_key[k].symbol))
+            name = by_key[k].symbol
+            if alike.get(k):
+                # one line hides the other (which one is on top differs between
+                # applications): each legend entry says where the missing colour went
+                name += f" (= {', '.join(by_key[o].symbol for o in alike[k])}: one curve)"
+            chart.series.append(_series(ws_data, "A", letters[k], rows, name))
         chart.width, chart.height = 18, 10
         if mech.input_is_angle:
             _angle_axis(chart, t)
         ws.add_chart(chart, f"A{anchor_row}")
         anchor_row += 21
+
+
+EQUAL_REL = 1e-9      # two series within this share of their peak at every row are one curve
+
+
+def _reference_sweep(t: Template) -> dict:
+    """Every column over the sweep as the independent reference computes it: it, not the
+    formulas being charted, says which curves coincide."""
+    import numpy as np
+    from . import generic
+    return generic.solve(t.mechanism.description, t.values(), np.array(t.sweep.angles()))
+
+
+def same_curve(a, b) -> bool:
+    """Equal at every row of the sweep (relative to their peak), undefined at the same rows."""
+    import numpy as np
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    shown = np.isfinite(a)
+    if not shown.any() or not np.array_equal(shown, np.isfinite(b)):
+        return False
+    peak = max(np.abs(a[shown]).max(), np.abs(b[shown]).max())
+    return bool(np.abs(a[shown] - b[shown]).max() <= EQUAL_REL * max(peak, 1e-300))
+
+
+def coinciding(keys: list[str], reference: dict) -> dict[str, list[str]]:
+    """{key: the other keys whose series equals its own over the whole sweep}."""
+    known = [k for k in keys if k in reference]
+    return {k: [o for o in known if o != k and same_curve(reference[k], reference[o])]
+            for k in known}
 
 
 def _series_title(model: Model, key: str) -> str:

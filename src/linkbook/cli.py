@@ -28,6 +28,8 @@ EPILOG = """examples:
   linkbook build --all --outdir output          # every bundled template
   linkbook verify fourbar.xlsx                  # every formula against the reference
   linkbook animate fourbar.xlsx                 # fourbar.gif: the mechanism moving
+  linkbook info fourbar.xlsx                    # its numbers: ranges, Grashof class, peaks
+  linkbook export fourbar.xlsx -o tables/       # its tables as CSV files
 
 KEY in --set is the parameter's symbol as `linkbook list -v` shows it (a2, gamma3, ...).
 Lengths are in the template's unit, angles in degrees. Exit status: 0 done, 2 bad input or a
@@ -189,7 +191,51 @@ def _parser() -> argparse.ArgumentParser:
                    help="a sheet to print (repeat for more; default: every visible sheet)")
     p.add_argument("--dpi", type=_positive_int(30, 600), default=PREVIEW_DPI,
                    help=f"resolution of the PNGs (30-600, default {PREVIEW_DPI})")
+    _info_parsers(sub)
     return ap
+
+
+def _info_parsers(sub) -> None:
+    """`info` and `export`: a book's numbers, as its own formulas compute them."""
+    from textwrap import fill
+    i = sub.add_parser("info", help="a summary of a book's (or a template's) numbers",
+                       description=fill("Summarise a workbook, or a template built in memory (nothing "
+                                   "is written): its inputs with units, the Grashof class of "
+                                   "each four-bar loop, the range of the output and of each "
+                                   "angle over the sweep, each transmission angle's range, the "
+                                   "gaps where the loop cannot close, and the largest |ω|, |α|, "
+                                   "speed and acceleration of the Motion sheet. Every number is "
+                                   "computed by linkbook's engine from the book's own formulas, "
+                                   "so a book edited in Excel reports its edited values.", 79),
+                       epilog="examples:\n  linkbook info fourbar.xlsx\n  linkbook info "
+                              "fourbar\n  linkbook info mine.toml --json\n\n"
+                              + fill("--json prints one object: book, mechanism, title, input "
+                                     "(symbol, unit), inputs, fourbar_loops, output, angles, "
+                                     "transmission_angles (each: what, unit, min, max), "
+                                     "not_closing, gaps (from, to), peaks (what, unit, peak, "
+                                     "at).", 79),
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    i.add_argument("book", metavar="BOOK.xlsx|NAME_OR_TOML",
+                   help="a workbook, a bundled template name or a .toml file")
+    i.add_argument("--json", action="store_true", help="print the summary as a JSON object")
+    e = sub.add_parser("export", help="write a book's tables as CSV files",
+                       description=fill("Write each table sheet of a workbook (Sweep, Motion, Grid, "
+                                   "Stroke sweep: those it has) to DIR/BOOK-SHEET.csv (a "
+                                   "space in a sheet's name written as -): the "
+                                   "header rows as in the book, then one line per row, with "
+                                   "the values linkbook's engine computes from the book's "
+                                   "formulas (a book saved without values exports numbers "
+                                   "too). Numbers in full precision (Python's repr); an error "
+                                   "value as its code, #N/A where the loop cannot close; a "
+                                   "text that starts with =, +, -, @, a tab or a carriage "
+                                   "return prefixed with ' (so that no spreadsheet opening the "
+                                   "CSV runs it as a formula); UTF-8 with a byte-order mark, "
+                                   "comma-separated.", 79),
+                       epilog="examples:\n  linkbook export fourbar.xlsx -o tables/",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    e.add_argument("book", metavar="BOOK.xlsx")
+    e.add_argument("-o", "--outdir", metavar="DIR", default=None,
+                   help="folder for the CSV files (default: BOOK_csv next to the book)")
 
 
 def run() -> None:
@@ -296,6 +342,10 @@ def _main(argv: list[str] | None) -> int:
             return _preview(args)
         if args.command == "animate":
             return _animate(args)
+        if args.command == "info":
+            return _info(args)
+        if args.command == "export":
+            return _export(args)
     except (InputError, CannotWrite) as exc:
         _error(exc)
         return 2
@@ -441,6 +491,40 @@ def _positive_float(text: str) -> float:
     if not (value > 0 and value < float("inf")):
         raise argparse.ArgumentTypeError(f"must be a positive number (got {text})")
     return value
+
+
+def _info(args) -> int:
+    import json
+    from . import info
+    from .verifier import UnusableFile
+    try:
+        book = (info.open_book(Path(args.book)) if args.book.lower().endswith(".xlsx")
+                else info.built_book(args.book))
+        data = info.read_record(book, info.summary)
+    except UnusableFile as exc:
+        _error(exc)
+        return 2
+    print(json.dumps(data, indent=2, ensure_ascii=False) if args.json
+          else "\n".join(info.lines(data)))
+    return 0
+
+
+def _export(args) -> int:
+    from .export import export, table_texts
+    from .files import ensure_folder
+    from .info import open_book, read_record
+    from .verifier import UnusableFile
+    book = Path(args.book)
+    try:
+        texts = read_record(open_book(book), table_texts)
+    except UnusableFile as exc:
+        _error(exc)
+        return 2
+    outdir = ensure_folder(Path(args.outdir) if args.outdir
+                           else book.with_name(book.stem + "_csv"), "--outdir")
+    for path in export(texts, book.stem, outdir):
+        print(f"wrote {path}")
+    return 0
 
 
 def _animate(args) -> int:

@@ -1,0 +1,110 @@
+"""`linkbook export`: the tables of a built book as CSV, one file per table sheet.
+
+The values are the engine's, computed from the book's formulas, so a book saved without stored
+values exports numbers too. Where each table's header and rows are comes from the build
+record (sheets.py)."""
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import sheets as layout
+from .info import Book
+
+# A text field starting with one of these is read as a formula by spreadsheets that open the
+# CSV (CSV has no cell types): OWASP's advice is to prefix it with an apostrophe
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+@dataclass
+class Table:
+    sheet: str
+    rows: list[int]     # the header rows as in the book, then the data rows
+
+
+def tables(book: Book) -> list[Table]:
+    """The book's table sheets in its tab order: Sweep, Motion, Grid, Stroke sweep (those it
+    has)."""
+    meta, found = book.meta, {}
+    r0, r1 = meta["sweep"]["rows"]
+    found[meta["sweep"].get("sheet", layout.SWEEP)] = [r0 - 1, *range(r0, r1 + 1)]
+    if meta.get("motion"):
+        m = meta["motion"]
+        # the header above the current position's row; the table from the sweep's first row
+        found[m["sheet"]] = [m["current_row"] - 1, *range(m["rows"][0], m["rows"][1] + 1)]
+    if meta.get("grid"):
+        g = meta["grid"]
+        stroke = [g["stroke_row"]] if "stroke_row" in g else []
+        found[g["sheet"]] = [g["param_row"] - 1, g["param_row"],
+                             *range(g["rows"][0], g["rows"][1] + 1), *stroke]
+    if meta.get("stroke"):
+        s = meta["stroke"]
+        found[s["sheet"]] = [s["param_row"], *range(s["rows"][0], s["rows"][1] + 1)]
+    return [Table(name, found[name]) for name in book.wb.sheetnames if name in found]
+
+
+def field(value) -> str:
+    """One CSV field: a number in full precision (repr), an error as its code (#N/A), a text
+    guarded against being read as a formula, an empty cell empty."""
+    from .engine import error_code
+    if value is None:
+        return ""
+    if isinstance(value, bool):
+        return "TRUE" if value else "FALSE"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else "#NUM!"
+    code = error_code(value)
+    if code is not None:
+        return code
+    text = str(value)
+    return "'" + text if text.startswith(FORMULA_STARTS) else text
+
+
+def _last_column(book: Book, table: Table) -> int:
+    """The table's width: its last column holding anything in any of its rows."""
+    from .xlsx import coordinate_to_tuple
+    rows, last = set(table.rows), 0
+    for (sheet, cell), value in book.values.items():
+        if sheet == table.sheet and value is not None and value != "":
+            row, col = coordinate_to_tuple(cell)
+            if row in rows:
+                last = max(last, col)
+    return last
+
+
+def table_text(book: Book, table: Table) -> str:
+    from .xlsx import column_letter
+    letters = [column_letter(c) for c in range(1, _last_column(book, table) + 1)]
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\r\n")
+    for row in table.rows:
+        writer.writerow([field(book.values.get((table.sheet, f"{letter}{row}")))
+                         for letter in letters])
+    return out.getvalue()
+
+
+def file_name(book_stem: str, sheet: str) -> str:
+    return f"{book_stem}-{sheet.replace(' ', '-')}.csv"
+
+
+def table_texts(book: Book) -> list[tuple[str, str]]:
+    """(sheet, CSV text) of every table: all computed before any file is written."""
+    return [(table.sheet, table_text(book, table)) for table in tables(book)]
+
+
+def export(texts: list[tuple[str, str]], book_stem: str, outdir: Path) -> list[Path]:
+    """Write each table's text to OUTDIR/BOOK-SHEET.csv (UTF-8 with a byte-order mark, so that
+    Excel reads θ and μ right); each file written whole or not at all."""
+    from .files import write_atomic
+    written = []
+    for sheet, text in texts:
+        path = outdir / file_name(book_stem, sheet)
+        write_atomic(path, lambda tmp, text=text: Path(tmp).write_text(text,
+                                                                        encoding="utf-8-sig"))
+        written.append(path)
+    return written

@@ -1,0 +1,148 @@
+"""`linkbook info`: a book's numbers at the terminal, each one equal to the independent
+reference's (generic.py), also after the book is edited; a template summarised in memory."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import openpyxl
+import pytest
+
+from conftest import template
+from test_cli import run
+
+from linkbook import generic
+
+DEG_TOL = 1e-9      # verify's bound for an angle
+
+
+def _book(tmp_path, *sets) -> tuple:
+    out = tmp_path / "fourbar.xlsx"
+    done = run("build", "fourbar", *(a for s in sets for a in ("--set", s)), "-o", str(out))
+    assert done.returncode == 0, done.stderr
+    return out, template("fourbar", sets)
+
+
+def _info(target, cwd=None) -> dict:
+    done = run("info", str(target), "--json", cwd=cwd)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+def _reference(t) -> dict:
+    return generic.solve(t.mechanism.description, t.values(), np.array(t.sweep.angles()))
+
+
+def _range(data: dict, section: str, symbol: str) -> dict:
+    return next(r for r in data[section] if r["what"].split()[-1] == symbol)
+
+
+def _same_angle(a: float, b: float) -> bool:
+    return abs((a - b + 180.0) % 360.0 - 180.0) <= DEG_TOL
+
+
+def test_fourbar_numbers_are_the_reference_numbers(tmp_path):
+    book, t = _book(tmp_path)
+    data = _info(book)
+    ref = _reference(t)
+    loop = generic.fourbar_loops(t.mechanism.description, t.values())[0]
+    assert [r["grashof"] for r in data["fourbar_loops"]] == [generic.grashof_class(*loop)]
+
+    theta14 = np.unwrap(ref["theta14"])     # one continuous curve: its range is the swing
+    shown = _range(data, "angles", "θ14")
+    assert shown["unit"] == "deg"
+    assert _same_angle(shown["min"], np.degrees(theta14.min()))
+    assert _same_angle(shown["max"], np.degrees(theta14.max()))
+    assert abs((shown["max"] - shown["min"]) - np.degrees(np.ptp(theta14))) <= DEG_TOL
+
+    mu = _range(data, "transmission_angles", "μ")
+    assert abs(mu["min"] - np.degrees(np.nanmin(ref["mu"]))) <= DEG_TOL
+    assert abs(mu["max"] - np.degrees(np.nanmax(ref["mu"]))) <= DEG_TOL
+    assert data["gaps"] == []
+
+    printed = run("info", str(book)).stdout.splitlines()
+    line = next(x for x in printed if x.split()[:1] == ["θ14"])
+    assert line.split()[1:] == [f"{shown['min']:.6g}", "…", f"{shown['max']:.6g}", "deg"]
+    line = next(x for x in printed if x.strip().startswith("transmission angle μ"))
+    assert line.split()[-4:] == [f"{mu['min']:.6g}", "…", f"{mu['max']:.6g}", "deg"]
+    assert f"four-bar loop A0 A B B0: {generic.grashof_class(*loop)}" in printed[
+        printed.index("Four-bar loops") + 1]
+
+    omega = next(p for p in data["peaks"] if p["what"] == "ω14")
+    assert omega["unit"] == "rad/s"
+    ref_omega = np.abs(ref["omega_theta14"])
+    assert abs(omega["peak"] - ref_omega.max()) <= 1e-9 * ref_omega.max()
+    assert omega["at"] == t.sweep.angles()[int(np.argmax(ref_omega))]
+
+
+def _gaps_of(angles, assembled) -> list[dict]:
+    """The reference's runs of input angles where the loop does not close."""
+    gaps, start = [], None
+    for i, ok in enumerate(assembled):
+        if not ok and start is None:
+            start = angles[i]
+        if not ok and (i + 1 == len(angles) or assembled[i + 1]):
+            gaps.append({"from": start, "to": angles[i]})
+            start = None
+    return gaps
+
+
+def test_an_edited_book_reports_its_edited_values(tmp_path):
+    """a2 typed over in the saved book (as in Excel): the loop turns non-Grashof and leaves
+    gaps; info reports those, the reference's, not the numbers the book was built with."""
+    book, _ = _book(tmp_path)
+    wb = openpyxl.load_workbook(book)
+    wb["Mechanism"]["C8"] = 60          # a2, the crank
+    wb.save(book)
+    data = _info(book)
+    edited = template("fourbar", ["a2=60"])
+    ref = _reference(edited)
+    loop = generic.fourbar_loops(edited.mechanism.description, edited.values())[0]
+    assert data["fourbar_loops"][0]["grashof"] == generic.grashof_class(*loop) \
+        == "non-Grashof: triple rocker"
+    a2 = next(r for r in data["inputs"] if r["symbol"] == "a2")
+    assert (a2["value"], a2["unit"]) == (60, "mm")
+    expected = _gaps_of(edited.sweep.angles(), ref["assembled"])
+    assert expected and data["gaps"] == expected
+    assert data["not_closing"] == int((~ref["assembled"]).sum())
+
+
+def test_a_template_is_summarised_in_memory_as_its_book_is(tmp_path):
+    book, _ = _book(tmp_path)
+    from_book = _info(book)
+    empty = tmp_path / "here"
+    empty.mkdir()
+    from_template = _info("fourbar", cwd=empty)
+    assert list(empty.iterdir()) == []      # nothing written
+    for key in ("fourbar_loops", "angles", "transmission_angles", "gaps", "peaks", "inputs"):
+        assert from_template[key] == from_book[key]
+
+
+def test_the_text_fits_80_columns_and_names_units(tmp_path):
+    book, _ = _book(tmp_path, "a2=60")
+    done = run("info", str(book))
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert max(map(len, lines)) < 80
+    text = done.stdout
+    assert "non-Grashof: triple rocker" in text and "from " in text and "rad/s" in text
+    assert any(line.split()[:1] == ["θ14"] and line.rstrip().endswith("deg") for line in lines)
+
+
+def test_a_long_label_is_wrapped_not_cut(tmp_path):
+    """The slider-crank's branch label is longer than the line has room for: all of it shows."""
+    done = run("info", "slider-crank", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert max(map(len, done.stdout.splitlines())) < 80
+    label = next(p.label for p in template("slider-crank").parameters if p.symbol == "branch")
+    assert " ".join(done.stdout.split()).count(" ".join(label.split())) == 1
+
+
+@pytest.mark.parametrize("target, says", [("missing.xlsx", "no such file"),
+                                          ("no-such-template", "no-such-template")])
+def test_bad_input_is_one_line(tmp_path, target, says):
+    done = run("info", target, cwd=tmp_path)
+    assert done.returncode == 2
+    assert done.stdout == ""
+    assert len(done.stderr.splitlines()) == 1 and says in done.stderr
+    assert done.stderr.startswith("linkbook: error: ")
