@@ -30,6 +30,12 @@ DEAD_CENTRE = ["--set", "a1=10", "--set", "a2=20", "--set", "a3=4", "--set", "a4
                "--set", "b3=3", "--set", "c3=2", "--step", "10"]
 NEAR_CHANGE_POINT = ["--set", "a4=42.69"]       # s + l exceeds p + q by 1e-4 of it
 RAM_DEAD_CENTRE = ["--set", "a4=100", "--set", "a5=300", "--set", "b1=-190"]
+# A Jansen leg whose knee angles (θ of the links p and q at C) reach below -180° in radians, out
+# of every allowed window unless the degree view wraps them: the bundled books' degree views
+# already fall in the window of their windowed ATAN2 radians.
+WIDE_KNEE = [f"--set={s}" for s in ("m=20.717", "a=38.0", "l=7.8", "j=94.462", "b=25.522",
+                                    "k=82.043", "c=53.014", "d=77.328", "e=58.441", "f=37.167",
+                                    "g=47.763", "h=44.116", "i=90.412")]
 
 
 @dataclass
@@ -75,7 +81,8 @@ MUTANTS = [
            "    step = t.stroke_step\n", "    step = t.stroke_step * 10\n",
            [("pump", ["--step", "5"])]),
     Mutant("window: a degree view without its 360° window", "src/linkbook/workbook.py",
-           'return f"=MOD(DEGREES({ref}){shift},360){back}"', 'return f"=DEGREES({ref})"'),
+           'return f"=MOD(DEGREES({ref}){shift},360){back}"', 'return f"=DEGREES({ref})"',
+           [("jansen", WIDE_KNEE)]),
     Mutant("frame: the drawing's centre y from x max", "src/linkbook/frames.py",
            "\"cy\": f\"=({ref['ymin']}+{ref['ymax']})/2\"",
            "\"cy\": f\"=({ref['ymin']}+{ref['xmax']})/2\""),

@@ -15,9 +15,9 @@ from openpyxl.utils import get_column_letter, quote_sheetname
 from .model import LENGTH, Model
 from .templates import Template
 from .workbook import (BOLD, DASH, DERIVED_FILL, DRAWING_COLUMNS, LINE_HEIGHT, MECH, NOTE,
-                       SWEEP, TITLE, Formula, _head, _text, column_range, label_lines,
-                       number_format, numbers_only, put, set_formula, table_style, text_width,
-                       unit_text)
+                       SWEEP, TITLE, Formula, _head, _text, _wrap_across, column_range,
+                       label_lines, number_format, numbers_only, put, set_formula, table_style,
+                       text_width, unit_text)
 
 SHEET = "Drawing data"
 HALF = 5                 # the frame: -HALF … HALF grid squares on both axes
@@ -164,8 +164,9 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
     # same rows as one block, and took the mapped columns (which read the grid square, which
     # reads the copies' MIN and MAX) and the copies beside them for a circular reference.
     c += 1
-    _text(ws, f"{get_column_letter(c)}3", f"What the frame must hold, as numbers ({DASH} where "
-          "a coordinate is #N/A): the extents' MIN and MAX read these", NOTE)
+    note, first_copy = (f"What the frame must hold, as numbers ({DASH} where a coordinate is "
+                        "#N/A): the extents' MIN and MAX read these"), c
+    _text(ws, f"{get_column_letter(c)}3", note, NOTE)
     ranges = []
     for axis in sources:
         ranges.append([])
@@ -179,6 +180,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
                             "rows": [FIRST_ROW, last], **source["of"]})
             ranges[-1].append(column_range(SHEET, get_column_letter(c), FIRST_ROW, last))
             c += 1
+    _wrap_across(ws, 3, get_column_letter(first_copy), get_column_letter(c - 1), note)
     formulas = {
         "xmin": _extreme("MIN", ranges[0]), "xmax": _extreme("MAX", ranges[0]),
         "ymin": _extreme("MIN", ranges[1]), "ymax": _extreme("MAX", ranges[1]),
