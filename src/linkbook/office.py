@@ -601,7 +601,9 @@ def preview(path, outdir, dpi: int = PREVIEW_DPI, sheets: list[str] | None = Non
             made = sorted(pictures.glob("*.png"), key=_page_number)
             if not made:
                 raise OfficeFailed(f"no pages were rendered from sheet {sheet!r}")
-            out += [Path(shutil.move(str(p), outdir / p.name)) for p in made]
+            # pdftoppm pads the page number to the page count's digits (-01 of 12 pages)
+            out += [Path(shutil.move(str(p), outdir / f"{name}-{_page_number(p)}.png"))
+                    for p in made]
         return out
 
 
