@@ -226,8 +226,9 @@ def test_modes_chosen(book_path):
                 for g in eng.groups}
     assert by_shape[(SWEEP, "B5")].mode == "vector"
     assert by_shape[(SWEEP, "B5")].batch.row_by_row == 0
-    assert by_shape[(SWEEP, "J5")].mode == "vector"             # MAX runs row by row inside
-    assert by_shape[(SWEEP, "J5")].batch.row_by_row > 0
+    assert by_shape[(SWEEP, "J5")].mode == "vector"             # MAX picks its winner per row
+    assert by_shape[(SWEEP, "J5")].batch.row_by_row == 0
+    assert by_shape[(SWEEP, "J5")].batch.numeric > 0
     assert by_shape[(SWEEP, "M5")].batch.row_by_row > 0         # the overflow collapsed ^
     assert by_shape[(SWEEP, "T5")].mode == "vector"   # compiled from row 6: B5, $B$5 collide in 5
     assert by_shape[(SWEEP, "U5")].mode == "vector"   # B5 and $B5 are the same cell in every row
@@ -524,3 +525,32 @@ def test_verifying_a_book_imports_no_scipy(tmp_path):
     out = subprocess.run([sys.executable, "-c", code, str(book)], capture_output=True,
                          text=True, check=True).stdout.split()
     assert out == ["0", "False", "True", "1.128515", "True", "True", "True", "True", "True"], out
+
+
+def test_min_and_max_pick_the_first_winner_as_per_cell_calls_do():
+    """MIN and MAX of one value per row run on arrays in vector calls: the winner is the first
+    smallest (largest) argument itself, as formulas' per-cell call gives it (value and type);
+    rows with an int, a bool, a text, a NaN or an error take the per-cell path."""
+    pairs = [(0.0, -0.0), (-0.0, 0.0), (0.5, 0.5), (1.5, -2.5), (-2.5, 1.5), (1e-300, -1e-300),
+             (3.0, 3), (3, 3.0), (2.0, True), ("4", 1.0), (1.0, "#N/A"), (float("nan"), 1.0),
+             (1.0, float("nan"))]
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    for r, (a, b) in enumerate(pairs, start=1):
+        for col, v in ((1, a), (2, b)):
+            ws.cell(row=r, column=col, value=f"={v}" if v == "#N/A" else v)
+        for col, f in enumerate(("MIN", "MAX"), start=3):
+            ws.cell(row=r, column=col, value=f"={f}(A{r},B{r})")
+            ws.cell(row=r, column=col + 2, value=f"={f}(B{r},A{r},B{r})")
+    vector = engine.Engine(wb)
+    got = vector.run()
+    want = engine.Engine(wb, vectorize=False).run()
+    assert vector.stats["vector_groups"] >= 4
+    for key, w in want.items():
+        g = got[key]
+        if engine.is_error(w) or engine.is_error(g):
+            assert engine.error_code(g) == engine.error_code(w), key
+        elif isinstance(w, float) and math.isnan(w):
+            assert isinstance(g, float) and math.isnan(g), key
+        else:
+            assert type(g) is type(w) and g == w, (key, g, w)

@@ -814,6 +814,48 @@ def _numeric_call(form, func, args, n: int):
     return out.reshape(n, 1).view(Array)
 
 
+# MIN and MAX of one value per row (the cosine rule's domain test: ABS(s-MAX(p,q))>MIN(p,q)).
+# formulas gives the first smallest (largest) argument itself, as Python's min (max) does; on
+# rows where every argument is a finite float the winner is picked from the arguments here.
+EXTREMES = {"MIN": np.less, "MAX": np.greater}
+
+
+def _extreme_call(better, func, args, n: int):
+    """MIN or MAX (`better`: np.less, np.greater) over n rows: the argument that wins, itself,
+    on rows of finite floats; `func` row by row on the rest.  None when an argument is not a
+    plain array or scalar (the caller runs `func` row by row)."""
+    flat = []
+    for a in args:
+        if isinstance(a, np.ndarray) and a.size in (1, n):
+            a = a.reshape(-1)
+        elif type(a) in _FLOAT_TYPES:
+            a = np.array([a], object)
+        else:
+            return None
+        flat.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
+    plain = np.ones(n, bool)
+    xs = []
+    for a in flat:
+        plain &= np.fromiter((type(v) in _FLOAT_TYPES for v in a), bool, n)
+        x = np.zeros(n)
+        x[plain] = a[plain].astype(float)
+        xs.append(x)
+    for x in xs:
+        plain &= np.isfinite(x)
+    best, value = flat[0], xs[0]
+    for a, x in zip(flat[1:], xs[1:]):
+        wins = better(x, value)
+        best, value = np.where(wins, a, best), np.where(wins, x, value)
+    out = np.empty(n, object)
+    out[:] = list(best)
+    for i in np.flatnonzero(~plain):
+        out[i] = _single(func(*[np.asarray(a[i:i + 1], object).reshape(1, 1) for a in flat]))
+    return out.reshape(n, 1).view(Array)
+
+
+_FLOAT_TYPES = frozenset({float, np.float64})
+
+
 def _is_broadcast(a: np.ndarray) -> bool:
     return a.strides == (0,)
 
@@ -835,17 +877,23 @@ class _NotScalar(Exception):
     """A row-by-row node returned more than one value: the group cannot be vectorized."""
 
 
-def _vector_node(func, batch: _Batch, elementwise: bool, numeric=None):
+def _vector_node(func, batch: _Batch, elementwise: bool, numeric=None, extreme=None):
     """Wrap a node of the compiled graph for (n, 1) calls.  A node with a numeric form runs it
-    on the rows of finite numbers.  Element-wise nodes run once; if their output is not (n, 1)
-    (an exception collapsed it), or the node is not element-wise, it runs row by row on (1, 1)
-    slices, exactly as in a per-cell call."""
+    on the rows of finite numbers, MIN and MAX (`extreme`) pick their winner on rows of finite
+    floats.  Element-wise nodes run once; if their output is not (n, 1) (an exception collapsed
+    it), or the node is not element-wise, it runs row by row on (1, 1) slices, exactly as in a
+    per-cell call."""
     def node(*args, **kw):
         n = batch.n
         if n == 1 or not any(_size(a) == n for a in args):
             return func(*args, **kw)
         if numeric is not None and not kw:
             out = _numeric_call(numeric, func, args, n)
+            if out is not None:
+                batch.numeric += 1
+                return out
+        if extreme is not None and not kw:
+            out = _extreme_call(extreme, func, args, n)
             if out is not None:
                 batch.numeric += 1
                 return out
@@ -886,7 +934,8 @@ def _wrap(func, name: str, batch: _Batch | None):
     """A node's function as the graph runs it: for vector calls, wrapped by its name."""
     if batch is None:
         return func
-    return _vector_node(func, batch, name in ELEMENTWISE, NUMERIC_FORMS.get(name))
+    return _vector_node(func, batch, name in ELEMENTWISE, NUMERIC_FORMS.get(name),
+                        EXTREMES.get(name))
 
 
 def _formulas_graph(formula: str, batch: _Batch | None, extra: dict):
