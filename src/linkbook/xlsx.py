@@ -55,7 +55,8 @@ _INDEX = re.compile(r"[ \t\r\n]*[0-9]+[ \t\r\n]*")
 # of 64 nested brackets or fewer passes whatever its brackets are).
 FORMULA_LENGTH_LIMIT = 8192
 FORMULA_NESTING_LIMIT = 64
-_BRACKETS = re.compile(r'"(?:[^"]|"")*"|\'(?:[^\']|\'\')*\'|[()]')
+_QUOTED = re.compile(r'"(?:[^"]|"")*"|\'(?:[^\']|\'\')*\'')
+_NOT_BRACKET = re.compile(r"[^()]+")
 
 
 class Unsupported(Exception):
@@ -336,17 +337,22 @@ def _check_formula(text: str, part: str, title: str, address: str) -> None:
                       f"characters; Excel's limit is {FORMULA_LENGTH_LIMIT:,}")
     if text.count("(") <= FORMULA_NESTING_LIMIT:
         return
-    depth = deepest = 0
-    for m in _BRACKETS.finditer(text):
-        bracket = m.group()
-        if bracket == "(":
-            depth += 1
-            deepest = max(deepest, depth)
-        elif bracket == ")":
-            depth -= 1
+    deepest = _nesting(text)
     if deepest > FORMULA_NESTING_LIMIT:
         raise Refused(f"{part}: cell {title}!{address} has a formula nested {deepest} brackets "
                       f"deep; Excel's limit is {FORMULA_NESTING_LIMIT} levels")
+
+
+def _nesting(text: str) -> int:
+    """How deep a formula's brackets nest (outside its strings and quoted sheet names), up to
+    one past the limit: each pass takes away the innermost pairs, so the passes count the
+    levels, each a scan at C speed. A bracket never closed counts as one more level."""
+    brackets = _NOT_BRACKET.sub("", _QUOTED.sub("", text))
+    passes = 0
+    while "()" in brackets and passes <= FORMULA_NESTING_LIMIT:
+        brackets = brackets.replace("()", "")
+        passes += 1
+    return passes + brackets.count("(")
 
 
 def coordinate_to_tuple(coordinate: str) -> tuple[int, int]:
