@@ -168,3 +168,29 @@ def test_cells_of_a_deleted_sheet_are_not_counted_as_compared(book, tmp_path):
     assert report.status == 1 and not report.replaced
     assert len(report.absent) == gone > 0
     assert report.cells == report.formula_cells == linkbook.verify(book).formula_cells - gone
+
+
+@pytest.mark.parametrize("value,kind,shown", [(b"1", b"b", "True"), (b"1", b"str", "'1'")],
+                         ids=["TRUE for 1", "the text 1 for 1"])
+def test_a_value_of_another_kind_stored_differs(book, tmp_path, capsys, value, kind, shown):
+    """TRUE or the text "1" stored where the formula gives the number 1: a reader that does not
+    calculate shows TRUE or left-aligned text, however close the numbers."""
+    closes = _first_closes(book)
+    assert float(stored_in(book, "Sweep", closes)) == 1.0 and linkbook.verify(book).status == 0
+    path = with_stored(book, tmp_path / "kind.xlsx", "Sweep", closes, value, kind)
+    code, text, data = verdict(path, capsys)
+    assert code == 1 and data["stored_values_differ"] == 1
+    assert f"Sweep!{closes}: expected 1" in text and f"got {shown}" in text
+
+
+def test_a_boolean_stored_as_another_word_is_refused(book, tmp_path, capsys):
+    path = with_stored(book, tmp_path / "two.xlsx", "Sweep", _first_closes(book), b"2", b"b")
+    assert main(["verify", str(path)]) == 2
+    assert "is not a boolean" in capsys.readouterr().err
+
+
+def _first_closes(book: Path) -> str:
+    """The first cell of the sweep's "closes [1/0]" column (1 where every loop closes)."""
+    from linkbook import sheets
+    sweep = sheets.read_meta(xlsx.read(book))["sweep"]
+    return f"{sweep['columns']['closes']}{sweep['rows'][0]}"

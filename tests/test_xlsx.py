@@ -222,14 +222,23 @@ def test_a_name_defined_twice_is_refused(tmp_path, fourbar_bytes, capsys, first)
 # and 'NaN' as infinities no formula can use (recalculated and saved as CSV); Python's int()
 # and float() read 35, 35, an error, an error, inf, inf and nan.
 @pytest.mark.parametrize("stored", ["3_5", "３５", "0x10", "35.0.0", "1e999", "INF", "NaN",
-                                    "3 5", "35mm", "1e", "+-35"])
+                                    "3 5", "35mm", "1e", "+-35", "0" * 5000 + "35"])
 def test_a_number_the_application_reads_otherwise_is_refused(tmp_path, fourbar_bytes, capsys,
                                                              stored):
     cell, part = INPUT_A2
     path = _damaged(tmp_path, fourbar_bytes, part, cell, cell.replace(">35<", f">{stored}<"))
     code, last = _verify(path, capsys)
     assert code == 2
-    assert f"{part}: cell Mechanism!C8 holds {stored!r}" in last, last
+    assert f"{part}: cell Mechanism!C8 holds {stored[:40]!r}" in last, last
+
+
+def test_a_shared_string_the_table_lacks_is_refused(tmp_path, fourbar_bytes, capsys):
+    cell, part = INPUT_A2
+    path = _damaged(tmp_path, fourbar_bytes, part, cell,
+                    cell.replace(' t="n"><v>35<', ' t="s"><v>99999<'))
+    code, last = _verify(path, capsys)
+    assert code == 2
+    assert f"{part}: cell Mechanism!C8 names shared string 99999, and the table has" in last
 
 
 # Every form of XML Schema's decimal and double: LibreOffice reads each as 35.

@@ -567,7 +567,9 @@ def _drawing(book: Path, out: Path, work):
             raise AnimationError(f"{book}: no such file")
         return work()
     except OSError as exc:
-        print(f"linkbook: error: cannot write {out}: {exc.strerror or exc}", file=sys.stderr)
+        # the output's own refusal names it; any other (reading the book, a font) its file
+        what = f"cannot write {out}" if exc.filename in (None, str(out)) else exc.filename
+        print(f"linkbook: error: {what}: {exc.strerror or exc}", file=sys.stderr)
     except (AnimationError, UnsafeFile) as exc:
         print(f"linkbook: error: {exc}", file=sys.stderr)
     return None

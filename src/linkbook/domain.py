@@ -139,7 +139,10 @@ def _number_terms(text: str) -> list[float]:
             todo.append(node.operand)
         elif isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) \
                 and not isinstance(node.value, bool):
-            terms.append(abs(float(node.value)))
+            try:
+                terms.append(abs(float(node.value)))
+            except OverflowError:           # an integer no double holds: refused as too large
+                terms.append(math.inf)
     return terms[::-1]
 
 

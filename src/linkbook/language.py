@@ -66,6 +66,18 @@ def number(value: float) -> Expr:
     return Expr(text) if value >= 0 else Expr(text, NEGATION)
 
 
+def _finite(field: str, value: int | float) -> Expr:
+    """A number the description writes, refused when no double holds it (an integer of hundreds
+    of digits, 1e999)."""
+    try:
+        if math.isfinite(float(value)):
+            return number(value)
+    except OverflowError:
+        pass
+    shown = f"an integer of {len(str(abs(value)))} digits" if isinstance(value, int) else value
+    raise DescriptionError(field, f"must be a finite number (got {shown})")
+
+
 def expression(field: str, raw: object, symbols: set[str]) -> Expr:
     """A number, or Excel-like text of parameter symbols, + - * / ^, parentheses and a few
     functions, turned into Excel text with explicit precedence (−a^2 is −(a^2), as in algebra;
@@ -73,7 +85,7 @@ def expression(field: str, raw: object, symbols: set[str]) -> Expr:
     if isinstance(raw, bool) or not isinstance(raw, (int, float, str)):
         raise DescriptionError(field, f"must be a number or an expression (got {raw!r})")
     if not isinstance(raw, str):
-        return number(raw)
+        return _finite(field, raw)
     try:
         tree = ast.parse(raw.replace("^", "**"), mode="eval")
     except SyntaxError:
@@ -88,7 +100,7 @@ _BINARY = {ast.Add: ("+", SUM), ast.Sub: ("-", SUM), ast.Mult: ("*", PRODUCT),
 def _emit(field: str, node: ast.AST, symbols: set[str]) -> Expr:
     if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) \
             and not isinstance(node.value, bool):
-        return number(node.value)
+        return _finite(field, node.value)
     if isinstance(node, ast.Name):
         if node.id not in symbols:
             raise DescriptionError(field, f"unknown symbol {node.id!r}; parameters are "

@@ -280,6 +280,16 @@ def _show(value, error_code):
     return code if code else value
 
 
+def _show_stored(value, error_code):
+    """A stored or computed value as the stored check names it: a text quoted, so that the
+    text "1.5" does not read as the number 1.5."""
+    from .office import CellError
+    if isinstance(value, CellError):
+        return str(value)
+    shown = _show(value, error_code)
+    return repr(shown) if isinstance(shown, str) and not error_code(value) else shown
+
+
 def unit_scale(unit: str, size: float) -> float | None:
     """The natural magnitude of a unit: S for a length (also per second, per second²), S² for
     an area; None for an angle, a ratio or a count (a quantity with no length in it)."""
@@ -1147,6 +1157,9 @@ def stored_values(wb, path, cells: set[tuple[str, str]]) -> dict[tuple[str, str]
             if kind == "e":
                 out[key] = CellError(text)
             elif kind == "b":
+                if text.strip() not in ("0", "1", "true", "false"):
+                    raise UnusableFile(f"{path}: {key[0]}!{key[1]}: the stored value {text!r} "
+                                       "is not a boolean")
                 out[key] = text.strip() in ("1", "true")
             elif kind == "n":
                 try:
@@ -1157,6 +1170,16 @@ def stored_values(wb, path, cells: set[tuple[str, str]]) -> dict[tuple[str, str]
             else:
                 out[key] = text
     return out
+
+
+def _kind(value, error_code) -> str:
+    """What a reader shows a cell as: an error, a boolean, a number or a text."""
+    from .office import CellError
+    if isinstance(value, CellError) or error_code(value) is not None:
+        return "error"
+    if isinstance(value, bool):
+        return "boolean"
+    return "number" if isinstance(value, (int, float)) else "text"
 
 
 def _same(a, b, error_code) -> bool:
@@ -1177,6 +1200,12 @@ def _check_stored(wb, meta, values, stored, is_error, error_code, relative) -> C
     from .office import CellError
     c = Check(STORED, "value ≠ the formula's", cells=len(stored))
     differ = {k: v for k, v in stored.items() if not _same(v, values.get(k), error_code)}
+    # a value of another kind (TRUE for 1, the text "1.5" for 1.5) differs outright: a reader
+    # that does not calculate shows it as it is, whatever the bounds say of its number
+    for key in [k for k, v in differ.items()
+                if _kind(v, error_code) != _kind(values.get(k), error_code)]:
+        c.mismatches.append(Mismatch(key[0], key[1], _show_stored(values.get(key), error_code),
+                                     _show_stored(differ.pop(key), error_code)))
     if not differ:
         return c
 
@@ -1194,8 +1223,8 @@ def _check_stored(wb, meta, values, stored, is_error, error_code, relative) -> C
             if key in differ and key not in named:
                 named.add(key)
                 computed, got = values.get(key), differ[key]
-                c.mismatches.append(Mismatch(m.sheet, m.cell, _show(computed, error_code),
-                                             _show(got, any_code)))
+                c.mismatches.append(Mismatch(m.sheet, m.cell, _show_stored(computed, error_code),
+                                             _show_stored(got, any_code)))
                 if isinstance(computed, float) and isinstance(got, float):
                     c.max_abs = max(c.max_abs, abs(got - computed))
     return c

@@ -278,7 +278,7 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
             stored = el.findtext(v_tag)
             if stored or kind == "str":     # an empty <v> stores nothing, but as empty text
                 ws.stored[(row, col)] = (
-                    kind, strings[_index(stored, part, ws.title, address)] if kind == "s"
+                    kind, _shared(strings, stored, part, ws.title, address) if kind == "s"
                     else _number(stored, part, ws.title, address) if kind == "n"
                     else stored or "")
             continue
@@ -293,7 +293,7 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
                         unmodelled.append(f"{ws.title}!{address}: a number shown as a date")
                     value = _number(value, part, ws.title, address)
                 elif kind == "s":
-                    value = strings[_index(value, part, ws.title, address)]
+                    value = _shared(strings, value, part, ws.title, address)
                 elif kind == "b":
                     value = bool(_index(value, part, ws.title, address))
                 elif kind == "str":
@@ -307,8 +307,12 @@ def _number(text: str, part: str, title: str, address: str) -> int | float:
     """A stored number as openpyxl reads it (a '.', 'e' or 'E' makes a float), once it is
     known to be one the application reads as the same finite number."""
     if _NUMBER.fullmatch(text) and math.isfinite(as_float := float(text)):
-        # a whole number beyond a double's range is refused above, before int() could read it
-        return as_float if ("." in text or "e" in text or "E" in text) else int(text)
+        if "." in text or "e" in text or "E" in text:
+            return as_float
+        try:
+            return int(text)
+        except ValueError:      # digits past int()'s limit (leading zeros): nothing reads that
+            pass
     raise Refused(f"{part}: cell {title}!{address} holds {_shown(text)}, not a finite number "
                   "in XML Schema's form (the spreadsheet application would read it otherwise)")
 
@@ -322,10 +326,19 @@ def _shown(text: str, most: int = 40) -> str:
 
 def _index(text: str, part: str, title: str, address: str) -> int:
     """A shared string's index or a boolean's 0/1: digits only."""
-    if _INDEX.fullmatch(text):
+    if _INDEX.fullmatch(text) and len(text) <= 18:
         return int(text)
     raise Refused(f"{part}: cell {title}!{address} holds {_shown(text)} where a whole number "
                   "belongs")
+
+
+def _shared(strings: list[str], text: str, part: str, title: str, address: str) -> str:
+    """The shared string a cell's index names; refused when the table has no such entry."""
+    index = _index(text, part, title, address)
+    if index < len(strings):
+        return strings[index]
+    raise Refused(f"{part}: cell {title}!{address} names shared string {index}, and the table "
+                  f"has {len(strings)}")
 
 
 def _check_formula(text: str, part: str, title: str, address: str) -> None:
