@@ -30,16 +30,11 @@ class Book:
 def open_book(path: Path) -> Book:
     """A saved book, evaluated by the engine. UnusableFile (one line) when it cannot be read."""
     from . import engine
-    from .safety import UnsafeFile, read_workbook_safely
-    from .verifier import UnusableFile, _build_record
+    from .verifier import UnusableFile, read_book
     path = Path(path)
     if not path.is_file():
         raise UnusableFile(f"{path}: no such file")
-    try:
-        wb = read_workbook_safely(path)
-    except UnsafeFile as exc:
-        raise UnusableFile(str(exc)) from None
-    meta = _build_record(path, wb)
+    wb, meta = read_book(path)
     try:
         values = engine.evaluate(wb)
     except engine.EngineError as exc:

@@ -1021,16 +1021,22 @@ def _check_stroke_sampling(solver, params: dict, grid: dict, adjust: list, value
 
 
 # ---------------------------------------------------------------- the command
-@gc_paused
-def verify(path: Path, engine: str = "vector") -> Report:
-    """Every formula cell of the book at `path` compared with the independent reference.
-    Raises UnusableFile with one line when the file cannot be verified."""
+def read_book(path: Path):
+    """(workbook, build record) of the book at `path`, read as the application reads it (the
+    fast XML view, or openpyxl where it must); UnusableFile with one line when it cannot be."""
     from .safety import UnsafeFile, read_workbook_safely
     try:
         wb = read_workbook_safely(path)
     except UnsafeFile as exc:
         raise UnusableFile(str(exc)) from None
-    meta = _build_record(path, wb)
+    return wb, _build_record(path, wb)
+
+
+@gc_paused
+def verify(path: Path, engine: str = "vector") -> Report:
+    """Every formula cell of the book at `path` compared with the independent reference.
+    Raises UnusableFile with one line when the file cannot be verified."""
+    wb, meta = read_book(path)
     try:
         params = inputs_of(wb, meta)    # first: an input no number holds is named, not computed
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
