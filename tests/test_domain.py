@@ -3,7 +3,6 @@ and agrees with; what verify would refuse, or what would not fit the memory budg
 up front with one line naming the limit and the figure, and writes nothing."""
 from __future__ import annotations
 
-import os
 import time
 import zipfile
 from pathlib import Path
@@ -13,19 +12,11 @@ import pytest
 from conftest import ROOT, template
 import linkbook
 from linkbook import builder, domain, safety
-from linkbook.cli import main
+from test_bad_input import _run  # the command run in a folder of its own
 
 FOURBAR_TOML = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")
 
 
-def _run(tmp_path: Path, args: list[str], capsys) -> tuple[int, str]:
-    cwd = os.getcwd()
-    os.chdir(tmp_path)
-    try:
-        code = main(args)
-    finally:
-        os.chdir(cwd)
-    return code, capsys.readouterr().err
 
 
 def refused(tmp_path: Path, capsys, args: list[str], *must_hold: str) -> None:

@@ -383,6 +383,19 @@ def panel_book() -> openpyxl.Workbook:
     return wb
 
 
+def assert_as_per_cell(got: dict, want: dict) -> None:
+    """Every cell of `want` (a per-cell evaluation) has the same value and type in `got`: the
+    same error, NaN for NaN."""
+    for key, w in want.items():
+        g = got[key]
+        if engine.is_error(w) or engine.is_error(g):
+            assert engine.error_code(g) == engine.error_code(w), key
+        elif isinstance(w, float) and math.isnan(w):
+            assert isinstance(g, float) and math.isnan(g), key
+        else:
+            assert type(g) is type(w) and g == w, (key, g, w)
+
+
 def test_elementwise_functions_vectorize_exactly():
     """Vector calls give, cell by cell, the same value and type as per-cell calls."""
     wb = panel_book()
@@ -392,14 +405,7 @@ def test_elementwise_functions_vectorize_exactly():
     assert vector.stats["vector_groups"] >= len(ONE_ARG) + len(TWO_ARG) + len(OPERATORS)
     assert vector.stats["row_by_row_nodes"] >= len(ONE_ARG) - len(ONE_ELEMENTWISE)
     assert set(got) == set(want)
-    for key, w in want.items():
-        g = got[key]
-        if engine.is_error(w) or engine.is_error(g):
-            assert engine.error_code(g) == engine.error_code(w), key
-        elif isinstance(w, float) and math.isnan(w):
-            assert isinstance(g, float) and math.isnan(g), key
-        else:
-            assert type(g) is type(w) and g == w, (key, g, w)
+    assert_as_per_cell(got, want)
 
 
 def test_compiled_shapes_are_reused_with_identical_results():
@@ -546,11 +552,4 @@ def test_min_and_max_pick_the_first_winner_as_per_cell_calls_do():
     got = vector.run()
     want = engine.Engine(wb, vectorize=False).run()
     assert vector.stats["vector_groups"] >= 4
-    for key, w in want.items():
-        g = got[key]
-        if engine.is_error(w) or engine.is_error(g):
-            assert engine.error_code(g) == engine.error_code(w), key
-        elif isinstance(w, float) and math.isnan(w):
-            assert isinstance(g, float) and math.isnan(g), key
-        else:
-            assert type(g) is type(w) and g == w, (key, g, w)
+    assert_as_per_cell(got, want)

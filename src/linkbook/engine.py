@@ -776,28 +776,40 @@ NUMERIC_FORMS = {
         "ABS": np.abs, "EXP": np.exp}.items()},
 }
 _NUMBER_TYPES = frozenset({float, int, np.float64, np.int64})
+_FLOAT_TYPES = frozenset({float, np.float64})
 
 
-def _numeric_call(form, func, args, n: int):
-    """`func` (formulas' node) over n rows: `form` on the rows where it applies, `func` on the
-    rest.  None when an argument is not a plain array or scalar (the caller uses `func`)."""
+def _rows_of(args, n: int, types: frozenset):
+    """The arguments of a node over n rows as (object arrays of n, the rows where every
+    argument is of `types`, float arrays of n with those rows filled); None when an argument is
+    not a plain array or scalar."""
     flat = []
     for a in args:
         if isinstance(a, np.ndarray) and a.size in (1, n):
             a = a.reshape(-1)
-        elif type(a) in _NUMBER_TYPES:
+        elif type(a) in types:
             a = np.array([a], object)
         else:
             return None
         flat.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
     plain = np.ones(n, bool)
     for a in flat:
-        plain &= np.fromiter((type(v) in _NUMBER_TYPES for v in a), bool, n)
+        plain &= np.fromiter((type(v) in types for v in a), bool, n)
     xs = []
     for a in flat:
         x = np.zeros(n)
         x[plain] = a[plain].astype(float)
         xs.append(x)
+    return flat, plain, xs
+
+
+def _numeric_call(form, func, args, n: int):
+    """`func` (formulas' node) over n rows: `form` on the rows where it applies, `func` on the
+    rest.  None when an argument is not a plain array or scalar (the caller uses `func`)."""
+    rows = _rows_of(args, n, _NUMBER_TYPES)
+    if rows is None:
+        return None
+    flat, plain, xs = rows
     with np.errstate(all="ignore"):
         result, kind = form(*xs)
     plain &= np.isfinite(result)
@@ -824,22 +836,10 @@ def _extreme_call(better, func, args, n: int):
     """MIN or MAX (`better`: np.less, np.greater) over n rows: the argument that wins, itself,
     on rows of finite floats; `func` row by row on the rest.  None when an argument is not a
     plain array or scalar (the caller runs `func` row by row)."""
-    flat = []
-    for a in args:
-        if isinstance(a, np.ndarray) and a.size in (1, n):
-            a = a.reshape(-1)
-        elif type(a) in _FLOAT_TYPES:
-            a = np.array([a], object)
-        else:
-            return None
-        flat.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
-    plain = np.ones(n, bool)
-    xs = []
-    for a in flat:
-        plain &= np.fromiter((type(v) in _FLOAT_TYPES for v in a), bool, n)
-        x = np.zeros(n)
-        x[plain] = a[plain].astype(float)
-        xs.append(x)
+    rows = _rows_of(args, n, _FLOAT_TYPES)
+    if rows is None:
+        return None
+    flat, plain, xs = rows
     for x in xs:
         plain &= np.isfinite(x)
     best, value = flat[0], xs[0]
@@ -852,8 +852,6 @@ def _extreme_call(better, func, args, n: int):
         out[i] = _single(func(*[np.asarray(a[i:i + 1], object).reshape(1, 1) for a in flat]))
     return out.reshape(n, 1).view(Array)
 
-
-_FLOAT_TYPES = frozenset({float, np.float64})
 
 
 def _is_broadcast(a: np.ndarray) -> bool:
