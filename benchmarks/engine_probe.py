@@ -24,7 +24,7 @@ from openpyxl.utils import get_column_letter
 from openpyxl.workbook.defined_name import DefinedName
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
-from linkbook import engine  # noqa: E402
+from linkbook.engine import evaluator as engine  # noqa: E402
 
 PARAMS = {"a_1": 2.0, "a_2": 1.0, "a_3": 2.5, "a_4": 1.5, "branch": 1}
 COLUMNS = [  # column letter -> formula for row {r}

@@ -15,7 +15,10 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from linkbook import builder, charts, office, templates
+from linkbook.book import builder
+from linkbook.book import charts
+from linkbook.apps import office
+from linkbook.language import templates
 
 IMAGES = Path(__file__).resolve().parent / "images"
 DRAWINGS = ("boom-cylinder", "garage-door", "hoeken", "jansen", "toggle-press", "watt-sixbar",

@@ -11,8 +11,10 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
-from linkbook import builder, engine, templates  # noqa: E402
-from linkbook.verifier import check_book  # noqa: E402
+from linkbook.book import builder
+from linkbook.engine import evaluator as engine
+from linkbook.language import templates  # noqa: E402
+from linkbook.check.verifier import check_book  # noqa: E402
 
 
 PUBLISHED = ROOT / "tests" / "data" / "published.toml"

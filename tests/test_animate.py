@@ -16,8 +16,12 @@ import pytest
 from conftest import template
 from PIL import Image
 
-from linkbook import builder, cli, engine, verifier, workbook
-from linkbook.animate import AnimationError, frame_at, frames_of, render, write_mp4
+from linkbook.book import builder
+from linkbook.apps import cli
+from linkbook.engine import evaluator as engine
+from linkbook.check import verifier
+from linkbook.book import workbook
+from linkbook.apps.animate import AnimationError, frame_at, frames_of, render, write_mp4
 
 BUNDLED = sorted(p.stem for p in Path(__file__).resolve().parents[1].glob("templates/*.toml"))
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")

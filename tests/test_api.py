@@ -121,7 +121,7 @@ def test_a_refused_write_raises_cannot_write_naming_the_target(tmp_path, monkeyp
     import errno
     import os
 
-    from linkbook import package
+    from linkbook.book import package
 
     def full(src, dst, **kwargs):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(dst))

@@ -9,8 +9,8 @@ import openpyxl
 import pytest
 
 from conftest import ROOT
-from linkbook import builder as build_module
-from linkbook.cli import main
+from linkbook.book import builder as build_module
+from linkbook.apps.cli import main
 
 FOURBAR_TOML = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")
 
@@ -77,7 +77,7 @@ TOML_CASES = [
      "name"),
     ("two parameters, one name", FOURBAR_TOML.replace('name = "Branch"', 'name = "a_1"'),
      "already"),
-    # what the schema (src/linkbook/mechanism.schema.json) refuses, before the semantic checks
+    # what the schema (src/linkbook/language/mechanism.schema.json) refuses, before the semantic checks
     ("a misspelt required key of a step", FOURBAR_TOML.replace('p_length = "a3"',
                                                                'p_lenght = "a3"'),
      "mine.toml: mechanism.steps[1] (dyad B): unknown key 'p_lenght' (did you mean "

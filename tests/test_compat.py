@@ -16,9 +16,12 @@ from conftest import built, checks_of
 from openpyxl.utils import get_column_letter
 from openpyxl.utils.cell import column_index_from_string, coordinate_from_string
 
-from linkbook import builder, engine, office, templates
-from linkbook.language import FUNCTIONS as EXPRESSION_FUNCTIONS
-from linkbook.language import expression
+from linkbook.book import builder
+from linkbook.engine import evaluator as engine
+from linkbook.apps import office
+from linkbook.language import templates
+from linkbook.language.compiler import FUNCTIONS as EXPRESSION_FUNCTIONS
+from linkbook.language.compiler import expression
 
 # Functions that a linkage workbook could reasonably use, each documented by all of: Microsoft's
 # "Excel functions (alphabetical)" (as in Excel 2007/2010), LibreOffice Calc's "Functions by

@@ -22,8 +22,10 @@ import openpyxl
 import pytest
 from conftest import template
 
-from linkbook import builder, package, verifier
-from linkbook.controls import Control
+from linkbook.book import builder
+from linkbook.book import package
+from linkbook.check import verifier
+from linkbook.book.controls import Control
 
 UNO_PYTHON = "/usr/bin/python3"
 PROBE = Path(__file__).with_name("uno_probe.py")

@@ -1,4 +1,4 @@
-"""Two independent references must agree: the generic one (src/linkbook/generic.py, from the
+"""Two independent references must agree: the generic one (src/linkbook/check/reference.py, from the
 bundled templates' descriptions) and the per-mechanism solver it replaced (tests/legacy_reference.py,
 written from docs/mechanisms.md, with its own loop equations in the mechanisms' own unknowns).
 
@@ -16,8 +16,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 import legacy_reference
-from linkbook import generic, templates
-from linkbook.mechanisms import ANGLE_KIND, BRANCH_KIND
+from linkbook.check import reference as generic
+from linkbook.language import templates
+from linkbook.language.mechanisms import ANGLE_KIND, BRANCH_KIND
 from test_properties import dimensions
 
 EXAMPLES = int(os.environ.get("LINKBOOK_CROSS_EXAMPLES", "60"))

@@ -11,7 +11,9 @@ import pytest
 
 from conftest import ROOT, template
 import linkbook
-from linkbook import builder, domain, safety
+from linkbook.book import builder
+from linkbook.language import domain
+from linkbook.base import safety
 from test_bad_input import _run  # the command run in a folder of its own
 
 FOURBAR_TOML = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")

@@ -15,9 +15,13 @@ import openpyxl
 import pytest
 from conftest import template
 
-from linkbook import builder, charts, engine, frames, office
-from linkbook.mechanisms import LENGTH_KIND
-from linkbook.verifier import inputs_of
+from linkbook.book import builder
+from linkbook.book import charts
+from linkbook.engine import evaluator as engine
+from linkbook.book import frames
+from linkbook.apps import office
+from linkbook.language.mechanisms import LENGTH_KIND
+from linkbook.check.verifier import inputs_of
 
 pytestmark = pytest.mark.libreoffice
 DPI = 150

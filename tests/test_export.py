@@ -10,11 +10,11 @@ import pytest
 from conftest import built
 from test_cli import run
 
-from linkbook import engine
-from linkbook.export import tables, table_text
-from linkbook.info import Book
-from linkbook.sheets import read_meta, write_meta
-from linkbook.xlsx import column_letter
+from linkbook.engine import evaluator as engine
+from linkbook.apps.export import tables, table_text
+from linkbook.apps.info import Book
+from linkbook.base.sheets import read_meta, write_meta
+from linkbook.base.xlsx import column_letter
 
 
 def _export(book, outdir) -> list:

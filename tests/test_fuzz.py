@@ -29,8 +29,9 @@ from conftest import template
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from linkbook import builder, cli
-from linkbook import workbook as layout
+from linkbook.book import builder
+from linkbook.apps import cli
+from linkbook.book import workbook as layout
 
 ROOT = Path(__file__).resolve().parents[1]
 SECONDS = 20

@@ -21,8 +21,11 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT / "src") not in sys.path:        # conftest does this too; kept for --noconftest
     sys.path.insert(0, str(ROOT / "src"))
 
-from linkbook import builder, office, templates, verifier  # noqa: E402
-from linkbook.cli import main  # noqa: E402
+from linkbook.book import builder
+from linkbook.apps import office
+from linkbook.language import templates
+from linkbook.check import verifier  # noqa: E402
+from linkbook.apps.cli import main  # noqa: E402
 
 BUNDLED = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")      # cannot turn fully: #N/A rows

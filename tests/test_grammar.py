@@ -17,7 +17,9 @@ from conftest import built
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from linkbook import engine, grammar, templates
+from linkbook.engine import evaluator as engine
+from linkbook.engine import grammar
+from linkbook.language import templates
 
 def pipe_tree(pipe):
     """A compiled pipe as a tree: ("call", function object, argument trees), ("const", type,

@@ -7,8 +7,8 @@ import pytest
 
 from conftest import built, template
 
-from linkbook import generic
-from linkbook.charts import same_curve
+from linkbook.check import reference as generic
+from linkbook.book.charts import same_curve
 
 
 def _motion_legends(name: str) -> dict[str, str]:

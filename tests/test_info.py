@@ -11,7 +11,7 @@ import pytest
 from conftest import template
 from test_cli import run
 
-from linkbook import generic
+from linkbook.check import reference as generic
 
 DEG_TOL = 1e-9      # verify's bound for an angle
 

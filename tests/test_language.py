@@ -12,10 +12,12 @@ import tomllib
 import pytest
 
 from conftest import ROOT, checks_of, formula_cells
-from linkbook import builder, engine, templates
-from linkbook.templates import InputError
+from linkbook.book import builder
+from linkbook.engine import evaluator as engine
+from linkbook.language import templates
+from linkbook.language.templates import InputError
 
-SCHEMA = ROOT / "src" / "linkbook" / "mechanism.schema.json"
+SCHEMA = ROOT / "src" / "linkbook" / "language" / "mechanism.schema.json"
 
 
 def fourbar_data() -> dict:
@@ -221,13 +223,13 @@ def test_the_docs_copy_of_the_schema_is_the_packaged_one():
     """Editors read docs/mechanism.schema.json; build checks with the one inside the package."""
     docs = (ROOT / "docs" / "mechanism.schema.json").read_bytes()
     assert docs == SCHEMA.read_bytes(), ("docs/mechanism.schema.json has drifted: copy "
-                                         "src/linkbook/mechanism.schema.json over it")
+                                         "src/linkbook/language/mechanism.schema.json over it")
 
 
 def test_the_compiler_knows_the_keys_the_schema_allows():
     """One source of truth: the semantic checks take each step's keys from the schema, so a key
     the schema allows is one the compiler reads, and no other."""
-    from linkbook import language
+    from linkbook.language import compiler as language
     steps = json.loads(SCHEMA.read_text(encoding="utf-8"))["properties"]["mechanism"][
         "properties"]["steps"]["items"]
     for rule in steps["allOf"]:
@@ -348,7 +350,7 @@ def _every_option(**values) -> templates.Template:
 def test_every_option_of_every_step_type_is_verified():
     t = _every_option()
     assert {s["type"] for s in t.mechanism.description["steps"]} == set(
-        __import__("linkbook.language", fromlist=["STEP_KEYS"]).STEP_KEYS)
+        __import__("linkbook.language.compiler", fromlist=["STEP_KEYS"]).STEP_KEYS)
     b, values = builder.make(t)
     checks = checks_of(b, values)
     bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
@@ -386,7 +388,7 @@ def test_every_option_on_random_dimensions():
 def test_a_long_description_fits_the_build_record(tmp_path):
     """The record (with the description) is split across cells: Excel holds 32,767 characters in
     one. Forty extra steps make it longer than that; the saved book still verifies."""
-    from linkbook.verifier import verify
+    from linkbook.check.verifier import verify
     data = fourbar_data()
     data["mechanism"].pop("columns")
     for i in range(40):
@@ -448,7 +450,7 @@ GARAGE_TOML = (templates.TEMPLATE_DIR / "garage-door.toml").read_text(encoding="
 def test_a_length_that_comes_out_negative_is_refused_at_build(tmp_path, capsys):
     """|CD| = a6 − 200 is −50 mm with the template's a6 = 150: the loop cannot be assembled
     (the reference says so), so build refuses with one line naming the step's field."""
-    from linkbook.cli import main
+    from linkbook.apps.cli import main
     (tmp_path / "mine.toml").write_text(
         GARAGE_TOML.replace('p_length = "a6"', 'p_length = "a6 - 200"'), encoding="utf-8")
     code = main(["build", str(tmp_path / "mine.toml"), "-o", str(tmp_path / "mine.xlsx")])
@@ -505,8 +507,8 @@ def test_a_loop_that_cannot_close_is_named_with_where_at_build(tmp_path, capsys,
     fails and over which angles — the angles where the independent reference cannot assemble
     the mechanism."""
     import numpy as np
-    from linkbook import generic
-    from linkbook.cli import main
+    from linkbook.check import reference as generic
+    from linkbook.apps.cli import main
     path = tmp_path / "door.toml"
     path.write_text(GARAGE_TOML.replace("value = 150.0", f"value = {door}"), encoding="utf-8")
     t = templates.load(str(path))
@@ -534,7 +536,7 @@ def test_the_summary_names_the_first_loop_step_that_cannot_close(door, expected)
     somewhere in the sweep: the first step whose point the reference cannot place on some row;
     a dash where every loop closes."""
     import numpy as np
-    from linkbook import generic
+    from linkbook.check import reference as generic
     t = templates.from_data("door", tomllib.loads(GARAGE_TOML.replace(
         "value = 150.0", f"value = {door}")))
     ref = generic.solve(t.mechanism.description, t.values(), np.array(t.sweep.angles()))
@@ -550,7 +552,7 @@ def test_the_summary_names_the_first_loop_step_that_cannot_close(door, expected)
 
 
 def test_a_mechanism_that_closes_everywhere_builds_without_a_warning(tmp_path, capsys):
-    from linkbook.cli import main
+    from linkbook.apps.cli import main
     assert main(["build", "garage-door", "-o", str(tmp_path / "door.xlsx")]) == 0
     assert capsys.readouterr().err == ""
 
@@ -562,7 +564,7 @@ def test_an_angle_output_gives_its_range_and_swing_in_degrees(b0):
     (with the ground turned 90°, the rocker swings across 180°: still one piece). Expected
     values: the reference's rocker angle, unwrapped."""
     import numpy as np
-    from linkbook import generic
+    from linkbook.check import reference as generic
     data = fourbar_data()
     data["mechanism"]["output"] = "theta14"
     data["mechanism"]["ground"]["B0"] = json.loads(b0)

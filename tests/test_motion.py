@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from conftest import built, checks_of
-from linkbook import generic, templates
+from linkbook.check import reference as generic
+from linkbook.language import templates
 
 
 def test_offset_slider_crank_by_hand():
@@ -141,5 +142,5 @@ def test_a_dead_centre_is_na_not_div0():
 
 
 def verify_code(value):
-    from linkbook import engine
+    from linkbook.engine import evaluator as engine
     return engine.error_code(value) if engine.is_error(value) else None

@@ -26,7 +26,15 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT / "src") not in sys.path:        # conftest does this too; kept for --noconftest
     sys.path.insert(0, str(ROOT / "src"))
 
-from linkbook import builder, cached, charts, cli, office, package, templates, verifier, workbook  # noqa: E402
+from linkbook.book import builder
+from linkbook.book import cached
+from linkbook.book import charts
+from linkbook.apps import cli
+from linkbook.apps import office
+from linkbook.book import package
+from linkbook.language import templates
+from linkbook.check import verifier
+from linkbook.book import workbook  # noqa: E402
 
 REL_TOL = 1e-9          # LibreOffice stores 15 significant digits
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")      # cannot turn fully: #N/A rows

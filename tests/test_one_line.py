@@ -22,8 +22,9 @@ import openpyxl
 import pytest
 
 from conftest import ROOT, template
-from linkbook import builder, cli
-from linkbook import sheets as layout
+from linkbook.book import builder
+from linkbook.apps import cli
+from linkbook.base import sheets as layout
 
 FOURBAR_TOML = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")
 
@@ -130,7 +131,7 @@ def test_a_refused_write_is_named_and_leaves_the_earlier_file(tmp_path, capsys, 
                                                               number, reason):
     """The save half done, then the file system refuses: one line naming the target (not the
     hidden temporary file) and the reason; the earlier book is untouched, nothing is left."""
-    from linkbook import package
+    from linkbook.book import package
     target = tmp_path / "fourbar.xlsx"
     target.write_bytes(b"the earlier book")
 
@@ -310,7 +311,7 @@ def test_openpyxls_three_line_message_is_one_line(tmp_path, capsys, book):
     """openpyxl's message on a cell it cannot read (a number written 0x10) runs over three
     lines ("... Please see the exception for more details."): it is joined into one, as the
     command, animate and preview see it."""
-    from linkbook.safety import UnsafeFile, load_workbook_safely
+    from linkbook.base.safety import UnsafeFile, load_workbook_safely
     path = tmp_path / "hex.xlsx"
     path.write_bytes(_rewritten(book, "xl/worksheets/sheet1.xml", lambda xml: re.sub(
         r'(<c r="C8"[^>]*><v>)[^<]*(</v>)', lambda m: m[1] + "0x10" + m[2], xml)))
@@ -325,7 +326,7 @@ def test_openpyxls_three_line_message_is_one_line(tmp_path, capsys, book):
 def test_a_signal_while_libreoffice_runs_ends_it_too(tmp_path):
     """LibreOffice runs in a session of its own (so that a time-out can end soffice.bin, the
     launcher's child): Ctrl-C reaches only us, and we end its whole process group."""
-    from linkbook import office
+    from linkbook.apps import office
     pids = tmp_path / "pids"
     script = f"sleep 120 & echo $$ $! > {pids}; wait"
 

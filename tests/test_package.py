@@ -16,7 +16,8 @@ from hypothesis import strategies as st
 from openpyxl.comments import Comment
 from openpyxl.styles import Alignment, Font, PatternFill
 
-from linkbook import package, workbook
+from linkbook.book import package
+from linkbook.book import workbook
 
 
 def _parts(path: Path) -> dict[str, bytes]:

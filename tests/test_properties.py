@@ -13,9 +13,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conftest import checks_of, formula_cells
-from linkbook import builder, templates
-from linkbook.language import STEP_KEYS
-from linkbook.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
+from linkbook.book import builder
+from linkbook.language import templates
+from linkbook.language.compiler import STEP_KEYS
+from linkbook.language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
                                  OFFSET_KIND, RATE_KIND)
 
 EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))

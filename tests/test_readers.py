@@ -166,7 +166,7 @@ C = "http://schemas.openxmlformats.org/drawingml/2006/chart"
 def test_drawing_namespaces_move_to_the_root():
     """The form openpyxl writes through lxml (each prefix declared where it is used) becomes
     the form of its own writer, which Gnumeric reads: every prefix declared on the root."""
-    from linkbook.package import namespaces_on_root
+    from linkbook.book.package import namespaces_on_root
     local = (f'<?xml version="1.0"?>\n<wsDr xmlns="urn:d"><g><a:graphic xmlns:a="{A}">'
              f'<c:chart xmlns:c="{C}" id="1"/></a:graphic></g><a:x xmlns:a="{A}">t</a:x>'
              f'</wsDr>').encode()
@@ -182,18 +182,18 @@ def test_drawing_namespaces_move_to_the_root():
     '<r/>',
 ])
 def test_namespaces_left_alone_where_they_cannot_move(xml):
-    from linkbook.package import namespaces_on_root
+    from linkbook.book.package import namespaces_on_root
     assert namespaces_on_root(xml.encode()) == xml.encode()
 
 
 def test_text_that_looks_like_a_declaration_stays():
-    from linkbook.package import namespaces_on_root
+    from linkbook.book.package import namespaces_on_root
     text = 'a title with xmlns:b="urn:not-markup" in it'
     assert namespaces_on_root(f'<r><a:x xmlns:a="{A}">{text}</a:x></r>'.encode()) == \
         f'<r xmlns:a="{A}"><a:x>{text}</a:x></r>'.encode()
 
 
 def test_a_self_closing_root_takes_the_declarations():
-    from linkbook.package import namespaces_on_root
+    from linkbook.book.package import namespaces_on_root
     assert namespaces_on_root(f'<r xmlns:a="{A}" b="1"/>'.encode()) == \
         f'<r b="1" xmlns:a="{A}"/>'.encode()

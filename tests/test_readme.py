@@ -13,7 +13,7 @@ import openpyxl
 import pytest
 
 from conftest import ROOT, template
-from linkbook import builder
+from linkbook.book import builder
 
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 BLOCKS = re.findall(r"```python\n(.*?)```", README, flags=re.S)

@@ -1,4 +1,4 @@
-"""Tests of the generic independent reference solver (src/linkbook/generic.py), on the textbook's
+"""Tests of the generic independent reference solver (src/linkbook/check/reference.py), on the textbook's
 eight mechanisms as the bundled templates describe them.
 
 The solver is checked against what it must honour, never against numbers it produced itself:
@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from linkbook import generic, templates
+from linkbook.check import reference as generic
+from linkbook.language import templates
 
 REPO = Path(__file__).resolve().parents[1]
 MECHANISMS = ("fourbar", "slider-crank", "pump", "inverted-slider-crank", "quick-return", "shaper",

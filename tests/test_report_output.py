@@ -11,8 +11,9 @@ import openpyxl
 import pytest
 
 from conftest import template
-from linkbook import builder, cli
-from linkbook import sheets as layout
+from linkbook.book import builder
+from linkbook.apps import cli
+from linkbook.base import sheets as layout
 
 
 @pytest.fixture(scope="module")

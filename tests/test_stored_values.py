@@ -12,8 +12,9 @@ from pathlib import Path
 import pytest
 
 import linkbook
-from linkbook import package, xlsx
-from linkbook.cli import main
+from linkbook.book import package
+from linkbook.base import xlsx
+from linkbook.apps.cli import main
 
 
 @pytest.fixture(scope="module")
@@ -191,6 +192,6 @@ def test_a_boolean_stored_as_another_word_is_refused(book, tmp_path, capsys):
 
 def _first_closes(book: Path) -> str:
     """The first cell of the sweep's "closes [1/0]" column (1 where every loop closes)."""
-    from linkbook import sheets
+    from linkbook.base import sheets
     sweep = sheets.read_meta(xlsx.read(book))["sweep"]
     return f"{sweep['columns']['closes']}{sweep['rows'][0]}"

@@ -12,7 +12,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from conftest import ROOT, checks_of
 
-from linkbook import builder, cli, engine, templates, workbook
+from linkbook.book import builder
+from linkbook.apps import cli
+from linkbook.engine import evaluator as engine
+from linkbook.language import templates
+from linkbook.book import workbook
 
 BUNDLED = [p.stem for p in templates.bundled()]
 

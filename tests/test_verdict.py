@@ -9,9 +9,10 @@ import openpyxl
 import pytest
 from conftest import template
 
-from linkbook import builder, cli
-from linkbook import workbook as layout
-from linkbook.templates import InputError, with_overrides
+from linkbook.book import builder
+from linkbook.apps import cli
+from linkbook.book import workbook as layout
+from linkbook.language.templates import InputError, with_overrides
 
 
 @pytest.fixture(scope="module")
@@ -204,7 +205,9 @@ def test_the_quick_return_ratio_follows_the_ram(sets):
 
     from conftest import built
 
-    from linkbook import engine, generic, verifier
+    from linkbook.engine import evaluator as engine
+    from linkbook.check import reference as generic
+    from linkbook.check import verifier
     b, values = built("quick-return", sets)
     inputs = verifier.inputs_of(b.workbook, b.meta)
     expected = generic.time_ratio(b.meta["description"], inputs, "s16")
@@ -221,7 +224,7 @@ def test_the_quick_return_ratio_follows_the_ram(sets):
 def test_the_bound_is_the_documented_one():
     """README: 1e-12·S for a length (times the rate for a velocity), 1e-9 for an angle; beyond
     its magnitude m a value may differ by 1e-12·|x|²/m; an angle itself never grows."""
-    from linkbook.verifier import Check
+    from linkbook.check.verifier import Check
     S = 500.0
     length = Check("b", "x", S, 1.0, S)
     assert length.limit(100.0) == pytest.approx(5e-10)

@@ -12,8 +12,10 @@ import openpyxl
 import pytest
 
 from conftest import formula_cells, template
-from linkbook import builder, engine, templates
-from linkbook.cli import main
+from linkbook.book import builder
+from linkbook.engine import evaluator as engine
+from linkbook.language import templates
+from linkbook.apps.cli import main
 
 BUNDLED = sorted(p.stem for p in templates.bundled())
 
@@ -200,7 +202,7 @@ def test_libreoffice_recalculates_every_bundled_book_like_the_reference(name, tm
     """The real application: a full recalculation in LibreOffice, every formula cell against the
     reference (1e-9 relative: LibreOffice stores 15 significant digits)."""
     from test_office import require_soffice
-    from linkbook.verifier import verify
+    from linkbook.check.verifier import verify
     require_soffice()
     path = tmp_path / f"{name}.xlsx"
     builder.build_file(templates.load(name), path)

@@ -6,7 +6,8 @@ from __future__ import annotations
 import pytest
 
 from conftest import ROOT, built, checks_of, formula_cells
-from linkbook import engine, templates
+from linkbook.engine import evaluator as engine
+from linkbook.language import templates
 
 CASES = [
     # (template, --set, --branch)

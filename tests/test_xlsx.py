@@ -13,7 +13,8 @@ import pytest
 from openpyxl.workbook.defined_name import DefinedName
 
 from conftest import built
-from linkbook import safety, xlsx
+from linkbook.base import safety
+from linkbook.base import xlsx
 from test_engine import build_book, edge_book
 
 
@@ -160,7 +161,7 @@ FIRST_NAME = "<definedName name=\"a_1\">'Mechanism'!$C$7</definedName>"
 @pytest.fixture(scope="module")
 def fourbar_bytes(tmp_path_factory) -> bytes:
     from conftest import template
-    from linkbook import builder
+    from linkbook.book import builder
     path = tmp_path_factory.mktemp("fourbar") / "fourbar.xlsx"
     builder.build_file(template("fourbar"), path)
     return path.read_bytes()
@@ -174,7 +175,7 @@ def _damaged(tmp_path: Path, raw: bytes, part: str, old: str, new: str) -> Path:
 
 
 def _verify(path: Path, capsys, *options) -> tuple[int, str]:
-    from linkbook.cli import main
+    from linkbook.apps.cli import main
     code = main(["verify", str(path), *options])
     out = capsys.readouterr()
     lines = (out.out + out.err).strip().splitlines()
@@ -283,7 +284,7 @@ def test_libreoffice_reads_the_scoped_name_verify_refuses(tmp_path, fourbar_byte
     require_soffice()
     added = _scoped("a_2", "'Mechanism'!$C$9")
     path = _damaged(tmp_path, fourbar_bytes, "xl/workbook.xml", FIRST_NAME, FIRST_NAME + added)
-    from linkbook import office
+    from linkbook.apps import office
     clean = tmp_path / "clean.xlsx"
     clean.write_bytes(fourbar_bytes)
     before, after = office.recalculated_values(clean), office.recalculated_values(path)

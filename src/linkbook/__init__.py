@@ -30,8 +30,9 @@ def build(template: str | Path, output: str | Path | None = None, *, sets=(), st
     it); `values` stores computed values too. Returns the path written (default: <name>.xlsx
     here); `output`'s folder must exist. Raises InputError or CannotWrite with one line.
     """
-    from . import builder, templates
-    from .files import check_output
+    from .book import builder
+    from .language import templates
+    from .base.files import check_output
     if isinstance(sets, str):
         raise templates.InputError("sets", f'must be a list of KEY=VALUE texts, such as '
                                            f'["a2=45"] (got the text {sets!r})')
@@ -51,9 +52,9 @@ def verify(path: str | Path, engine: str = "vector"):
     "gnumeric".
     A book that cannot be verified at all gives a Report of status 2 with the reason in
     `error` (the line the command prints), so that a status is always there to act on."""
-    from .office import OfficeFailed, OfficeUnavailable
-    from .safety import UnsafeFile
-    from .verifier import Report, UnusableFile, verify as run
+    from .apps.office import OfficeFailed, OfficeUnavailable
+    from .base.safety import UnsafeFile
+    from .check.verifier import Report, UnusableFile, verify as run
     try:
         return run(Path(path), engine)
     except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:
@@ -71,12 +72,12 @@ def __dir__() -> list[str]:
 def __getattr__(name: str):
     # the error types, without importing the whole package for `linkbook --version`
     if name == "InputError":
-        from .templates import InputError
+        from .language.templates import InputError
         return InputError
     if name == "UnusableFile":
-        from .verifier import UnusableFile
+        from .check.verifier import UnusableFile
         return UnusableFile
     if name == "CannotWrite":
-        from .files import CannotWrite
+        from .base.files import CannotWrite
         return CannotWrite
     raise AttributeError(f"module 'linkbook' has no attribute {name!r}")

@@ -113,7 +113,7 @@ class MotionWriter:
         try:
             self.model.add(*quantities)
         except ValueError as exc:
-            from .language import DescriptionError
+            from .compiler import DescriptionError
             raise DescriptionError(f"{self.c.field}", f"{exc} (velocity and acceleration keys "
                                                       "start with vx_, vy_, ax_, ay_, omega_, "
                                                       "alpha_, v_, acc_)") from None
@@ -218,7 +218,7 @@ class MotionWriter:
             return ZERO, ZERO
         if side.text == f"{{{self.c.input_key}}}":
             return self.speed, self.accel
-        from .language import DescriptionError
+        from .compiler import DescriptionError
         raise DescriptionError(field, "a side driven by the actuator must be its length itself "
                                       f"({self.c.input_key}), so that its rate is the input's")
 

@@ -18,8 +18,8 @@ import math
 import numbers
 import re
 
-from .office import error_code
-from .xlsx import xml_text
+from ..apps.office import error_code
+from ..base.xlsx import xml_text
 
 
 # One cell: optional namespace prefix, attributes, then either "/>" or a body up to its end tag.

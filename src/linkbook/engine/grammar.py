@@ -29,7 +29,7 @@ import functools
 import re
 from dataclasses import dataclass
 
-from .xlsx import column_index
+from ..base.xlsx import column_index
 
 # One token at a time, at the current position (re.match).  A reference or name must not run on
 # into more of a name, a call, a sheet, a range or a spill mark; a number must not run on into a

@@ -13,11 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
-from . import generic, sheets as layout
-from .pause import gc_paused
-from .sheets import summary_prefix
-from .model import RAD
-from .domain import (InputError, check_input, check_lengths_together, check_value,
+from . import reference as generic
+from ..base import sheets as layout
+from ..base.pause import gc_paused
+from ..base.sheets import summary_prefix
+from ..language.model import RAD
+from ..language.domain import (InputError, check_input, check_lengths_together, check_value,
                      check_written_lengths)
 
 ABS_TOL = 1e-9
@@ -283,7 +284,7 @@ def _show(value, error_code):
 def _show_stored(value, error_code):
     """A stored or computed value as the stored check names it: a text quoted, so that the
     text "1.5" does not read as the number 1.5."""
-    from .office import CellError
+    from ..apps.office import CellError
     if isinstance(value, CellError):
         return str(value)
     shown = _show(value, error_code)
@@ -293,7 +294,7 @@ def _show_stored(value, error_code):
 def unit_scale(unit: str, size: float) -> float | None:
     """The natural magnitude of a unit: S for a length (also per second, per second²), S² for
     an area; None for an angle, a ratio or a count (a quantity with no length in it)."""
-    from .model import ACCEL, AREA, LENGTH, SPEED
+    from ..language.model import ACCEL, AREA, LENGTH, SPEED
     if unit in (LENGTH, SPEED, ACCEL):
         return size
     return size * size if unit == AREA else None
@@ -311,7 +312,7 @@ class Reference:
     the description the book records, with the book's own input values."""
 
     def __init__(self, meta: dict):
-        from .language import DescriptionError, from_record
+        from ..language.compiler import DescriptionError, from_record
         try:
             self.mechanism = from_record(meta)
         except (DescriptionError, KeyError, TypeError, AttributeError) as exc:
@@ -703,7 +704,7 @@ def motion_rates(mech, params: dict, size: float) -> tuple[float, float]:
     bound times the first, an acceleration's times the second. Neither goes below 1e-9 (a
     rate of one part in 10⁹ of the size per second is zero for any purpose; `formulas` reads
     an input of 1e-184 as 0, to 15 decimals)."""
-    from .mechanisms import MOTION_SYMBOLS
+    from ..language.mechanisms import MOTION_SYMBOLS
     speed, accel = (float(params.get(k, 0.0)) for k in MOTION_SYMBOLS[mech.input_kind])
     if not mech.input_is_angle:
         speed, accel = speed / size, accel / size
@@ -716,7 +717,7 @@ MIN_RATE = 1e-9
 def _check_motion(meta, model, solver, params, angles, ref, one, angle, scale, size, run) -> None:
     """The Motion sheet (the sweep's rows and the current position's row) and the traced
     point's velocity under the current position, each compared through `run`."""
-    from .model import ACCEL, ANG_ACCEL, AREA, LENGTH, RATIO
+    from ..language.model import ACCEL, ANG_ACCEL, AREA, LENGTH, RATIO
     mech = solver.mechanism
     motion, sheet = meta["motion"], meta["motion"]["sheet"]
     rate1, rate2 = motion_rates(mech, params, size)
@@ -906,7 +907,7 @@ def _slope(solver: Reference, params: dict, angles: np.ndarray, key: str, unit: 
     period = ANGLE_UNITS.get(unit)
     h = SENSITIVITY_STEP
     if not motion:
-        from .mechanisms import MOTION_SYMBOLS
+        from ..language.mechanisms import MOTION_SYMBOLS
         params = {k: v for k, v in params.items()
                   if k not in MOTION_SYMBOLS[solver.mechanism.input_kind]}
 
@@ -1024,7 +1025,7 @@ def _check_stroke_sampling(solver, params: dict, grid: dict, adjust: list, value
 def read_book(path: Path):
     """(workbook, build record) of the book at `path`, read as the application reads it (the
     fast XML view, or openpyxl where it must); UnusableFile with one line when it cannot be."""
-    from .safety import UnsafeFile, read_workbook_safely
+    from ..base.safety import UnsafeFile, read_workbook_safely
     try:
         wb = read_workbook_safely(path)
     except UnsafeFile as exc:
@@ -1041,7 +1042,7 @@ def verify(path: Path, engine: str = "vector") -> Report:
         params = inputs_of(wb, meta)    # first: an input no number holds is named, not computed
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
         raise UnusableFile(_record_mismatch(path, exc)) from None
-    from . import engine as engines
+    from ..engine import evaluator as engines
     is_error, error_code, relative = engines.is_error, engines.error_code, False
     try:
         if engine == "vector":
@@ -1053,7 +1054,7 @@ def verify(path: Path, engine: str = "vector") -> Report:
             relative = True
         else:
             # a real application (LibreOffice, Gnumeric) recalculates a copy: judged alike
-            from . import office
+            from ..apps import office
             if engine not in office.APPLICATIONS:
                 raise UnusableFile(f"unknown engine {engine!r}")
             values = office.recalculated_values(path, engine)
@@ -1150,8 +1151,8 @@ def stored_values(wb, path, cells: set[tuple[str, str]]) -> dict[tuple[str, str]
     """(sheet, cell) -> the value each of `cells` (formula cells) stores with its formula (the
     `<v>`): what LibreOffice with default settings, openpyxl's data_only and pandas show. Numbers
     as float, errors as office.CellError, text as str; a cell that stores none is left out."""
-    from .office import CellError, read_values
-    from .xlsx import column_letter
+    from ..apps.office import CellError, read_values
+    from ..base.xlsx import column_letter
     if not all(hasattr(ws, "stored") for ws in wb.worksheets):   # openpyxl read the book
         return {k: v for k, v in read_values(path).items() if k in cells}
     out = {}
@@ -1180,7 +1181,7 @@ def stored_values(wb, path, cells: set[tuple[str, str]]) -> dict[tuple[str, str]
 
 def _kind(value, error_code) -> str:
     """What a reader shows a cell as: an error, a boolean, a number or a text."""
-    from .office import CellError
+    from ..apps.office import CellError
     if isinstance(value, CellError) or error_code(value) is not None:
         return "error"
     if isinstance(value, bool):
@@ -1189,7 +1190,7 @@ def _kind(value, error_code) -> str:
 
 
 def _same(a, b, error_code) -> bool:
-    from .office import CellError
+    from ..apps.office import CellError
     code_a = str(a) if isinstance(a, CellError) else None
     if code_a is not None or error_code(b) is not None:
         return code_a == error_code(b)
@@ -1203,7 +1204,7 @@ def _check_stored(wb, meta, values, stored, is_error, error_code, relative) -> C
     that its formula does not give (an edit of the file, a stale save) differs, named with what
     the formula gives and what is stored. Only the stored values that differ from the formula's
     own are judged again."""
-    from .office import CellError
+    from ..apps.office import CellError
     c = Check(STORED, "value ≠ the formula's", cells=len(stored))
     differ = {k: v for k, v in stored.items() if not _same(v, values.get(k), error_code)}
     # a value of another kind (TRUE for 1, the text "1.5" for 1.5) differs outright: a reader
@@ -1239,8 +1240,8 @@ def _check_stored(wb, meta, values, stored, is_error, error_code, relative) -> C
 def likely_causes(wb, checks: list[Check]) -> set[tuple[str, str]]:
     """The differing cells that read no other differing cell: where each chain of
     disagreement starts (a broken formula; the cells downstream differ because they read it)."""
-    from . import engine as engines
-    from .xlsx import coordinate_to_tuple
+    from ..engine import evaluator as engines
+    from ..base.xlsx import coordinate_to_tuple
     differ = {(m.sheet, m.cell) for c in checks for m in c.mismatches}
     where: dict[str, set[tuple[int, int]]] = {}
     for sheet, cell in differ:
@@ -1269,7 +1270,7 @@ def formula_cells(wb) -> set[tuple[str, str]]:
 
 
 def cell_order(key: tuple[str, str]) -> tuple:
-    from .xlsx import coordinate_to_tuple
+    from ..base.xlsx import coordinate_to_tuple
     row, col = coordinate_to_tuple(key[1])
     return key[0], col, row
 
@@ -1287,7 +1288,7 @@ def cell_ranges(cells: list[tuple[str, str]], most: int = 6) -> str:
 def cell_runs(cells: list[tuple[str, str]]) -> list[str]:
     """['Sweep!F5:F77', 'Mechanism!I9'] for sorted (sheet, cell) pairs: each run of rows down
     one column as one range."""
-    from .xlsx import column_letter, coordinate_to_tuple
+    from ..base.xlsx import column_letter, coordinate_to_tuple
     runs: list[list] = []
     for sheet, cell in cells:
         row, index = coordinate_to_tuple(cell)

@@ -18,17 +18,17 @@ from openpyxl.utils import column_index_from_string, get_column_letter, quote_sh
 from openpyxl.workbook.defined_name import DefinedName
 from openpyxl.worksheet.datavalidation import DataValidation
 
-from . import __version__
-from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS
-from .model import (ACCEL, ANG_ACCEL, ANG_SPEED, AREA, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
+from .. import __version__
+from ..language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS
+from ..language.model import (ACCEL, ANG_ACCEL, ANG_SPEED, AREA, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
                     SPEED, Model, Resolver, header, parenthesize, render, unit_text)
 from .controls import control_record
-from .domain import INPUT_ANGLE_LIMIT
+from ..language.domain import INPUT_ANGLE_LIMIT
 from .package import Formula
-from .sheets import (CHARTS, DASH, DRAWING_COLUMNS, FORMAT_VERSION, GAPS_SHOWN, GRID, MECH,  # noqa: F401
+from ..base.sheets import (CHARTS, DASH, DRAWING_COLUMNS, FORMAT_VERSION, GAPS_SHOWN, GRID, MECH,  # noqa: F401
                      META, MOTION_SHEET, STROKE, SWEEP, read_meta, summary_prefix, write_meta)
-from .steps import outside_domain
-from .templates import Template
+from ..language.steps import outside_domain
+from ..language.templates import Template
 
 ROW = "\x00"   # stands for the row number in a rendered sweep formula
 SWEEP_ROW = "\x02"   # the Sweep sheet's row of a Motion row (MOTION_OFFSET rows up)
@@ -1054,7 +1054,7 @@ EXCEL_FORMULA_CHARS, EXCEL_NESTING = 8192, 64
 def _grid_formula(model, names, input_column, param, out, param_row) -> str:
     """The self-contained grid formula, refused (before any file is written) where Excel could
     not open it: over 8,192 characters or 64 levels of nested functions."""
-    from .templates import InputError
+    from ..language.templates import InputError
     cells = {input_column: f"$A{ROW}", param: f"{COL}${param_row}"}
     text = Resolver(model, names, cells).formula(out)
     depth = deepest = 0

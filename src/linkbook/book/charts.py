@@ -19,8 +19,8 @@ from openpyxl.chart.shapes import GraphicalProperties
 from openpyxl.utils import column_index_from_string, get_column_letter, quote_sheetname
 
 from . import frames
-from .model import ANG_ACCEL, ANG_SPEED, LENGTH, Model, header, unit_text
-from .templates import Template
+from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, Model, header, unit_text
+from ..language.templates import Template
 from .workbook import CHARTS, GRID, MECH, MOTION_SHEET, SWEEP, Built
 
 LINE_EMU = 22000          # 1.7 pt
@@ -269,7 +269,7 @@ def _reference_sweep(t: Template) -> dict:
     """Every column over the sweep as the independent reference computes it: it, not the
     formulas being charted, says which curves coincide."""
     import numpy as np
-    from . import generic
+    from ..check import reference as generic
     return generic.solve(t.mechanism.description, t.values(), np.array(t.sweep.angles()))
 
 

@@ -6,13 +6,17 @@ import re
 from dataclasses import replace
 from pathlib import Path
 
-from . import charts, domain, engine, package, workbook
+from . import charts
+from ..language import domain
+from ..engine import evaluator as engine
+from . import package
+from . import workbook
 from .controls import Control
-from .files import write_atomic
-from .model import COLUMN, _one_group
-from .pause import gc_paused
-from .templates import Sweep, Template
-from .xlsx import column_letter, xml_text
+from ..base.files import write_atomic
+from ..language.model import COLUMN, _one_group
+from ..base.pause import gc_paused
+from ..language.templates import Sweep, Template
+from ..base.xlsx import column_letter, xml_text
 
 
 def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict | None]:
@@ -40,7 +44,7 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
 def _print_setup(wb) -> None:
     """Page layout for printing and previews; the Mechanism sheet (inputs, current position and
     drawing side by side) prints one page wide, landscape, so no block is cut off."""
-    from .office import apply_print_setup
+    from ..apps.office import apply_print_setup
     apply_print_setup(wb, fit_to_width=(workbook.MECH,))
 
 
@@ -179,7 +183,7 @@ def _refuse_beyond_verify(path: Path) -> None:
     """The written book, checked as verify will check it (safety.check_zip: its XML, exactly,
     where book_size estimated it): one verify would refuse is refused before it takes the place
     of anything."""
-    from .safety import UnsafeFile, check_zip
+    from ..base.safety import UnsafeFile, check_zip
     try:
         check_zip(path)
     except UnsafeFile as exc:

@@ -9,8 +9,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import sheets as layout
-from .xlsx import coordinate_to_tuple
+from ..base import sheets as layout
+from ..base.xlsx import coordinate_to_tuple
 
 # Motion columns whose largest magnitude the summary reports: angular velocities and
 # accelerations, the sliders' speeds and accelerations, the traced point's speed and acceleration
@@ -29,8 +29,8 @@ class Book:
 
 def open_book(path: Path) -> Book:
     """A saved book, evaluated by the engine. UnusableFile (one line) when it cannot be read."""
-    from . import engine
-    from .verifier import UnusableFile, read_book
+    from ..engine import evaluator as engine
+    from ..check.verifier import UnusableFile, read_book
     path = Path(path)
     if not path.is_file():
         raise UnusableFile(f"{path}: no such file")
@@ -44,8 +44,8 @@ def open_book(path: Path) -> Book:
 
 def built_book(name_or_toml: str) -> Book:
     """A template built in memory (nothing written) and evaluated. InputError for bad input."""
-    from . import templates
-    from .builder import make
+    from ..language import templates
+    from ..book.builder import make
     built, values = make(templates.load(name_or_toml))
     return Book(name_or_toml, built.workbook, built.meta, values)
 
@@ -53,7 +53,7 @@ def built_book(name_or_toml: str) -> Book:
 def read_record(book: Book, read):
     """read(book), with a build record that does not match the book (a key missing, a cell
     moved) turned into the one line verify gives for it."""
-    from .verifier import UnusableFile, _record_mismatch
+    from ..check.verifier import UnusableFile, _record_mismatch
     try:
         return read(book)
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:

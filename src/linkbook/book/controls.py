@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .xlsx import xml_attribute
+from ..base.xlsx import xml_attribute
 
 VML_TYPE = "application/vnd.openxmlformats-officedocument.vmlDrawing"
 CTRL_TYPE = "application/vnd.ms-excel.controlproperties+xml"

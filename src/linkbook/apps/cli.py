@@ -13,8 +13,9 @@ from pathlib import Path
 # setting wins.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from . import __version__, templates  # noqa: E402 (after the setting above)
-from .templates import InputError
+from .. import __version__
+from ..language import templates  # noqa: E402 (after the setting above)
+from ..language.templates import InputError
 
 EPILOG = """examples:
   linkbook list
@@ -325,7 +326,7 @@ def _raise_terminated(signum, frame):
 
 
 def _main(argv: list[str] | None) -> int:
-    from .files import CannotWrite
+    from ..base.files import CannotWrite
     args = _parser().parse_args(argv)
     try:
         if args.command == "list":
@@ -360,7 +361,7 @@ def _error(exc: Exception) -> None:
 
 def _verify(args) -> int:
     import json
-    from . import verify
+    from .. import verify
     reports = []
     for book in args.books:
         report = verify(book, args.engine)
@@ -383,8 +384,8 @@ def _verify(args) -> int:
 
 def _as_data(report) -> dict:
     """One book's report as data: the same keys whether or not it could be verified."""
-    from . import __version__
-    from .verifier import TOLERANCE_RULE
+    from .. import __version__
+    from ..check.verifier import TOLERANCE_RULE
     usable = report.error is None
     return {
         "book": report.path, "mechanism": report.mechanism, "engine": report.engine,
@@ -404,7 +405,7 @@ def _as_data(report) -> dict:
 def _in_book_order(report, cells) -> list[tuple[str, str]]:
     """(sheet, cell) pairs by the sheet's place among the book's tabs, then column, then row,
     numerically (E9 before E10)."""
-    from .xlsx import coordinate_to_tuple
+    from ..base.xlsx import coordinate_to_tuple
     place = {name: i for i, name in enumerate(report.sheets)}
 
     def order(key):
@@ -415,7 +416,7 @@ def _in_book_order(report, cells) -> list[tuple[str, str]]:
 
 def _ranges(report, cells) -> list[str]:
     """Cells as ranges in book order, a run of rows down one column as one: Sweep!E5:E77."""
-    from .verifier import cell_runs
+    from ..check.verifier import cell_runs
     return cell_runs(_in_book_order(report, cells))
 
 
@@ -427,7 +428,7 @@ def _one_line(exc: Exception) -> str:
 def _print_report(report, verbose: bool = False) -> None:
     """A header line, the checks (every one with `verbose`, else those that failed) with a few
     of their differing cells, and the verdict line."""
-    from .verifier import cell_ranges
+    from ..check.verifier import cell_ranges
     print(f"{report.path}: {report.mechanism}, engine {report.engine}")
     shown = [c for c in report.checks if verbose or not c.ok]
     if shown:
@@ -496,7 +497,7 @@ def _positive_float(text: str) -> float:
 def _info(args) -> int:
     import json
     from . import info
-    from .verifier import UnusableFile
+    from ..check.verifier import UnusableFile
     try:
         book = (info.open_book(Path(args.book)) if args.book.lower().endswith(".xlsx")
                 else info.built_book(args.book))
@@ -511,9 +512,9 @@ def _info(args) -> int:
 
 def _export(args) -> int:
     from .export import export, table_texts
-    from .files import ensure_folder
+    from ..base.files import ensure_folder
     from .info import open_book, read_record
-    from .verifier import UnusableFile
+    from ..check.verifier import UnusableFile
     book = Path(args.book)
     try:
         texts = read_record(open_book(book), table_texts)
@@ -529,7 +530,7 @@ def _export(args) -> int:
 
 def _animate(args) -> int:
     from .animate import frames_of, render, terminal_progress, write_video
-    from .files import write_atomic
+    from ..base.files import write_atomic
     book = Path(args.book)
     if args.at is not None:
         return _picture(args, book)
@@ -561,7 +562,7 @@ def _drawing(book: Path, out: Path, work):
     """What work() returns, or None after one error line: the book missing or unusable, or
     `out` not written. Shared by the animation and the single picture."""
     from .animate import AnimationError
-    from .safety import UnsafeFile
+    from ..base.safety import UnsafeFile
     try:
         if not book.is_file():
             raise AnimationError(f"{book}: no such file")
@@ -578,7 +579,7 @@ def _drawing(book: Path, out: Path, work):
 def _picture(args, book: Path) -> int:
     """`animate --at VALUE`: the mechanism at one input value, as PNG or SVG."""
     from .animate import AnimationError, frame_at, render, write_svg
-    from .files import write_atomic
+    from ..base.files import write_atomic
     out = Path(args.output) if args.output else book.with_name(f"{book.stem}-at-{args.at:g}.png")
     kind = out.suffix.lower().lstrip(".")
     if kind not in ("png", "svg"):
@@ -601,9 +602,9 @@ def _picture(args, book: Path) -> int:
 
 
 def _preview(args) -> int:
-    from .files import ensure_folder
+    from ..base.files import ensure_folder
     from .office import OfficeUnavailable, preview, visible_sheets
-    from .safety import UnsafeFile, check_zip
+    from ..base.safety import UnsafeFile, check_zip
     book = Path(args.book)
     try:
         check_zip(book)
@@ -648,7 +649,7 @@ def _new(args) -> int:
 
 
 def _check(args) -> int:
-    from .builder import make
+    from ..book.builder import make
     t = templates.load(args.template)
     built, _ = make(t, values_needed=False)
     _warn(built)
@@ -670,9 +671,9 @@ def _build(args) -> int:
                 or args.unit:
             raise InputError("--all", "builds the bundled templates as they are; give no "
                                       "template, -o, --set, --step, --branch or --unit with it")
-        from .files import ensure_folder
+        from ..base.files import ensure_folder
         outdir = ensure_folder(Path(args.outdir or "output"), "--outdir")
-        from .builder import build_file
+        from ..book.builder import build_file
         for path in templates.bundled():
             t = templates.load(str(path))
             out = outdir / f"{t.name}.xlsx"
@@ -687,9 +688,9 @@ def _build(args) -> int:
     if args.unit:
         t = templates.with_unit(t, args.unit)
     t = templates.with_overrides(t, args.assignments, args.step, args.branch)
-    from .files import check_output
+    from ..base.files import check_output
     out = check_output(Path(args.output or f"{t.name}.xlsx"), "-o", (".xlsx",))
-    from .builder import build_file
+    from ..book.builder import build_file
     _warn(build_file(t, out, args.values))
     print(f"wrote {out}")
     return 0

@@ -19,9 +19,9 @@ from .mechanisms import (ANGLE_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND, R
 
 def _template_dir() -> Path:
     """Installed: templates/ is packaged inside linkbook; from a checkout: the repo's templates/."""
-    here = Path(__file__).resolve().parent
-    packaged = here / "templates"
-    return packaged if packaged.is_dir() else here.parents[1] / "templates"
+    package = Path(__file__).resolve().parents[1]
+    packaged = package / "templates"
+    return packaged if packaged.is_dir() else package.parents[1] / "templates"
 
 
 TEMPLATE_DIR = _template_dir()
@@ -204,7 +204,7 @@ def check_text(field: str, text: str) -> str:
     """Text that goes into a cell: no character a workbook cannot hold (control characters,
     U+FFFE, U+FFFF, surrogates), and at most a quarter of what a cell holds (labels share cells
     with units and notes)."""
-    from .xlsx import NOT_IN_XML
+    from ..base.xlsx import NOT_IN_XML
     bad = NOT_IN_XML.search(text)
     if bad:
         kind = "control character" if bad.group() < " " else "character"
@@ -317,7 +317,7 @@ def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template"
     check_length_unit(flag, unit)
     if unit == t.length_unit:
         return t
-    from .language import unconvertible
+    from .compiler import unconvertible
     found = unconvertible(t.mechanism, t.mechanism.build())
     if found:
         field, why = found
@@ -361,7 +361,7 @@ def motion_default(mech: Mechanism, symbol: str, length_unit: str) -> dict:
 def _mechanism(name: str, data: dict, origin: str) -> Mechanism:
     """The mechanism the template describes (docs/language.md). The older form names a bundled
     template's mechanism (`mechanism = "fourbar"`): its description and parameter kinds."""
-    from .language import DescriptionError, compile_mechanism, parameter_kinds
+    from .compiler import DescriptionError, compile_mechanism, parameter_kinds
     raw = data.get("mechanism")
     table = _need(data, "parameters", origin, dict)
     kinds: dict[str, str] = {}
@@ -411,7 +411,7 @@ def check_step_lengths(t: Template) -> None:
     """Every length a step takes (a side, a rod, a crank), evaluated with the book's values,
     must be positive: the loop cannot be assembled with a zero or negative one, and a book
     built so would be #N/A all through. A length of the swept input is checked by the sweep."""
-    from .language import value_of
+    from .compiler import value_of
     values = t.values()
     for field, raw in t.mechanism.lengths:
         value = value_of(raw, values)

@@ -33,8 +33,8 @@ from openpyxl.compat import safe_string
 
 from . import cached
 from .controls import CTRL_TYPE, VML_TYPE, Control, SheetControls
-from .files import write_atomic
-from .xlsx import NOT_IN_XML, column_letter, xml_attribute
+from ..base.files import write_atomic
+from ..base.xlsx import NOT_IN_XML, column_letter, xml_attribute
 
 MAIN_NS = "http://schemas.openxmlformats.org/spreadsheetml/2006/main"
 REL_NS = "http://schemas.openxmlformats.org/officeDocument/2006/relationships"

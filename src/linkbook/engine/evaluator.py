@@ -77,7 +77,7 @@ from formulas.tokens.operand import Error, Range, XlError
 from formulas.tokens.operator import Intersect, OperatorToken
 
 from . import grammar
-from .xlsx import column_index, column_letter, coordinate_to_tuple
+from ..base.xlsx import column_index, column_letter, coordinate_to_tuple
 
 __all__ = [
     "evaluate", "evaluate_file", "evaluate_formulas_model", "is_error", "error_code", "shape_of",

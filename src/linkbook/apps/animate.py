@@ -16,9 +16,9 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import engine
-from . import workbook as layout
-from .charts import PATH_COLOUR, drawing_colours, link_label, nice_step
+from ..engine import evaluator as engine
+from ..book import workbook as layout
+from ..book.charts import PATH_COLOUR, drawing_colours, link_label, nice_step
 
 DEFAULT_FPS = 20
 DEFAULT_SIZE = 600
@@ -61,7 +61,7 @@ class Animation:
 def frames_of(path: Path, step: float | None = None, at: float | None = None) -> Animation:
     """Evaluate the book at every input value of its sweep (or from the sweep's start to its end
     by `step`, or at the one value `at`) and read the drawing data of each."""
-    from .safety import load_workbook_safely
+    from ..base.safety import load_workbook_safely
     wb = load_workbook_safely(path)
     meta = layout.read_meta(wb)
     if meta is None or "position" not in meta or "sweep" not in meta:

@@ -12,8 +12,8 @@ from __future__ import annotations
 from openpyxl.styles import Alignment
 from openpyxl.utils import get_column_letter, quote_sheetname
 
-from .model import LENGTH, Model
-from .templates import Template
+from ..language.model import LENGTH, Model
+from ..language.templates import Template
 from .workbook import (BOLD, DASH, DERIVED_FILL, DRAWING_COLUMNS, LINE_HEIGHT, MECH, NOTE,
                        SWEEP, TITLE, Formula, _head, _text, _wrap_across, column_range,
                        label_lines, number_format, numbers_only, put, set_formula, table_style,

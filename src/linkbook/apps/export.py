@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import sheets as layout
+from ..base import sheets as layout
 from .info import Book
 
 # A text field starting with one of these is read as a formula by spreadsheets that open the
@@ -49,7 +49,7 @@ def tables(book: Book) -> list[Table]:
 def field(value) -> str:
     """One CSV field: a number in full precision (repr), an error as its code (#N/A), a text
     guarded against being read as a formula, an empty cell empty."""
-    from .engine import error_code
+    from ..engine.evaluator import error_code
     if value is None:
         return ""
     if isinstance(value, bool):
@@ -67,7 +67,7 @@ def field(value) -> str:
 
 def _last_column(book: Book, table: Table) -> int:
     """The table's width: its last column holding anything in any of its rows."""
-    from .xlsx import coordinate_to_tuple
+    from ..base.xlsx import coordinate_to_tuple
     rows, last = set(table.rows), 0
     for (sheet, cell), value in book.values.items():
         if sheet == table.sheet and value is not None and value != "":
@@ -78,7 +78,7 @@ def _last_column(book: Book, table: Table) -> int:
 
 
 def table_text(book: Book, table: Table) -> str:
-    from .xlsx import column_letter
+    from ..base.xlsx import column_letter
     letters = [column_letter(c) for c in range(1, _last_column(book, table) + 1)]
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\r\n")
@@ -100,7 +100,7 @@ def table_texts(book: Book) -> list[tuple[str, str]]:
 def export(texts: list[tuple[str, str]], book_stem: str, outdir: Path) -> list[Path]:
     """Write each table's text to OUTDIR/BOOK-SHEET.csv (UTF-8 with a byte-order mark, so that
     Excel reads θ and μ right); each file written whole or not at all."""
-    from .files import write_atomic
+    from ..base.files import write_atomic
     written = []
     for sheet, text in texts:
         path = outdir / file_name(book_stem, sheet)

@@ -25,7 +25,7 @@ import ast
 import math
 
 from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, OFFSET_KIND, RATE_KIND
-from .safety import MAX_UNCOMPRESSED
+from ..base.safety import MAX_UNCOMPRESSED
 
 LENGTH_RANGE = (1e-6, 1e9)       # a length; an offset may also be 0 (or up to 1e9 either way)
 RATE_LIMIT = 1e9                 # |ω|, |α|, |v|, |a| of the input
