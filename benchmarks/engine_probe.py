@@ -1,4 +1,4 @@
-"""Wall time and peak memory of linkbook.engine.evaluate() against formulas.ExcelModel.
+"""Wall time and peak memory of linkbook.engine.evaluator.evaluate() against formulas.ExcelModel.
 
 Builds synthetic four-bar-like sweep tables (one angle column + 10 formula columns, named
 parameters on a second sheet, a summary row with ranges) and prints, per size:

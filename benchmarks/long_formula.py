@@ -6,7 +6,7 @@ processes, each measured alone (os.wait4 gives that child's own peak resident me
 
 - ``linkbook verify`` of the book: Excel holds at most 8,192 characters in a formula, so verify
   must refuse it (exit 2) at once, in bounded memory;
-- the formula grammar (linkbook.grammar.parse) alone on the formula, which any caller of the
+- the formula grammar (linkbook.engine.grammar.parse) alone on the formula, which any caller of the
   engine may hand it: its memory must grow linearly with the length.
 
 A child that passes its limit (--memory, --seconds) is stopped and shown as over it.

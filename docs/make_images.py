@@ -17,7 +17,7 @@ from PIL import Image
 
 from linkbook.book import builder
 from linkbook.book import charts
-from linkbook.apps import office
+from linkbook.apps import preview
 from linkbook.language import templates
 
 IMAGES = Path(__file__).resolve().parent / "images"
@@ -31,7 +31,7 @@ def pages(name: str, tmp: Path, sheets=("Mechanism",)) -> list[Path]:
     built, _ = builder.make(templates.load(name))
     path = tmp / f"{name}.xlsx"
     built.workbook.save(path)
-    return office.preview(path, tmp / name, dpi=DPI, sheets=list(sheets))
+    return preview.preview(path, tmp / name, dpi=DPI, sheets=list(sheets))
 
 
 def drawing_box(page: Image.Image) -> tuple[int, int, int, int] | None:

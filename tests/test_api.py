@@ -5,6 +5,8 @@ import openpyxl
 import pytest
 
 import linkbook
+import linkbook.base.pause
+import linkbook.check.verifier
 
 
 def test_build_then_verify(tmp_path):
@@ -94,7 +96,7 @@ def test_the_garbage_collector_is_paused_only_during_a_call(tmp_path):
     they found it: on after a call that returns or raises, off if it was off."""
     import gc
     seen = []
-    real_verify = linkbook.verifier.verify.__wrapped__
+    real_verify = linkbook.check.verifier.verify.__wrapped__
 
     def spy(*args, **kwargs):
         seen.append(gc.isenabled())
@@ -102,7 +104,7 @@ def test_the_garbage_collector_is_paused_only_during_a_call(tmp_path):
 
     path = linkbook.build("slider-crank", tmp_path / "sc.xlsx", step=30)
     assert gc.isenabled()
-    paused = linkbook.pause.gc_paused(spy)
+    paused = linkbook.base.pause.gc_paused(spy)
     assert paused(path).status == 0 and seen == [False] and gc.isenabled()
     with pytest.raises(linkbook.UnusableFile):
         paused(tmp_path / "missing.xlsx")

@@ -18,7 +18,7 @@ from openpyxl.utils.cell import column_index_from_string, coordinate_from_string
 
 from linkbook.book import builder
 from linkbook.engine import evaluator as engine
-from linkbook.apps import office
+from linkbook.engine import office
 from linkbook.language import templates
 from linkbook.language.compiler import FUNCTIONS as EXPRESSION_FUNCTIONS
 from linkbook.language.compiler import expression

@@ -19,7 +19,7 @@ from linkbook.book import builder
 from linkbook.book import charts
 from linkbook.engine import evaluator as engine
 from linkbook.book import frames
-from linkbook.apps import office
+from linkbook.engine import office
 from linkbook.language.mechanisms import LENGTH_KIND
 from linkbook.check.verifier import inputs_of
 

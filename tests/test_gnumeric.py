@@ -22,7 +22,7 @@ if str(ROOT / "src") not in sys.path:        # conftest does this too; kept for 
     sys.path.insert(0, str(ROOT / "src"))
 
 from linkbook.book import builder
-from linkbook.apps import office
+from linkbook.engine import office
 from linkbook.language import templates
 from linkbook.check import verifier  # noqa: E402
 from linkbook.apps.cli import main  # noqa: E402

@@ -30,7 +30,9 @@ from linkbook.book import builder
 from linkbook.book import cached
 from linkbook.book import charts
 from linkbook.apps import cli
-from linkbook.apps import office
+from linkbook.engine import office
+from linkbook.apps import preview
+from linkbook.book import pages
 from linkbook.book import package
 from linkbook.language import templates
 from linkbook.check import verifier
@@ -258,7 +260,7 @@ def test_cells_rewritten_exactly(tmp_path):
     _zip_with_sheet(src, sheet)
     values = {("S & T", "A1"): 4.25, ("S & T", "A2"): 7, ("S & T", "A3"): "#N/A",
               ("S & T", "A4"): 99.0, ("S & T", "A5"): 1.0}
-    assert cached.add_cached_values(src, out, values) == 3
+    assert package.add_cached_values(src, out, values) == 3
     xml = zipfile.ZipFile(out).read("xl/worksheets/other.xml")
     assert (b'<x:c r="A1" s="2"><x:f t="shared" ref="A1:A2" si="0">B1*2</x:f>'
             b'<x:v>4.25</x:v></x:c>') in xml
@@ -284,7 +286,7 @@ def test_large_sheet_is_streamed_quickly(tmp_path):
     values = {("S & T", f"{openpyxl.utils.get_column_letter(c)}{r}"): r * 0.5 + c
               for r in range(1, rows + 1) for c in range(1, cols + 1)}
     start = time.perf_counter()
-    assert cached.add_cached_values(src, out, values) == rows * cols
+    assert package.add_cached_values(src, out, values) == rows * cols
     assert time.perf_counter() - start < 20
     xml = zipfile.ZipFile(out).read("xl/worksheets/other.xml")
     assert xml.count(b"<v>") == rows * cols and b'<c r="T3601" s="1"><f>' in xml
@@ -296,7 +298,7 @@ def test_print_setup_keeps_charts_whole():
     t = _template("fourbar")
     b = workbook.build(t)
     charts.add_charts(b, t, b.model)
-    office.apply_print_setup(b.workbook)
+    pages.apply_print_setup(b.workbook)
     mech = b.workbook[workbook.MECH]
     chart_col = openpyxl.utils.column_index_from_string(
         re.match(r"[A-Z]+", mech._charts[0].anchor).group())
@@ -356,7 +358,7 @@ def stale_book(tmp_path) -> Path:
     wb.active["A1"] = 2
     wb.active["B1"] = "=A1*3"
     wb.save(tmp_path / "fresh.xlsx")
-    cached.add_cached_values(tmp_path / "fresh.xlsx", tmp_path / "cached.xlsx",
+    package.add_cached_values(tmp_path / "fresh.xlsx", tmp_path / "cached.xlsx",
                              {("Sheet", "B1"): 42.0})
     with zipfile.ZipFile(tmp_path / "cached.xlsx") as zin, \
             zipfile.ZipFile(tmp_path / "stale.xlsx", "w", zipfile.ZIP_DEFLATED) as zout:
@@ -429,7 +431,7 @@ def test_cached_values_round_trip(lo_books, tmp_path):
     b, path, values = lo_books["non-grashof"]
     out = tmp_path / "cached.xlsx"
     formulas = _formula_cells(b.workbook)
-    assert cached.add_cached_values(path, out, values) == len(formulas)
+    assert package.add_cached_values(path, out, values) == len(formulas)
 
     shown = openpyxl.load_workbook(out, data_only=True)
     kinds = set()
@@ -474,7 +476,7 @@ def test_cached_book_with_charts_prints(tmp_path):
     path = _book_with_charts("fourbar", tmp_path)
     values = office.recalculated_values(path)
     out = tmp_path / "fourbar-cached.xlsx"
-    cached.add_cached_values(path, out, values)
+    package.add_cached_values(path, out, values)
     pdf = office.to_pdf(out, tmp_path / "pdf")
     text = subprocess.run(["pdftotext", str(pdf), "-"], capture_output=True, text=True,
                           check=True).stdout
@@ -489,7 +491,7 @@ def test_preview_pages_are_pictures(name, tmp_path, monkeypatch):
     require_soffice()
     book = _book_with_charts(name, tmp_path)
     scratch = _private_tempdir(monkeypatch, tmp_path)
-    pages = office.preview(book, tmp_path / "png", dpi=30)
+    pages = preview.preview(book, tmp_path / "png", dpi=30)
     assert not any(scratch.iterdir()), "a temporary folder was left behind"
     assert len(pages) >= 4 and all(p.suffix == ".png" for p in pages)
     for page in pages:
@@ -502,10 +504,10 @@ def test_a_sheet_alone_is_the_only_visible_one_and_prints_no_other(tmp_path):
     """The copy preview prints one sheet from: read back by openpyxl, only that sheet is
     visible and active, and no hidden sheet keeps a print area (LibreOffice prints those)."""
     book = _book_with_charts("fourbar", tmp_path)
-    assert office.visible_sheets(book) == [ws.title for ws in openpyxl.load_workbook(
+    assert preview.visible_sheets(book) == [ws.title for ws in openpyxl.load_workbook(
         book).worksheets if ws.sheet_state == "visible"]
-    assert {"Mechanism", "Drawing data"} < set(office.visible_sheets(book))
-    copy = office._only_sheets(book, ["Drawing data"], tmp_path / "one")
+    assert {"Mechanism", "Drawing data"} < set(preview.visible_sheets(book))
+    copy = preview._only_sheets(book, ["Drawing data"], tmp_path / "one")
     wb = openpyxl.load_workbook(copy)
     assert [ws.title for ws in wb.worksheets if ws.sheet_state == "visible"] == ["Drawing data"]
     assert wb.active.title == "Drawing data"
@@ -513,7 +515,7 @@ def test_a_sheet_alone_is_the_only_visible_one_and_prints_no_other(tmp_path):
         if ws.title != "Drawing data":
             assert not ws.print_area and not ws.print_title_rows, ws.title
     assert wb["Drawing data"].print_title_rows.replace("$", "") == "3:4"
-    assert office._file_word("Drawing data") == "Drawing_data"
+    assert preview._file_word("Drawing data") == "Drawing_data"
 
 
 @pytest.mark.libreoffice

@@ -326,7 +326,7 @@ def test_openpyxls_three_line_message_is_one_line(tmp_path, capsys, book):
 def test_a_signal_while_libreoffice_runs_ends_it_too(tmp_path):
     """LibreOffice runs in a session of its own (so that a time-out can end soffice.bin, the
     launcher's child): Ctrl-C reaches only us, and we end its whole process group."""
-    from linkbook.apps import office
+    from linkbook.engine import office
     pids = tmp_path / "pids"
     script = f"sleep 120 & echo $$ $! > {pids}; wait"
 

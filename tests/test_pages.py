@@ -131,7 +131,7 @@ def test_every_text_on_the_mechanism_grid_and_drawing_sheets_fits(name):
 def test_no_chart_covers_a_used_cell(name):
     """Each chart's box (its anchor and size, in the column widths and row heights the sheet
     sets) holds no cell with a value: no chart is printed over data or labels."""
-    from linkbook.apps.office import _chart_box
+    from linkbook.book.pages import _chart_box
     b, _ = built(name)
     for ws in b.workbook.worksheets:
         for chart in ws._charts:

@@ -12,7 +12,7 @@ import pytest
 
 from conftest import ROOT
 import linkbook
-from linkbook.apps import office
+from linkbook.engine import office
 
 MAIN = "{http://schemas.openxmlformats.org/spreadsheetml/2006/main}"
 FOURBAR_TOML = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")

@@ -284,7 +284,7 @@ def test_libreoffice_reads_the_scoped_name_verify_refuses(tmp_path, fourbar_byte
     require_soffice()
     added = _scoped("a_2", "'Mechanism'!$C$9")
     path = _damaged(tmp_path, fourbar_bytes, "xl/workbook.xml", FIRST_NAME, FIRST_NAME + added)
-    from linkbook.apps import office
+    from linkbook.engine import office
     clean = tmp_path / "clean.xlsx"
     clean.write_bytes(fourbar_bytes)
     before, after = office.recalculated_values(clean), office.recalculated_values(path)

@@ -52,7 +52,7 @@ def verify(path: str | Path, engine: str = "vector"):
     "gnumeric".
     A book that cannot be verified at all gives a Report of status 2 with the reason in
     `error` (the line the command prints), so that a status is always there to act on."""
-    from .apps.office import OfficeFailed, OfficeUnavailable
+    from .engine.office import OfficeFailed, OfficeUnavailable
     from .base.safety import UnsafeFile
     from .check.verifier import Report, UnusableFile, verify as run
     try:

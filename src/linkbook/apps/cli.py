@@ -57,7 +57,7 @@ VERIFY_OUTPUT = """output:
 
 
 def _parser() -> argparse.ArgumentParser:
-    from .office import PREVIEW_DPI     # standard library only: cheap to import
+    from .preview import PREVIEW_DPI     # standard library only: cheap to import
     ap = argparse.ArgumentParser(
         prog="linkbook",
         description="Turn a planar mechanism into an Excel workbook of live formulas: named "
@@ -603,7 +603,8 @@ def _picture(args, book: Path) -> int:
 
 def _preview(args) -> int:
     from ..base.files import ensure_folder
-    from .office import OfficeUnavailable, preview, visible_sheets
+    from ..engine.office import OfficeUnavailable
+    from .preview import preview, visible_sheets
     from ..base.safety import UnsafeFile, check_zip
     book = Path(args.book)
     try:

@@ -10,7 +10,7 @@ import tempfile
 from pathlib import Path
 from typing import Callable
 
-from ..language.templates import InputError
+from .errors import InputError
 
 # What the environment did, in words: the reason a write failed is the user's to fix, not ours.
 REASONS = {

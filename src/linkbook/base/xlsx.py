@@ -419,3 +419,47 @@ def xml_text(value: str) -> str:
 def xml_attribute(value: str) -> str:
     """`value` as a double-quoted attribute value, quotes included."""
     return f'"{value.translate(_ATTRIBUTE_ESCAPES)}"'
+
+
+# ---------------------------------------------------------------- error values
+ERROR_CODES = frozenset({"#NULL!", "#DIV/0!", "#VALUE!", "#REF!", "#NAME?", "#NUM!", "#N/A",
+                         "#GETTING_DATA", "#SPILL!", "#CALC!"})
+
+
+class CellError(str):
+    """A formula error read back from a recalculated file: str(e) is its code, e.g. '#N/A'."""
+
+    def __repr__(self) -> str:
+        return f"CellError({str(self)!r})"
+
+
+def error_code(value) -> str | None:
+    """'#N/A', '#NUM!', ... for an error value of any engine (CellError, the plain string that
+    openpyxl reads, or an object such as formulas' XlError whose str() is the code); else None."""
+    if value is None or isinstance(value, (bool, int, float)):
+        return None
+    text = str(value)
+    return text if text in ERROR_CODES else None
+
+
+def is_error(value) -> bool:
+    return error_code(value) is not None
+
+
+# ---------------------------------------------------------------- defined names
+_CELL_A1 = re.compile(r"^\$?[A-Za-z]{1,3}\$?\d+$")
+_CELL_R1C1 = re.compile(r"^[Rr](\d*|\[-?\d+\])[Cc](\d*|\[-?\d+\])$|^[RrCc]\d*$")
+_NAME_CHARS = re.compile(r"^[A-Za-z_\\][A-Za-z0-9_.]*$")
+
+
+def excel_name_problem(name: str) -> str | None:
+    """Why `name` cannot be an Excel defined name, or None when it can."""
+    if not name or len(name) > 255:
+        return "must have 1 to 255 characters"
+    if not _NAME_CHARS.match(name):
+        return "must start with a letter or _ and hold only letters, digits, _ and ."
+    if _CELL_A1.match(name) or _CELL_R1C1.match(name):
+        return "looks like a cell reference"
+    if name.upper() in {"TRUE", "FALSE"}:
+        return "is a reserved word"
+    return None

@@ -44,7 +44,7 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
 def _print_setup(wb) -> None:
     """Page layout for printing and previews; the Mechanism sheet (inputs, current position and
     drawing side by side) prints one page wide, landscape, so no block is cut off."""
-    from ..apps.office import apply_print_setup
+    from .pages import apply_print_setup
     apply_print_setup(wb, fit_to_width=(workbook.MECH,))
 
 

@@ -8,7 +8,7 @@ error, `str` for text, `b` for a boolean). Every other part of the zip (defined 
 number formats, charts, data validation) is copied unchanged. xl/workbook.xml also gets
 `<calcPr fullCalcOnLoad="1"/>`, so Excel and LibreOffice recalculate anyway when they open it.
 
-The copy itself is package.finish's one streaming pass (with `tidy=False` here: nothing but the
+The copy itself is package.finish's one streaming pass (package.add_cached_values) (with `tidy=False` here: nothing but the
 formula cells and calcPr changes). Cells without an `r` attribute (allowed by the standard,
 written by neither openpyxl nor LibreOffice) are left as they are.
 """
@@ -18,7 +18,7 @@ import math
 import numbers
 import re
 
-from ..apps.office import error_code
+from ..base.xlsx import error_code
 from ..base.xlsx import xml_text
 
 
@@ -29,16 +29,6 @@ TYPE_ATTR = re.compile(rb"""\st\s*=\s*("[^"]*"|'[^']*')""")
 # calcPr comes after definedNames and before these (CT_Workbook's sequence).
 AFTER_CALCPR = ("oleSize", "customWorkbookViews", "pivotCaches", "smartTagPr", "smartTagTypes",
                 "webPublishing", "fileRecoveryPr", "webPublishObjects", "extLst")
-
-
-def add_cached_values(path_in, path_out, values: dict) -> int:
-    """Copy path_in to path_out with a cached value in every formula cell found in `values`
-    ((sheet title, 'B7') -> float | str | bool | error). Errors may be office.CellError, the
-    plain code string ('#N/A') or any object whose str() is a known code (formulas' XlError).
-    Returns how many formula cells got a value; formula cells missing from `values` keep what
-    they had. path_out may be path_in: the file is replaced only when the copy is complete."""
-    from .package import finish
-    return finish(path_in, path_out, values=values, tidy=False)
 
 
 def cell_with_value(match: re.Match, cells: dict[bytes, object]) -> bytes | None:

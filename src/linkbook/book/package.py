@@ -65,11 +65,20 @@ AFTER_CONTROLS = ("legacyDrawingHF", "drawingHF", "picture", "oleObjects", "cont
                   "webPublishItems", "tableParts", "extLst")
 
 
+def add_cached_values(path_in, path_out, values: dict) -> int:
+    """Copy path_in to path_out with a cached value in every formula cell found in `values`
+    ((sheet title, 'B7') -> float | str | bool | error). Errors may be office.CellError, the
+    plain code string ('#N/A') or any object whose str() is a known code (formulas' XlError).
+    Returns how many formula cells got a value; formula cells missing from `values` keep what
+    they had. path_out may be path_in: the file is replaced only when the copy is complete."""
+    return finish(path_in, path_out, values=values, tidy=False)
+
+
 def finish(path_in, path_out, *, values: dict | None = None,
            controls: dict[str, list[Control]] | None = None, tidy: bool = True,
            cells: "HeldCells | None" = None) -> int:
     """Copy path_in to path_out, finished (see the module's docstring). `values`: (sheet title,
-    'B7') -> value of formula cells, as cached.add_cached_values takes them; `controls`: sheet
+    'B7') -> value of formula cells, as add_cached_values takes them; `controls`: sheet
     title -> its form controls; `tidy`: shared strings and fonts in order; `cells`: the cells
     `cells_held_back` kept from openpyxl's save (`tidy` is then implied). Returns how many
     formula cells got a cached value. path_out may be path_in: the file is replaced only when

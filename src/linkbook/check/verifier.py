@@ -284,7 +284,7 @@ def _show(value, error_code):
 def _show_stored(value, error_code):
     """A stored or computed value as the stored check names it: a text quoted, so that the
     text "1.5" does not read as the number 1.5."""
-    from ..apps.office import CellError
+    from ..base.xlsx import CellError
     if isinstance(value, CellError):
         return str(value)
     shown = _show(value, error_code)
@@ -312,7 +312,8 @@ class Reference:
     the description the book records, with the book's own input values."""
 
     def __init__(self, meta: dict):
-        from ..language.compiler import DescriptionError, from_record
+        from ..language.model import DescriptionError
+        from ..language.templates import from_record
         try:
             self.mechanism = from_record(meta)
         except (DescriptionError, KeyError, TypeError, AttributeError) as exc:
@@ -1054,7 +1055,7 @@ def verify(path: Path, engine: str = "vector") -> Report:
             relative = True
         else:
             # a real application (LibreOffice, Gnumeric) recalculates a copy: judged alike
-            from ..apps import office
+            from ..engine import office
             if engine not in office.APPLICATIONS:
                 raise UnusableFile(f"unknown engine {engine!r}")
             values = office.recalculated_values(path, engine)
@@ -1151,7 +1152,8 @@ def stored_values(wb, path, cells: set[tuple[str, str]]) -> dict[tuple[str, str]
     """(sheet, cell) -> the value each of `cells` (formula cells) stores with its formula (the
     `<v>`): what LibreOffice with default settings, openpyxl's data_only and pandas show. Numbers
     as float, errors as office.CellError, text as str; a cell that stores none is left out."""
-    from ..apps.office import CellError, read_values
+    from ..base.xlsx import CellError
+    from ..engine.office import read_values
     from ..base.xlsx import column_letter
     if not all(hasattr(ws, "stored") for ws in wb.worksheets):   # openpyxl read the book
         return {k: v for k, v in read_values(path).items() if k in cells}
@@ -1181,7 +1183,7 @@ def stored_values(wb, path, cells: set[tuple[str, str]]) -> dict[tuple[str, str]
 
 def _kind(value, error_code) -> str:
     """What a reader shows a cell as: an error, a boolean, a number or a text."""
-    from ..apps.office import CellError
+    from ..base.xlsx import CellError
     if isinstance(value, CellError) or error_code(value) is not None:
         return "error"
     if isinstance(value, bool):
@@ -1190,7 +1192,7 @@ def _kind(value, error_code) -> str:
 
 
 def _same(a, b, error_code) -> bool:
-    from ..apps.office import CellError
+    from ..base.xlsx import CellError
     code_a = str(a) if isinstance(a, CellError) else None
     if code_a is not None or error_code(b) is not None:
         return code_a == error_code(b)
@@ -1204,7 +1206,7 @@ def _check_stored(wb, meta, values, stored, is_error, error_code, relative) -> C
     that its formula does not give (an edit of the file, a stale save) differs, named with what
     the formula gives and what is stored. Only the stored values that differ from the formula's
     own are judged again."""
-    from ..apps.office import CellError
+    from ..base.xlsx import CellError
     c = Check(STORED, "value ≠ the formula's", cells=len(stored))
     differ = {k: v for k, v in stored.items() if not _same(v, values.get(k), error_code)}
     # a value of another kind (TRUE for 1, the text "1.5" for 1.5) differs outright: a reader

@@ -17,7 +17,8 @@ from fractions import Fraction
 from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism, on_loop)
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Block, Chart, FourBarLoop, Guide,
-                    Joint, Model, Quantity, _one_group, references)
+                    DescriptionError, Joint, Model, Quantity, _one_group, references)
+from ..base.xlsx import excel_name_problem
 from .schema import keys_of, schema, step_schemas
 from .steps import (OUTSIDE_DOMAIN, Sym, angle_of_triangle_or_na, in_domain_or_na,
                     input_angle, offset_slide, polar, slider, triangle)
@@ -26,14 +27,6 @@ KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND)
 _IDENT = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 _POINT = re.compile(r"^[A-Za-z0-9_]+$")
 RESERVED_KEYS = {"closes", "gap_from", "gap_to"}     # the sweep's bookkeeping columns
-
-
-class DescriptionError(Exception):
-    """A problem with a description: `field` names the step and key, `message` says what."""
-
-    def __init__(self, field: str, message: str):
-        super().__init__(f"{field}: {message}")
-        self.field, self.message = field, message
 
 
 # ---------------------------------------------------------------- expressions
@@ -700,7 +693,6 @@ class Compiler:
             raise DescriptionError(f"{field}.kind", f"must be {ANGLE_KIND} (a crank's angle) or "
                                                     f"{LENGTH_KIND} (a linear actuator's length) "
                                                     f"(got {self.input_kind!r})")
-        from .templates import excel_name_problem
         problem = excel_name_problem(f"{k}_now")
         if problem:
             raise DescriptionError(f"{field}.key", f"{k}_now (its Excel name) {problem}")
@@ -1301,18 +1293,3 @@ def compile_mechanism(name: str, data: dict, kinds: dict[str, str], origin: str,
             raise DescriptionError(f"{origin}: grid.output", f"{out!r} is not a shown column")
     return Mechanism(name, dict(c.kinds), c.input_key, c.input_symbol, lambda: model, grid,
                      description=data, input_kind=c.input_kind, lengths=tuple(c.lengths))
-
-
-def from_record(meta: dict) -> Mechanism:
-    """The mechanism a workbook's build record describes (verify reads an edited book back). A
-    book written before the mechanism language records only a bundled mechanism's name."""
-    kinds = {symbol: info["kind"] for symbol, info in meta["inputs"].items()}
-    grid = (meta["grid"]["param"], meta["grid"]["key"]) if "grid" in meta else None
-    description = meta.get("description")
-    if description is None:
-        from .templates import bundled_template_data
-        data = bundled_template_data(str(meta.get("mechanism")))
-        if data is None:
-            raise DescriptionError("workbook", f"unknown mechanism {meta.get('mechanism')!r}")
-        description = data["mechanism"]
-    return compile_mechanism(meta["mechanism"], description, kinds, "workbook", grid)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import ast
 import math
 
+from ..base.errors import InputError
 from .mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, OFFSET_KIND, RATE_KIND
 from ..base.safety import MAX_UNCOMPRESSED
 
@@ -40,14 +41,6 @@ MEMORY_BUDGET = 4 * 1024 ** 3
 MEMORY_PER_CELL = 1000
 MEMORY_PER_XML_BYTE = 4
 MAX_XML = MAX_UNCOMPRESSED
-
-
-class InputError(Exception):
-    """A bad value from the user: one line naming the field and the value."""
-
-    def __init__(self, field: str, message: str):
-        super().__init__(f"{field}: {message}")
-        self.field = field
 
 
 def parse_number(field: str, text: object) -> float:

@@ -212,3 +212,11 @@ def unit_text(unit: str, length_unit: str) -> str:
 def header(symbol: str, unit: str, length_unit: str) -> str:
     """`θ13 [deg]`: every header is the symbol and its unit in brackets."""
     return f"{symbol} [{unit_text(unit, length_unit)}]"
+
+
+class DescriptionError(Exception):
+    """A problem with a description: `field` names the step and key, `message` says what."""
+
+    def __init__(self, field: str, message: str):
+        super().__init__(f"{field}: {message}")
+        self.field, self.message = field, message

@@ -20,7 +20,7 @@ Expression steps get none (a formula of the user's has no derivative written for
 from __future__ import annotations
 
 from .model import (ACCEL, ALIAS, ANG_ACCEL, ANG_SPEED, AREA, CONSTANT, LENGTH, MOTION, RATIO,
-                    RPM, SPEED, Quantity, _one_group)
+                    RPM, SPEED, DescriptionError, Quantity, _one_group)
 
 ZERO = "0"
 
@@ -113,7 +113,6 @@ class MotionWriter:
         try:
             self.model.add(*quantities)
         except ValueError as exc:
-            from .compiler import DescriptionError
             raise DescriptionError(f"{self.c.field}", f"{exc} (velocity and acceleration keys "
                                                       "start with vx_, vy_, ax_, ay_, omega_, "
                                                       "alpha_, v_, acc_)") from None
@@ -218,7 +217,6 @@ class MotionWriter:
             return ZERO, ZERO
         if side.text == f"{{{self.c.input_key}}}":
             return self.speed, self.accel
-        from .compiler import DescriptionError
         raise DescriptionError(field, "a side driven by the actuator must be its length itself "
                                       f"({self.c.input_key}), so that its rate is the input's")
 

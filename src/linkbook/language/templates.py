@@ -12,8 +12,10 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from ..base.xlsx import excel_name_problem
 from .domain import (BRANCH_WORDS, InputError, check_input, check_lengths_together,
                      check_value, check_written_lengths, parse_number)
+from .compiler import DescriptionError, compile_mechanism, parameter_kinds, unconvertible, value_of
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND, RATE_KIND,
                          Mechanism)
 
@@ -86,24 +88,6 @@ class Template:
 
 
 # ---------------------------------------------------------------- names
-_CELL_A1 = re.compile(r"^\$?[A-Za-z]{1,3}\$?\d+$")
-_CELL_R1C1 = re.compile(r"^[Rr](\d*|\[-?\d+\])[Cc](\d*|\[-?\d+\])$|^[RrCc]\d*$")
-_NAME_CHARS = re.compile(r"^[A-Za-z_\\][A-Za-z0-9_.]*$")
-
-
-def excel_name_problem(name: str) -> str | None:
-    """Why `name` cannot be an Excel defined name, or None when it can."""
-    if not name or len(name) > 255:
-        return "must have 1 to 255 characters"
-    if not _NAME_CHARS.match(name):
-        return "must start with a letter or _ and hold only letters, digits, _ and ."
-    if _CELL_A1.match(name) or _CELL_R1C1.match(name):
-        return "looks like a cell reference"
-    if name.upper() in {"TRUE", "FALSE"}:
-        return "is a reserved word"
-    return None
-
-
 def default_name(symbol: str) -> str:
     """a2 -> a_2, gamma3 -> gamma_3: never a cell-like name such as A2 or B3; a symbol that is
     still one (c, r: columns and rows in R1C1) gets a prefix: p_c."""
@@ -317,7 +301,6 @@ def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template"
     check_length_unit(flag, unit)
     if unit == t.length_unit:
         return t
-    from .compiler import unconvertible
     found = unconvertible(t.mechanism, t.mechanism.build())
     if found:
         field, why = found
@@ -361,7 +344,6 @@ def motion_default(mech: Mechanism, symbol: str, length_unit: str) -> dict:
 def _mechanism(name: str, data: dict, origin: str) -> Mechanism:
     """The mechanism the template describes (docs/language.md). The older form names a bundled
     template's mechanism (`mechanism = "fourbar"`): its description and parameter kinds."""
-    from .compiler import DescriptionError, compile_mechanism, parameter_kinds
     raw = data.get("mechanism")
     table = _need(data, "parameters", origin, dict)
     kinds: dict[str, str] = {}
@@ -411,7 +393,6 @@ def check_step_lengths(t: Template) -> None:
     """Every length a step takes (a side, a rod, a crank), evaluated with the book's values,
     must be positive: the loop cannot be assembled with a zero or negative one, and a book
     built so would be #N/A all through. A length of the swept input is checked by the sweep."""
-    from .compiler import value_of
     values = t.values()
     for field, raw in t.mechanism.lengths:
         value = value_of(raw, values)
@@ -514,3 +495,17 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
                   grid_values=grid_values)
     check_sweep(out, step_field=names["step"] if step is not None else "sweep.step")
     return out
+
+
+def from_record(meta: dict) -> Mechanism:
+    """The mechanism a workbook's build record describes (verify reads an edited book back). A
+    book written before the mechanism language records only a bundled mechanism's name."""
+    kinds = {symbol: info["kind"] for symbol, info in meta["inputs"].items()}
+    grid = (meta["grid"]["param"], meta["grid"]["key"]) if "grid" in meta else None
+    description = meta.get("description")
+    if description is None:
+        data = bundled_template_data(str(meta.get("mechanism")))
+        if data is None:
+            raise DescriptionError("workbook", f"unknown mechanism {meta.get('mechanism')!r}")
+        description = data["mechanism"]
+    return compile_mechanism(meta["mechanism"], description, kinds, "workbook", grid)
