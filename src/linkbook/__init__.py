@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-__version__ = "0.1.0"
+from .base import __version__
 __all__ = ["build", "verify", "InputError", "UnusableFile", "CannotWrite", "__version__"]
 
 

@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..engine import evaluator as engine
-from ..book import workbook as layout
-from ..book.charts import PATH_COLOUR, drawing_colours, link_label, nice_step
+from ..base import sheets as layout
+from ..base.palette import PATH_COLOUR, drawing_colours, link_label, nice_step
 
 DEFAULT_FPS = 20
 DEFAULT_SIZE = 600

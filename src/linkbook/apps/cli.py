@@ -13,7 +13,7 @@ from pathlib import Path
 # setting wins.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from .. import __version__
+from ..base import __version__
 from ..language import templates  # noqa: E402 (after the setting above)
 from ..language.templates import InputError
 
@@ -384,7 +384,7 @@ def _verify(args) -> int:
 
 def _as_data(report) -> dict:
     """One book's report as data: the same keys whether or not it could be verified."""
-    from .. import __version__
+    from ..base import __version__
     from ..check.verifier import TOLERANCE_RULE
     usable = report.error is None
     return {

@@ -7,7 +7,6 @@ the mechanism, and axis limits fixed at build time would lose it after an edit.
 """
 from __future__ import annotations
 
-import math
 
 from openpyxl.chart import Reference, ScatterChart, Series
 from openpyxl.chart.axis import ChartLines
@@ -19,6 +18,7 @@ from openpyxl.chart.shapes import GraphicalProperties
 from openpyxl.utils import column_index_from_string, get_column_letter, quote_sheetname
 
 from . import frames
+from ..base.palette import PART_COLOURS, PATH_COLOUR, drawing_colours, link_label
 from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, Model, header, unit_text
 from ..language.templates import Template
 from .workbook import CHARTS, GRID, MECH, MOTION_SHEET, SWEEP, Built
@@ -27,37 +27,9 @@ LINE_EMU = 22000          # 1.7 pt
 DRAWING_CM = 15.0
 # The drawing's colours, set in the file (not left to the theme) so that `linkbook animate`
 # draws each link as the workbook does: link 1, 2, ... then the traced point's path.
-LINK_COLOURS = ("4F81BD", "C0504D", "9BBB59", "F79646", "4BACC6", "1F497D", "948A54")
-PATH_COLOUR = "8064A2"
-GROUND_COLOUR = "7F7F7F"
-# a slider's guide: a thin grey line; its block: a dark outline (neither takes a link's colour)
-PART_COLOURS = {"guide": GROUND_COLOUR, "slot": GROUND_COLOUR, "block": "404040"}
 SWEEP_CHART_CM = 18         # the width of the Charts sheet's charts
 SIDE, WIDTH_RATIO = 0.75, 1.45    # a framed chart: square plot area, legend on the right
 GRID_COLOUR = "9DC3E6"     # the frame's gridlines, one per grid square: light blue paper
-
-
-def drawing_colours(drawing: list[dict]) -> list[str]:
-    """A colour per drawn link: grey for the ground, the palette in turn for moving links."""
-    colours, k = [], 0
-    for link in drawing:
-        if link.get("ground"):
-            colours.append(GROUND_COLOUR)
-        elif link.get("kind") in PART_COLOURS:
-            colours.append(PART_COLOURS[link["kind"]])
-        else:
-            colours.append(LINK_COLOURS[k % len(LINK_COLOURS)])
-            k += 1
-    return colours
-
-
-def link_label(link: dict, i: int) -> str:
-    """The legend's name of a drawn link (books built before labels: numbered from 1)."""
-    if "label" in link:
-        return link["label"]
-    joints = link["joints"]
-    body = joints[:-1] if len(joints) > 2 and joints[0] == joints[-1] else joints
-    return f"link {i}: {''.join(body)}"
 
 
 def _series(ws, x_col: str, y_col: str, rows: tuple[int, int], title: str,
@@ -95,13 +67,6 @@ def _chart(title: str, x_title: str, y_title: str) -> ScatterChart:
         axis.tickLblPos = "low"      # labels at the edge of the plot, not where the axes cross
     c.legend.position = "b"
     return c
-
-
-def nice_step(span: float) -> float:
-    """A 1-2-5 grid step giving about 6 divisions."""
-    raw = span / 6
-    power = 10 ** math.floor(math.log10(raw))
-    return next(m * power for m in (1, 2, 2.5, 5, 10) if m * power >= raw)
 
 
 def _frame_axes(chart: ScatterChart, size_cm: float) -> None:
