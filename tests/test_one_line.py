@@ -58,16 +58,17 @@ def _hidden_files(folder: Path) -> list[str]:
 
 # ---------------------------------------------------------------- signals
 STALL = """
-import sys, time
-from linkbook import cli, {module}
-real = {module}.{function}
+import importlib, sys, time
+from linkbook.apps import cli
+module = importlib.import_module("linkbook.{module}")
+real = module.{function}
 
 def stall(*args, **kwargs):      # mid-work: say so, then wait for the signal
     print("ready", flush=True)
     time.sleep(120)
     return real(*args, **kwargs)
 
-{module}.{function} = stall
+module.{function} = stall
 sys.argv[1:] = {argv!r}
 cli.run()
 """
@@ -98,7 +99,7 @@ def test_a_signal_during_the_save_ends_in_one_line_and_leaves_no_temporary_file(
         tmp_path, signum, status, name):
     target = tmp_path / "fourbar.xlsx"
     target.write_bytes(b"the earlier book")
-    code, err, midway = _stopped_midway(tmp_path, "package", "finish",
+    code, err, midway = _stopped_midway(tmp_path, "book.package", "finish",
                                         ["build", "fourbar", "-o", "fourbar.xlsx"], signum)
     assert len(midway) == 1 and re.fullmatch(r"\.fourbar\.xlsx\..+\.tmp", midway[0]), midway
     assert code == status, err
@@ -111,7 +112,7 @@ def test_a_signal_during_the_save_ends_in_one_line_and_leaves_no_temporary_file(
 @pytest.mark.parametrize("signum,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_a_signal_during_verify_ends_in_one_line(tmp_path, book, signum, status):
     (tmp_path / "fourbar.xlsx").write_bytes(book)
-    code, err, _ = _stopped_midway(tmp_path, "engine", "evaluate",
+    code, err, _ = _stopped_midway(tmp_path, "engine.evaluator", "evaluate",
                                    ["verify", "fourbar.xlsx"], signum)
     assert code == status and len(err.strip().splitlines()) == 1, err
     assert err.startswith("linkbook: stopped by"), err

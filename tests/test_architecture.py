@@ -1,0 +1,163 @@
+"""The house's rules, read from the code's own imports (every import, also those inside functions).
+
+The package is six wings, each a subpackage of src/linkbook (README, "Architecture"):
+base (what all share) < language (TOML -> symbolic model) and engine (evaluating a book)
+< book (the writer) and check (the independent reference and the judge) < apps (command line,
+animate, info, export, preview) < the package's face (linkbook/__init__.py, __main__.py).
+A module imports only from its own wing and the wings below it, the imports make no circle, the
+independent reference takes nothing from the writer or the language (else it would check the
+writer against itself), the readers of books take the record, not the writer, and the writer
+never needs the LibreOffice runner.
+"""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "src" / "linkbook"
+RANK = {"base": 0, "language": 1, "engine": 1, "book": 2, "check": 2, "apps": 3, "": 4}
+# Wings of one rank that must not import each other either.
+APART = {("language", "engine"), ("engine", "language"), ("book", "check"), ("check", "book")}
+MAX_MODULE_LINES = 1_000
+MAX_CLASS_LINES = 300
+
+
+def module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def modules() -> dict[str, Path]:
+    return {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def _absolute(node: ast.ImportFrom, here: str, is_package: bool) -> str:
+    if node.level == 0:
+        return node.module or ""
+    base = here.split(".") if is_package else here.split(".")[:-1]
+    base = base[:len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def imports_of(name: str, path: Path, known: set[str]) -> set[str]:
+    """The project's modules that `name` imports, anywhere in its text."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names if a.name.startswith("linkbook")}
+        elif isinstance(node, ast.ImportFrom):
+            target = _absolute(node, name, path.name == "__init__.py")
+            if not target.startswith("linkbook"):
+                continue
+            # `from linkbook.book import builder` names a module; `from .x import f` a function
+            subs = {f"{target}.{a.name}" for a in node.names} & known
+            found |= subs or {target}
+    return {m for m in found if m != name}
+
+
+def graph() -> dict[str, set[str]]:
+    mods = modules()
+    return {name: imports_of(name, path, set(mods)) & set(mods) for name, path in mods.items()}
+
+
+def wing(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 2 or (len(parts) == 2 and parts[1] in RANK) else ""
+
+
+def circles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected groups of more than one module (Tarjan)."""
+    index, low, stack, on, out, counter = {}, {}, [], set(), [], [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in sorted(edges.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            group = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                group.append(w)
+                if w == v:
+                    break
+            if len(group) > 1:
+                out.append(sorted(group))
+
+    for v in sorted(edges):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def _ignoring_package_faces(edges):
+    """A package's face (__init__) re-exporting its own modules is not an import of the wing by
+    itself; an import of the face is an import of the wing."""
+    return {m: {t for t in ts if not m.startswith(t + ".")} for m, ts in edges.items()}
+
+
+def test_the_reader_sees_every_module_and_its_imports():
+    """The rules below are only as good as this reading: it must see the wings and the imports
+    the code makes at module level and inside functions."""
+    edges = graph()
+    assert {wing(m) for m in edges} == set(RANK)
+    assert "linkbook.base.xlsx" in edges["linkbook.engine.grammar"]
+    # builder imports page setup inside a function; cli imports verify's module inside one
+    assert "linkbook.book.pages" in edges["linkbook.book.builder"]
+    assert any(m.startswith("linkbook.check") for m in edges["linkbook.apps.cli"])
+
+
+def test_no_import_circles():
+    found = circles(_ignoring_package_faces(graph()))
+    assert not found, "modules that import each other in a loop: " + "; ".join(
+        " <-> ".join(g) for g in found)
+
+
+def test_no_wing_imports_a_higher_wing_or_its_neighbour():
+    bad = [f"{m} -> {t}" for m, ts in graph().items() for t in ts
+           if RANK[wing(t)] > RANK[wing(m)] or (wing(m), wing(t)) in APART]
+    assert not bad, "imports against the wings' order:\n" + "\n".join(sorted(bad))
+
+
+@pytest.mark.parametrize("reader, forbidden", [
+    ("linkbook.check.reference", ("linkbook.book", "linkbook.language", "linkbook.engine")),
+    ("linkbook.check", ("linkbook.book",)),
+    ("linkbook.apps.animate", ("linkbook.book",)),
+    ("linkbook.apps.export", ("linkbook.book",)),
+    ("linkbook.book", ("linkbook.engine.office",)),
+])
+def test_who_may_not_import_whom(reader, forbidden):
+    edges = graph()
+    bad = [f"{m} -> {t}" for m, ts in edges.items() if m == reader or m.startswith(reader + ".")
+           for t in ts if any(t == f or t.startswith(f + ".") for f in forbidden)]
+    assert not bad, "\n".join(sorted(bad))
+
+
+def test_the_rules_catch_a_circle_and_a_wrong_way_import():
+    """The checks fail on a house that breaks them (so a passing run means something)."""
+    edges = graph()
+    edges["linkbook.base.xlsx"] = edges["linkbook.base.xlsx"] | {"linkbook.book.workbook"}
+    assert circles(_ignoring_package_faces(edges))
+    assert RANK[wing("linkbook.book.workbook")] > RANK[wing("linkbook.base.xlsx")]
+
+
+def test_modules_and_classes_stay_small():
+    too_long = []
+    for name, path in modules().items():
+        text = path.read_text(encoding="utf-8")
+        lines = len(text.splitlines())
+        if lines > MAX_MODULE_LINES:
+            too_long.append(f"{name}: {lines} lines")
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, ast.ClassDef) and node.end_lineno - node.lineno + 1 > MAX_CLASS_LINES:
+                too_long.append(f"{name}.{node.name}: {node.end_lineno - node.lineno + 1} lines")
+    assert not too_long, "\n".join(too_long)
