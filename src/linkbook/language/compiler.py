@@ -42,7 +42,7 @@ class Compiler:
         self.dyads: list[dict] = []
         self.input_kind = ANGLE_KIND
         self.swept: set[str] = set()     # the input key, where it is a length expressions use
-        self.records: list[dict] = []    # per step what it placed, for motion.py
+        self.records: list[dict] = []    # per step what it placed, for its rates (motion.py)
         self.lengths: list[tuple[str, object]] = []   # (field, expression) of every length
         self.traced = ""
         self.field = f"{origin}: mechanism"
