@@ -24,6 +24,7 @@ from .model import (ACCEL, ALIAS, ANG_ACCEL, ANG_SPEED, AREA, CONSTANT, MOTION, 
                     DescriptionError, Quantity)
 from .steps import STEPS
 
+
 def rate_symbol(symbol: str, order: int, angle: bool) -> str:
     """θ13 → ω13, α13; another symbol gets one or two dots (ṡ14, s̈14)."""
     if angle and symbol.startswith("θ"):

@@ -11,6 +11,7 @@ from .step_type import StepType, fixed, schema_keys
 
 
 def place(c, field: str, s: dict) -> None:
+    """P = pivot + length·(cos, sin)(input angle + phase)."""
     name = s["point"]
     if c.input_kind != ANGLE_KIND:
         raise DescriptionError(f"{field}.type", "a crank turns with an angle input; this "
@@ -37,6 +38,7 @@ def place(c, field: str, s: dict) -> None:
 
 
 def rates(w, rec: dict) -> None:
+    """The crank turns about its pivot at the input's ω and α."""
     n, pivot = rec["point"], rec["pivot"]
     w.links[(pivot, n)] = (w.speed, w.accel)
     w.rigid(n, pivot, w.speed, w.accel)

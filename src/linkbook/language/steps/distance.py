@@ -9,6 +9,7 @@ from .step_type import StepType, schema_keys
 
 
 def place(c, field: str, s: dict) -> None:
+    """|AB| from the points' coordinates."""
     k = s["key"]
     pair = s["between"]
     if not isinstance(pair, list) or len(pair) != 2:
@@ -27,6 +28,7 @@ def place(c, field: str, s: dict) -> None:
 
 
 def rates(w, rec: dict) -> None:
+    """|AB|'s rates from the points' motion."""
     w.length_and_angle(*rec["between"], rec["length"], None)
 
 

@@ -41,6 +41,8 @@ def triangle(model: Model, *, side: str, angle: str, p: str, q: str, branch: str
 
 
 def place(c, field: str, s: dict) -> None:
+    """R from |PR| = p_length, |QR| = q_length: the polar columns of Q→P, then the
+    triangle's angles (the cosine rule) on the branch asked for."""
     name = s["point"]
     p = c.known_point(f"{field}.p", s["p"], name)
     q = c.known_point(f"{field}.q", s["q"], name)
@@ -90,6 +92,8 @@ def place(c, field: str, s: dict) -> None:
 
 
 def rates(w, rec: dict) -> None:
+    """The two circles about P and Q differentiated; a side that is the actuator's length
+    changes at the input's rate."""
     n, p, q = rec["point"], rec["p"], rec["q"]
     p_rates = w.side_rates(f"{rec['field']}.p_length", rec["p_length"])
     q_rates = w.side_rates(f"{rec['field']}.q_length", rec["q_length"])

@@ -13,6 +13,7 @@ UNITS = {"length": LENGTH, "rad": RAD, "-": "-"}
 
 
 def place(c, field: str, s: dict) -> None:
+    """The user's formula of parameters and earlier columns, #N/A where its value is an error."""
     k = c.new_key(f"{field}.key", s["key"])
     unit = s.get("unit", "-")
     if unit not in UNITS:

@@ -10,6 +10,8 @@ from .step_type import StepType, fixed, schema_keys
 
 
 def place(c, field: str, s: dict) -> None:
+    """A point fixed in the frame A→B: by local coordinates [u, v], by its distances to A
+    and B, or by a distance from A at an angle from A→B."""
     n = s["point"]
     a, b = c.frame(f"{field}.frame", s["frame"], n)
     forms = [k for k in ("local", "distances", "distance") if k in s]
@@ -80,6 +82,7 @@ def place(c, field: str, s: dict) -> None:
 
 
 def rates(w, rec: dict) -> None:
+    """Carried by its frame as a rigid body; by two circles where the frame stretches."""
     n, (a, b) = rec["point"], rec["frame"]
     if rec["form"] == "distances" and not w.fixed_length(a, b):
         w.two_circles(n, a, b)      # a frame that stretches: two circles about its points

@@ -24,6 +24,8 @@ def offset_slide(model: Model, *, p: str, angle: str, offset: str, branch: str,
 
 
 def place(c, field: str, s: dict) -> None:
+    """The polar columns of pivot→P, then the right triangle pivot–foot–P: the link's
+    angle and the travel along the slide."""
     n = s["point"]
     p = c.known_point(f"{field}.p", s["p"], n)
     pivot = c.known_point(f"{field}.pivot", s["pivot"], n)

@@ -27,7 +27,7 @@ def slider(model: Model, *, pin_x: str, pin_y: str, line_y: str, length: str, br
     relative = f"({{{angle.key}}}-{direction})" if direction else f"{{{angle.key}}}"
     model.add(
         quantity(angle, RAD, f"{turn}PI()/2+{{{branch}}}*(PI()/2-"
-                       + asin_or_na(f"{rise}/{{{length}}}") + ")"),
+                             + asin_or_na(f"{rise}/{{{length}}}") + ")"),
         quantity(position, LENGTH, f"{pin_x}-{{{length}}}*COS({relative})"),
     )
 

@@ -11,6 +11,7 @@ from .step_type import StepType, fixed, schema_keys
 
 
 def place(c, field: str, s: dict) -> None:
+    """E + s_slot·û = T + s·d̂ (the slot through E, the line through T), by Cramer's rule."""
     n = s["point"]
     e = c.known_point(f"{field}.slot_through", s["slot_through"], n)
     a, b = c.frame(f"{field}.slot_frame", s["slot_frame"], n)

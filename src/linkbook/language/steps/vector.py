@@ -11,6 +11,7 @@ from .step_type import StepType, schema_keys
 
 
 def place(c, field: str, s: dict) -> None:
+    """The polar columns of A→B; its angle is the link A→B's where no step gave one."""
     k = s["key"]
     if not isinstance(k, str) or not IDENT.match(k):
         raise DescriptionError(f"{field}.key", f"must be an identifier (got {k!r})")
@@ -29,6 +30,7 @@ def place(c, field: str, s: dict) -> None:
 
 
 def rates(w, rec: dict) -> None:
+    """|AB| and the angle of A→B: their rates from the points' motion."""
     w.length_and_angle(rec["from"], rec["to"], rec["length"], rec["angle"])
 
 
