@@ -20,8 +20,8 @@ from linkbook.book import builder
 from linkbook.engine import evaluator as engine
 from linkbook.engine import office
 from linkbook.language import templates
-from linkbook.language.compiler import FUNCTIONS as EXPRESSION_FUNCTIONS
-from linkbook.language.compiler import expression
+from linkbook.language.expressions import FUNCTIONS as EXPRESSION_FUNCTIONS
+from linkbook.language.expressions import expression
 
 # Functions that a linkage workbook could reasonably use, each documented by all of: Microsoft's
 # "Excel functions (alphabetical)" (as in Excel 2007/2010), LibreOffice Calc's "Functions by

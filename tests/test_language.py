@@ -229,7 +229,7 @@ def test_the_docs_copy_of_the_schema_is_the_packaged_one():
 def test_the_compiler_knows_the_keys_the_schema_allows():
     """One source of truth: the semantic checks take each step's keys from the schema, so a key
     the schema allows is one the compiler reads, and no other."""
-    from linkbook.language import compiler as language
+    from linkbook.language import steps as language
     steps = json.loads(SCHEMA.read_text(encoding="utf-8"))["properties"]["mechanism"][
         "properties"]["steps"]["items"]
     for rule in steps["allOf"]:
@@ -350,7 +350,7 @@ def _every_option(**values) -> templates.Template:
 def test_every_option_of_every_step_type_is_verified():
     t = _every_option()
     assert {s["type"] for s in t.mechanism.description["steps"]} == set(
-        __import__("linkbook.language.compiler", fromlist=["STEP_KEYS"]).STEP_KEYS)
+        __import__("linkbook.language.steps", fromlist=["STEP_KEYS"]).STEP_KEYS)
     b, values = builder.make(t)
     checks = checks_of(b, values)
     bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]

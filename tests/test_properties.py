@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from conftest import checks_of, formula_cells
 from linkbook.book import builder
 from linkbook.language import templates
-from linkbook.language.compiler import STEP_KEYS
+from linkbook.language.steps import STEP_KEYS
 from linkbook.language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
                                  OFFSET_KIND, RATE_KIND)
 

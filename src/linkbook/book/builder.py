@@ -13,7 +13,8 @@ from . import package
 from . import workbook
 from .controls import Control
 from ..base.files import write_atomic
-from ..language.model import COLUMN, _one_group
+from ..language.excel import one_group
+from ..language.model import COLUMN
 from ..base.pause import gc_paused
 from ..language.templates import Sweep, Template
 from ..base.xlsx import column_letter, xml_text
@@ -60,7 +61,7 @@ def _cut_columns(built: workbook.Built):
     a rounding error in a sine, which applications do not share, would pick +π or −π."""
     columns = built.meta["sweep"]["columns"]
     return [(q, columns[q.key]) for q in built.model.of_role(COLUMN)
-            if q.formula.startswith("ATAN2(") and _one_group(q.formula)]
+            if q.formula.startswith("ATAN2(") and one_group(q.formula)]
 
 
 def degree_window_sources(built: workbook.Built) -> set[tuple[str, str]]:

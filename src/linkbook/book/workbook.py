@@ -27,7 +27,7 @@ from ..language.domain import INPUT_ANGLE_LIMIT
 from .package import Formula
 from ..base.sheets import (CHARTS, DASH, DRAWING_COLUMNS, FORMAT_VERSION, GAPS_SHOWN, GRID, MECH,  # noqa: F401
                      META, MOTION_SHEET, STROKE, SWEEP, read_meta, summary_prefix, write_meta)
-from ..language.steps import outside_domain
+from ..language.excel import outside_domain
 from ..language.templates import Template
 
 ROW = "\x00"   # stands for the row number in a rendered sweep formula

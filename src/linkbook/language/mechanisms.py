@@ -1,6 +1,6 @@
 """What the workbook writer needs to know of a mechanism, whatever describes it.
 
-Every mechanism is described as data in the mechanism language (docs/language.md, language.py);
+Every mechanism is described as data in the mechanism language (docs/language.md, compiler.py);
 the bundled ones are templates/*.toml. Nothing here touches openpyxl.
 """
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""The symbolic model of a mechanism's position analysis, and the one place that turns it into
-Excel formula text.
+"""The symbolic model of a mechanism's analysis, and how its formulas become a cell's Excel text
+where they land (Resolver).
 
 A model is an ordered list of quantities. Each quantity's formula is Excel text in which `{key}`
 stands for another quantity or a parameter. Where a formula lands decides what `{key}` becomes:
@@ -13,11 +13,9 @@ stands for another quantity or a parameter. Where a formula lands decides what `
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
-from typing import Callable
 
-PLACEHOLDER = re.compile(r"\{(\w+)\}")
+from .excel import parenthesize, render
 
 # Roles a quantity can play.
 COLUMN = "column"      # one cell per row of the sweep, shown with its header
@@ -134,44 +132,6 @@ class Model:
 
     def of_role(self, role: str) -> list[Quantity]:
         return [q for q in self.quantities if q.role == role]
-
-
-def references(formula: str) -> list[str]:
-    """The keys a formula mentions, in order of first use."""
-    return list(dict.fromkeys(PLACEHOLDER.findall(formula)))
-
-
-def render(formula: str, resolve: Callable[[str], str]) -> str:
-    """Replace every {key} by the text `resolve(key)` gives for it."""
-    return PLACEHOLDER.sub(lambda m: resolve(m.group(1)), formula)
-
-
-_SIMPLE = re.compile(r"^(\$?[A-Za-z_][\w.]*\$?\d*|[\d.]+(E[+-]?\d+)?|'[^']+'!\$?[A-Z]+\$?\d+)$")
-
-
-def parenthesize(text: str) -> str:
-    """Wrap an inlined expression unless it is a single name, reference or number."""
-    if _SIMPLE.match(text) or _one_group(text):
-        return text
-    return f"({text})"
-
-
-_CALL = re.compile(r"^[A-Z][A-Z0-9.]*(?=\()")
-
-
-def _one_group(text: str) -> bool:
-    """True for '(a+b)' or 'COS(a+b)': one bracket group or call spanning the whole text."""
-    call = _CALL.match(text)
-    start = call.end() if call else 0
-    if not text[start:].startswith("("):
-        return False
-    depth = 0
-    for i in range(start, len(text)):
-        depth += text[i] == "("
-        depth -= text[i] == ")"
-        if depth == 0:
-            return i == len(text) - 1
-    return False
 
 
 class Resolver:

@@ -19,59 +19,10 @@ Expression steps get none (a formula of the user's has no derivative written for
 """
 from __future__ import annotations
 
-from .model import (ACCEL, ALIAS, ANG_ACCEL, ANG_SPEED, AREA, CONSTANT, LENGTH, MOTION, RATIO,
-                    RPM, SPEED, DescriptionError, Quantity, _one_group)
-
-ZERO = "0"
-
-
-def _p(text: str) -> str:
-    """Parenthesized unless an atom: a key, a number, or one call or bracket group."""
-    if text.startswith("{") and text.endswith("}") and text.count("{") == 1:
-        return text
-    if text.replace(".", "", 1).isdigit() or _one_group(text):
-        return text
-    return f"({text})"
-
-
-def mul(*factors: str) -> str:
-    if any(f == ZERO for f in factors):
-        return ZERO
-    kept = [f for f in factors if f != "1"]
-    return "*".join(_p(f) for f in kept) if kept else "1"
-
-
-def lin(*terms: tuple[int, str]) -> str:
-    """A sum of signed terms (sign ±1, text), zeros dropped."""
-    out = ""
-    for sign, text in terms:
-        if text == ZERO:
-            continue
-        if sign > 0:
-            out += text if not out else "+" + (_p(text) if text.startswith("-") else text)
-        else:
-            out += "-" + _p(text)
-    return out or ZERO
-
-
-def guard(den: str, num: str) -> str:
-    """num/den, #N/A where den is exactly zero (a dead centre) or #N/A (the loop cannot close)
-    — never #DIV/0!; a numerator that is zero by construction still keeps that #N/A."""
-    if num == ZERO:
-        return f"IF({den}=0,NA(),0)"
-    return f"IF({den}=0,NA(),{_p(num)}/{_p(den)})"
-
-
-def sq(text: str) -> str:
-    return ZERO if text == ZERO else f"{_p(text)}^2"
-
-
-def dot(a: tuple[str, str], b: tuple[str, str]) -> str:
-    return lin((1, mul(a[0], b[0])), (1, mul(a[1], b[1])))
-
-
-def cross(a: tuple[str, str], b: tuple[str, str]) -> str:
-    return lin((1, mul(a[0], b[1])), (-1, mul(a[1], b[0])))
+from .excel import ZERO, cross, dot, guard, lin, mul, sq
+from .model import (ACCEL, ALIAS, ANG_ACCEL, ANG_SPEED, AREA, CONSTANT, MOTION, RPM, SPEED,
+                    DescriptionError, Quantity)
+from .steps import STEPS
 
 
 def rate_symbol(symbol: str, order: int, angle: bool) -> str:
@@ -82,7 +33,8 @@ def rate_symbol(symbol: str, order: int, angle: bool) -> str:
 
 
 class MotionWriter:
-    """Adds the Motion sheet's quantities to a compiled model (language.Compiler's state)."""
+    """Adds the Motion sheet's quantities to a compiled model (compiler.Compiler's state): each
+    step type's rates (steps package) through the helpers here."""
 
     def __init__(self, compiler):
         self.c = compiler
@@ -99,7 +51,9 @@ class MotionWriter:
             self.add(Quantity("rpm_in", symbol, RPM, f"{self.speed}*30/PI()", CONSTANT,
                               "input speed in revolutions per minute"))
         for rec in c.records:
-            getattr(self, f"step_{rec['type']}")(rec)
+            rates = STEPS[rec["type"]].rates
+            if rates is not None:
+                rates(self, rec)
         if self.model.path:
             name = self.c.traced
             vx, vy, ax, ay = self.motion[name]
@@ -272,124 +226,6 @@ class MotionWriter:
     def alias(self, key: str, text: str) -> str:
         self.add(Quantity(key, key, "-", text, ALIAS))
         return f"{{{key}}}"
-
-    # -- step types
-    def step_crank(self, rec: dict) -> None:
-        n, pivot = rec["point"], rec["pivot"]
-        self.links[(pivot, n)] = (self.speed, self.accel)
-        self.rigid(n, pivot, self.speed, self.accel)
-
-    def step_dyad(self, rec: dict) -> None:
-        n, p, q = rec["point"], rec["p"], rec["q"]
-        p_rates = self.side_rates(f"{rec['field']}.p_length", rec["p_length"])
-        q_rates = self.side_rates(f"{rec['field']}.q_length", rec["q_length"])
-        wq, wp, aq, ap = self.two_circles(n, p, q, p_rates, q_rates,
-                                          rec["p_length"].text, rec["q_length"].text,
-                                          rec["theta_q"], rec["theta_p"])
-        self.links[(q, n)] = (wq, aq)
-        self.links[(p, n)] = (wp, ap)
-
-    def step_slider(self, rec: dict) -> None:
-        """R = T + s d on its line (angle λ), P = R + u: ṡ d + θ̇ (i u) = v_P − v_T − s λ̇ (i d),
-        over the determinant d·u (zero where the rod is square to the line)."""
-        n, p, t = rec["point"], rec["p"], rec["through"]
-        dc, ds = rec["direction"]
-        if rec["along"]:
-            lw, la = self.link_rates(*rec["along"])
-            lw, la = self.rates(rec["line"], lw, la)
-        else:
-            lw = la = ZERO
-        s = f"{{{rec['s'].key}}}"
-        ux, uy = self.rel(n, p)
-        (vpx, vpy), (vtx, vty) = self.vel(p), self.vel(t)
-        (apx, apy), (atx, aty) = self.acc(p), self.acc(t)
-        det = self.determinant(n, LENGTH, dot((dc, ds), (ux, uy)))
-        dx = lin((1, vpx), (-1, vtx), (1, mul(s, lw, ds)))
-        dy = lin((1, vpy), (-1, vty), (-1, mul(s, lw, dc)))
-        sd = self.rate(rec["s"], 1, guard(det, dot((dx, dy), (ux, uy))), angle=False)
-        td = self.rate(rec["theta"], 1, guard(det, cross((dc, ds), (dx, dy))))
-        coriolis = mul("2", sd, lw)
-        ex = lin((1, apx), (-1, atx), (1, mul(coriolis, ds)), (1, mul(s, la, ds)),
-                 (1, mul(s, sq(lw), dc)), (1, mul(sq(td), ux)))
-        ey = lin((1, apy), (-1, aty), (-1, mul(coriolis, dc)), (-1, mul(s, la, dc)),
-                 (1, mul(s, sq(lw), ds)), (1, mul(sq(td), uy)))
-        sdd = self.rate(rec["s"], 2, guard(det, dot((ex, ey), (ux, uy))), angle=False)
-        tdd = self.rate(rec["theta"], 2, guard(det, cross((dc, ds), (ex, ey))))
-        self.point(n, lin((1, vtx), (1, mul(sd, dc)), (-1, mul(s, lw, ds))),
-                   lin((1, vty), (1, mul(sd, ds)), (1, mul(s, lw, dc))),
-                   lin((1, atx), (1, mul(sdd, dc)), (-1, mul(coriolis, ds)), (-1, mul(s, la, ds)),
-                       (-1, mul(s, sq(lw), dc))),
-                   lin((1, aty), (1, mul(sdd, ds)), (1, mul(coriolis, dc)), (1, mul(s, la, dc)),
-                       (-1, mul(s, sq(lw), ds))), witness=sd)
-        self.links[(n, p)] = (td, tdd)
-
-    def step_slide(self, rec: dict) -> None:
-        """The slide line, square to the link at the offset, passes through P:
-        (P − Q)·e = offset, e = (cos θ, sin θ); differentiated, θ̇ (P − Q)·(i e) = −(v_P − v_Q)·e,
-        over the determinant (P − Q)·(i e) (zero where the travel is zero)."""
-        n, p, q = rec["point"], rec["p"], rec["pivot"]
-        th = f"{{{rec['theta'].key}}}"
-        e, ie = (f"COS({th})", f"SIN({th})"), (f"-SIN({th})", f"COS({th})")
-        w = self.rel(q, p)
-        (vpx, vpy), (vqx, vqy) = self.vel(p), self.vel(q)
-        (apx, apy), (aqx, aqy) = self.acc(p), self.acc(q)
-        dv = (lin((1, vpx), (-1, vqx)), lin((1, vpy), (-1, vqy)))
-        da = (lin((1, apx), (-1, aqx)), lin((1, apy), (-1, aqy)))
-        den = self.determinant(n, LENGTH, dot(w, ie))
-        td = self.rate(rec["theta"], 1, guard(den, lin((-1, dot(dv, e)))))
-        tdd = self.rate(rec["theta"], 2, guard(den, lin((-1, dot(da, e)),
-                                                        (-1, mul("2", td, dot(dv, ie))),
-                                                        (1, mul(sq(td), dot(w, e))))))
-        self.links[(q, n)] = (td, tdd)
-        self.links[(n, p)] = self.rates(rec["theta_slide"], td, tdd)
-        self.rigid(n, q, td, tdd)
-        # the travel |nP| = |(P − Q)·(i e)|: its rates, with the sign of (P − Q)·(i e)
-        sign = f"SIGN({den})"
-        self.rates(rec["travel"],
-                   mul(sign, lin((1, dot(dv, ie)), (-1, mul(td, dot(w, e))))),
-                   mul(sign, lin((1, dot(da, ie)), (-1, mul("2", td, dot(dv, e))),
-                                 (-1, mul(tdd, dot(w, e))), (-1, mul(sq(td), dot(w, ie))))),
-                   angle=False)
-
-    def step_point(self, rec: dict) -> None:
-        n, (a, b) = rec["point"], rec["frame"]
-        if rec["form"] == "distances" and not self.fixed_length(a, b):
-            self.two_circles(n, a, b)      # a frame that stretches: two circles about its points
-            return
-        omega, alpha = self.link_rates(a, b)
-        self.rigid(n, a, omega, alpha)
-        if rec["theta"] is not None:
-            self.links[(a, n)] = self.rates(rec["theta"], omega, alpha)
-
-    def step_slot(self, rec: dict) -> None:
-        """E + s_slot û = T + s d̂ (the slot, direction û, turns with its link at ω):
-        ṡ d̂ − ṡ_slot û = v_E + s_slot ω (i û), over the determinant û × d̂ (zero when the slot
-        is parallel to the line)."""
-        n, e = rec["point"], rec["slot_through"]
-        omega, alpha = self.link_rates(*rec["frame"])
-        uc, us = rec["slot_dir"]
-        dc, ds = rec["direction"]
-        ss = f"{{{rec['s_slot'].key}}}"
-        (vex, vey), (aex, aey) = self.vel(e), self.acc(e)
-        det = self.determinant(n, RATIO, cross((uc, us), (dc, ds)))
-        dx = lin((1, vex), (-1, mul(ss, omega, us)))
-        dy = lin((1, vey), (1, mul(ss, omega, uc)))
-        sd = self.rate(rec["s"], 1, guard(det, cross((uc, us), (dx, dy))), angle=False)
-        ssd = self.rate(rec["s_slot"], 1, guard(det, cross((dc, ds), (dx, dy))), angle=False)
-        coriolis = mul("2", ssd, omega)
-        ex = lin((1, aex), (-1, mul(coriolis, us)), (-1, mul(ss, alpha, us)),
-                 (-1, mul(ss, sq(omega), uc)))
-        ey = lin((1, aey), (1, mul(coriolis, uc)), (1, mul(ss, alpha, uc)),
-                 (-1, mul(ss, sq(omega), us)))
-        sdd = self.rate(rec["s"], 2, guard(det, cross((uc, us), (ex, ey))), angle=False)
-        self.rate(rec["s_slot"], 2, guard(det, cross((dc, ds), (ex, ey))), angle=False)
-        self.point(n, mul(sd, dc), mul(sd, ds), mul(sdd, dc), mul(sdd, ds), witness=sd)
-
-    def step_vector(self, rec: dict) -> None:
-        self.length_and_angle(rec["from"], rec["to"], rec["length"], rec["angle"])
-
-    def step_distance(self, rec: dict) -> None:
-        self.length_and_angle(*rec["between"], rec["length"], None)
 
     def length_and_angle(self, a: str, b: str, length, angle) -> None:
         """|r| and the angle of r = a→b: ṙ = (r·v)/|r|, φ̇ = (r × v)/|r|²,

@@ -1,7 +1,7 @@
 """What a template may contain: the JSON Schema shipped beside this module
 (mechanism.schema.json; docs/ holds a copy for editors). A template is checked against it first,
 each problem reported as one line naming the file and the field; the semantic checks of
-templates.py and language.py follow.
+templates.py and compiler.py follow.
 """
 from __future__ import annotations
 

@@ -15,7 +15,9 @@ from pathlib import Path
 from ..base.xlsx import excel_name_problem
 from .domain import (BRANCH_WORDS, InputError, check_input, check_lengths_together,
                      check_value, check_written_lengths, parse_number)
-from .compiler import DescriptionError, compile_mechanism, parameter_kinds, unconvertible, value_of
+from .compiler import DescriptionError, compile_mechanism, parameter_kinds
+from .dimensions import unconvertible
+from .expressions import value_of
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND, RATE_KIND,
                          Mechanism)
 
