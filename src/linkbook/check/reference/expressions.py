@@ -265,6 +265,7 @@ def scalar(expr: object, params: Mapping[str, float]) -> float:
 
 
 def branch_sign(value: object, params: Mapping[str, float], what: str) -> int:
+    """A branch or a side: an expression of the parameters whose value is 1 or -1."""
     b = scalar(value, params)
     if b not in (1.0, -1.0):
         raise ValueError(f"{what} must be 1 or -1, got {value!r} = {b!r}")

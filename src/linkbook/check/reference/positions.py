@@ -179,6 +179,8 @@ class Positions:
         return all(self.fixed.get(k, False) for k in self.coords[name])
 
     def put(self, key: str, value, fixed: bool) -> None:
+        """Column `key` (once only), which later expressions may name; `fixed`: the workbook
+        writes it as one value independent of the input."""
         if key in self.out or key in self.reserved:
             raise ValueError(f"{self.where}: column key {key!r} is written twice")
         self.out[key] = value
@@ -216,6 +218,8 @@ class Positions:
                 for col, value in values.items()}
 
     def new_point(self, step: Mapping, keys: Mapping[str, str], moving: bool, loop: bool) -> None:
+        """The step's point, from its x and y columns (`keys`); a loop step's point exists
+        exactly where the mechanism is assembled."""
         name = step.get("point")
         if not isinstance(name, str) or not name:
             raise ValueError(f"{self.where}: missing point")

@@ -17,6 +17,7 @@ from ..taylor import t_cos, t_sin
 
 
 def place(solver: Positions, step: Mapping) -> None:
+    """The pin on every row, from the input angle and the phase; the crank a rigid link."""
     if not solver.angle_input:
         raise ValueError(f"{solver.where}: a crank needs an angle input")
     P = solver.known(step, "pivot")
@@ -29,6 +30,7 @@ def place(solver: Positions, step: Mapping) -> None:
 
 
 def rates(motion: Rates, step: Mapping) -> None:
+    """The pin in motion: the input's speed and acceleration carried through cos and sin."""
     ox, oy = motion.points[step["pivot"]]
     r = motion.s.num(step, "length")
     t = motion.input + math.radians(motion.s.num(step, "phase", 0.0))

@@ -13,6 +13,7 @@ from ..taylor import t_sqrt
 
 
 def place(solver: Positions, step: Mapping) -> None:
+    """The distance, measured."""
     key = step.get("key")
     if not isinstance(key, str) or not key:
         raise ValueError(f"{solver.where}: missing key")
@@ -22,11 +23,12 @@ def place(solver: Positions, step: Mapping) -> None:
 
 
 def rates(motion: Rates, step: Mapping) -> None:
+    """Its rate."""
     a, b = motion.s.pair(step, "between")
     (ax, ay), (bx, by) = motion.points[a], motion.points[b]
     dx, dy = bx - ax, by - ay
     motion.put_rates(motion.key(step, "d", step["key"]), t_sqrt(dx * dx + dy * dy), False)
 
 
-# its `between` and `key` are not lengths of the mechanism
+# a measurement, not a part of the mechanism: nothing of it counts towards its size
 STEP = StepType(place=place, rates=rates, length_fields=())

@@ -22,6 +22,7 @@ from ..step_type import StepType
 
 
 def place(solver: Positions, step: Mapping) -> None:
+    """R on every row by Newton, its angles measured on the solved points; its sides links."""
     P, Q = solver.known(step, "p"), solver.known(step, "q")
     pl, ql = solver.side(step, "p_length"), solver.side(step, "q_length")
     b = solver.branch(step)
@@ -54,6 +55,7 @@ def place(solver: Positions, step: Mapping) -> None:
 
 
 def rates(motion: Rates, step: Mapping) -> None:
+    """R's rates by implicit differentiation of the two circles; its angles' rates measured."""
     n, p, q = step["point"], step["p"], step["q"]
     x, y = motion.circles(n, p, motion.length(step, "p_length"), q,
                           motion.length(step, "q_length"))

@@ -15,6 +15,8 @@ from ..step_type import StepType
 
 
 def place(solver: Positions, step: Mapping) -> None:
+    """The formula evaluated: one named value (a float) where every name it uses is fixed,
+    else a column."""
     key = step.get("key")
     if not isinstance(key, str) or not key:
         raise ValueError(f"{solver.where}: missing key")

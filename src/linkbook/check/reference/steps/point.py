@@ -23,6 +23,7 @@ from ..taylor import t_cos, t_sin, t_sqrt
 
 
 def place(solver: Positions, step: Mapping) -> None:
+    """C on every row: by local coordinates, by distances, or by distance and angle."""
     a, b = solver.pair(step, "frame")
     A, B = solver.points[a], solver.points[b]
     name = step.get("point")
@@ -77,6 +78,7 @@ def place(solver: Positions, step: Mapping) -> None:
 
 
 def rates(motion: Rates, step: Mapping) -> None:
+    """C in motion: placed directly, or by the two circles differentiated implicitly."""
     n = step["point"]
     a, b = motion.s.pair(step, "frame")
     (ax, ay), (bx, by) = motion.points[a], motion.points[b]

@@ -14,7 +14,7 @@ from functools import partial
 import numpy as np
 
 from ..geometry import HALF_PI, Point, interior, near
-from ..newton import RES_TOL, NEAR_DOUBLE, TANGENT, Fun, directions, finite, solved_column, sweep
+from ..newton import NEAR_DOUBLE, RES_TOL, TANGENT, Fun, directions, finite, solved_column, sweep
 from ..positions import Positions
 from ..rates import Rates
 from ..step_type import Guide, Sliding, StepType
@@ -70,6 +70,7 @@ def _slide_angles(P: Point, Q: Point, offset: float, branch: int, size: float,
 
 
 def place(solver: Positions, step: Mapping) -> None:
+    """θ on every row by Newton; the block's pivot B, the travel and the slide line measured."""
     P, Q = solver.known(step, "p"), solver.known(step, "pivot")
     offset = solver.num(step, "offset")
     b = solver.branch(step)
@@ -94,6 +95,7 @@ def place(solver: Positions, step: Mapping) -> None:
 
 
 def rates(motion: Rates, step: Mapping) -> None:
+    """θ's rates by implicit differentiation of (P − Q)·e^{iθ} = offset."""
     n, p, q = step["point"], step["p"], step["pivot"]
     offset = motion.s.num(step, "offset")
     th0 = np.asarray(motion.s.out[motion.key(step, "theta", f"theta_{n}")], dtype=float)
@@ -116,7 +118,7 @@ def rates(motion: Rates, step: Mapping) -> None:
 
 
 def _slide_line(step: Mapping, params: Mapping[str, float]) -> Callable:
-    """A slide's line: the direction this module solved for it (θ + b·π/2, θ the link's angle),
+    """A slide's line: the direction `place` solved for it (θ + b·π/2, θ the link's angle),
     which stays defined where B and P meet or the offset is zero."""
     spec = (step.get("columns") or {}).get("theta_slide")
     key = str(spec.get("key") or "") if isinstance(spec, Mapping) else ""

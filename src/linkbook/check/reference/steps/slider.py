@@ -65,6 +65,7 @@ def _slider_positions(P: Point, T: Point, dx: float, dy: float, length: float, b
 
 
 def place(solver: Positions, step: Mapping) -> None:
+    """s on every row by Newton, R put exactly on its line, the angle R→P measured."""
     P, T = solver.known(step, "p"), solver.known(step, "through")
     length = solver.num(step, "length")
     direction = solver.num(step, "direction", 0.0)
@@ -92,6 +93,7 @@ def place(solver: Positions, step: Mapping) -> None:
 
 
 def rates(motion: Rates, step: Mapping) -> None:
+    """s's rates by implicit differentiation of |R − P| = l, the line turning with `along`."""
     n, p, t = step["point"], step["p"], step["through"]
     length = motion.s.num(step, "length")
     direction = math.radians(motion.s.num(step, "direction", 0.0))

@@ -48,6 +48,7 @@ def _slot_crossing(E: Point, T: Point, ux, uy, dx: float, dy: float) -> Point:
 
 
 def place(solver: Positions, step: Mapping) -> None:
+    """The crossing on every row; P exactly on the fixed line."""
     E = solver.known(step, "slot_through")
     a, b = solver.pair(step, "slot_frame")
     A, B = solver.points[a], solver.points[b]
@@ -68,6 +69,7 @@ def place(solver: Positions, step: Mapping) -> None:
 
 
 def rates(motion: Rates, step: Mapping) -> None:
+    """The positions' rates by implicit differentiation of the crossing."""
     n, e, t = step["point"], step["slot_through"], step["through"]
     a, b = motion.s.pair(step, "slot_frame")
     motion.put_rates(f"{a}_{b}", motion.angle(a, b), True)

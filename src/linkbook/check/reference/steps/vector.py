@@ -13,6 +13,7 @@ from ..taylor import t_atan2, t_sqrt
 
 
 def place(solver: Positions, step: Mapping) -> None:
+    """The vector's components, length and angle, measured."""
     key = step.get("key")
     if not isinstance(key, str) or not key:
         raise ValueError(f"{solver.where}: missing key")
@@ -26,6 +27,7 @@ def place(solver: Positions, step: Mapping) -> None:
 
 
 def rates(motion: Rates, step: Mapping) -> None:
+    """The rates of its length and angle."""
     key = step["key"]
     (ax, ay), (bx, by) = motion.points[step["from"]], motion.points[step["to"]]
     dx, dy = bx - ax, by - ay
