@@ -1,0 +1,118 @@
+"""Analysis of a described mechanism over its input: solve() on a sweep of input values, and
+what is measured on such solutions (an extreme refined, a quick-return ratio).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from .positions import Positions
+from .rates import MOTION_PARAMS, Rates
+from .steps import STEP_TYPES
+
+
+def solve(description: Mapping, params: Mapping[str, float], angles_deg) -> dict:
+    """Position analysis of a described mechanism at each input angle (degrees, 1-D array-like).
+
+    description: the [mechanism] table of a template as parsed by tomllib (input, ground, steps,
+    links, ...); params: {parameter symbol: value} (angle-kind parameters in degrees, branch
+    parameters ±1).
+
+    Returns {column key: np.ndarray} for every column of every step, hidden ones included
+    (radians, lengths; NaN where the step cannot close or a point it uses is undefined), the
+    input key (radians), constants as floats (a carried point's gamma on a rigid frame of known
+    length, an expression of the parameters alone), 'assembled': a bool array (every loop step —
+    dyad, slider, slide, slot — closes on that row) and 'points': {point name: (x ndarray,
+    y ndarray)} for every ground and step point.
+
+    Raises ValueError for a malformed description (unknown step type, unknown point, unknown
+    parameter, a branch not ±1, a key written twice, ...).
+    """
+    angles = np.atleast_1d(np.asarray(angles_deg, dtype=float))
+    if angles.ndim != 1:
+        raise ValueError("angles_deg must be one-dimensional")
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        solver = Positions(description, params, angles, STEP_TYPES)
+        out = solver.run()
+        speed, accel = MOTION_PARAMS["angle" if solver.angle_input else "length"]
+        if speed in params and accel in params:
+            out.update(Rates(solver, description, float(params[speed]),
+                             float(params[accel])).run())
+            if solver.angle_input:
+                out["rpm_in"] = float(params[speed]) * 30.0 / math.pi   # rad/s in rev/min
+        return out
+
+
+EXTREME_STEP = 1.0    # degrees: the reference's sampling of a turn to find an extreme's basin
+REVERSAL_STEP = 0.1   # degrees: ... to count an output's reversals
+
+
+def refined_extreme(description: Mapping, params: Mapping[str, float], key: str,
+                    angles: np.ndarray, values: np.ndarray, pick: Callable,
+                    rounds: int = 6) -> tuple[float, float]:
+    """(input angle, value) of column `key`'s extreme (`pick`: np.argmax or np.argmin) over
+    sampled `angles`, refined by resampling 21 points around the best one, tenfold finer each
+    round (six rounds from a 1° sampling: 1e-6°; the value is then exact to round-off)."""
+    params = positions_only(params)
+    i = int(pick(values))
+    angle = float(angles[i])
+    width = float(np.max(np.diff(angles))) if len(angles) > 1 else EXTREME_STEP
+    for _ in range(rounds):
+        near = np.linspace(angle - width, angle + width, 21)
+        v = np.asarray(solve(description, params, near)[key], dtype=float)
+        if not np.isfinite(v).all():
+            break
+        i = int(pick(v))
+        angle, width = float(near[i]), width / 10.0
+    value = float(np.asarray(solve(description, params, np.array([angle]))[key])[0])
+    return angle, value
+
+
+def positions_only(params: Mapping[str, float]) -> dict:
+    """The parameters without the input's speed and acceleration: solve() then skips motion."""
+    rates = {name for pair in MOTION_PARAMS.values() for name in pair}
+    return {k: v for k, v in params.items() if k not in rates}
+
+
+def _sign_changes(values: np.ndarray) -> int:
+    """How often a sampled run of values turns back (flat steps skipped)."""
+    steps = np.diff(values)
+    steps = steps[steps != 0.0]
+    return int(np.count_nonzero(np.sign(steps[1:]) != np.sign(steps[:-1])))
+
+
+def _reversals(description, params, key: str, angles: np.ndarray, values: np.ndarray) -> int:
+    """How often the output turns back over the sampled turn, looking 100 times closer
+    wherever it nearly stops (a local minimum of its step): a pair of reversals narrower than
+    the sampling (a dead centre just inside the swing) hides there."""
+    steps = np.abs(np.diff(np.append(values, values[0])))
+    slow = np.nonzero((steps <= np.roll(steps, 1)) & (steps <= np.roll(steps, -1)))[0]
+    if len(slow) > 50:          # an output that barely moves: no quick-return ratio
+        return -1
+    count, step = 0, float(angles[1] - angles[0])
+    for i in slow:
+        near = np.linspace(angles[i] - step, angles[i] + 2 * step, 301)
+        count += _sign_changes(np.asarray(solve(description, params, near)[key], dtype=float))
+    return count
+
+
+def time_ratio(description: Mapping, params: Mapping[str, float], key: str) -> float:
+    """A quick-return ratio measured on the motion, not from any formula: column `key` (an
+    output that moves forward and back once per turn of the input) over a turn sampled every
+    REVERSAL_STEP; the input angles of its two reversals (its refined maximum and minimum) split
+    the turn into the longer and the shorter stroke: longer / shorter. NaN where some sampled
+    angle cannot close, or where the output reverses other than twice per turn."""
+    params = positions_only(params)
+    angles = np.arange(0.0, 360.0, REVERSAL_STEP)
+    values = np.asarray(solve(description, params, angles)[key], dtype=float)
+    if not np.isfinite(values).all():
+        return math.nan
+    if _reversals(description, params, key, angles, values) != 2:
+        return math.nan
+    top, _ = refined_extreme(description, params, key, angles, values, np.argmax, rounds=5)
+    low, _ = refined_extreme(description, params, key, angles, values, np.argmin, rounds=5)
+    one = (low - top) % 360.0
+    return max(one, 360.0 - one) / min(one, 360.0 - one)

@@ -1,0 +1,57 @@
+"""What the reference needs of one step type of the mechanism language (docs/language.md).
+
+Each step type has a module of its own under steps/, which builds one StepType; steps/__init__.py
+lists them in STEP_TYPES, keyed by the step's `type`. Positions, Rates and the drawing of
+sliders look a step's type up there and know nothing else of it, so adding a step type to the
+reference is one new module and one line in that dict.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+# Fields holding a length or an offset: the sum of their sizes is the mechanism's size (the
+# scale of Newton's tolerances), unless a step type names other fields.
+LENGTH_FIELDS = ("length", "p_length", "q_length", "offset", "distance")
+
+# A line's direction as the drawing takes it: given the parameters, a function of a solve()
+# result that gives the line's unit direction (dx, dy), per row or fixed.
+LineOf = Callable[[Mapping[str, float]], Callable[[Mapping], tuple]]
+
+
+class Guide(NamedTuple):
+    """A drawn line a block slides on: through point `origin`, in the direction `line`, over the
+    travel of the block on point `mover` (its parts: "<label> 1", "<label> 2")."""
+    label: str
+    origin: str
+    mover: str
+    line: LineOf
+
+
+class Sliding(NamedTuple):
+    """What a sliding step draws: its guides, and a block centred on point `block`, its long side
+    along `line` (its corners: "<block> block 1" … "<block> block 4")."""
+    guides: tuple[Guide, ...]
+    block: str
+    line: LineOf
+
+
+@dataclass(frozen=True)
+class StepType:
+    """One step type, as the reference reads it.
+
+    place(positions, step): solve the step on every row and record what it makes, through the
+        methods of positions.Positions (known points and numbers in; point_columns, new_point,
+        column, add_link out); it raises ValueError for a malformed step.
+    rates(rates, step), optional: the step's velocities and accelerations, through the methods of
+        rates.Rates (place, put_rates, circles, ...; taylor.implicit for a loop); without it the
+        step has none (a later step may then not use a point it places in its rates).
+    length_fields: the fields whose values count towards the mechanism's size.
+    sliding(step), optional: the guides and the block the step draws (a sliding joint).
+    """
+    place: Callable[[Any, Mapping], None]
+    rates: Callable[[Any, Mapping], None] | None = None
+    length_fields: tuple[str, ...] = LENGTH_FIELDS
+    sliding: Callable[[Mapping], Sliding] | None = None

@@ -1,0 +1,37 @@
+"""`expression` — a named derived quantity: the user's formula, evaluated by the reference's own
+parser (expressions.py: Excel's functions, errors as NaN). It has no rates: the workbook writes
+none either.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..expressions import evaluate
+from ..positions import Positions
+from ..step_type import StepType
+
+
+def place(solver: Positions, step: Mapping) -> None:
+    """The formula evaluated: one named value (a float) where every name it uses is fixed,
+    else a column."""
+    key = step.get("key")
+    if not isinstance(key, str) or not key:
+        raise ValueError(f"{solver.where}: missing key")
+    if "formula" not in step:
+        raise ValueError(f"{solver.where}: missing formula")
+    # The workbook makes it one named cell when every name it uses is fixed (a parameter, a
+    # constant, a hidden value independent of the input angle); such names are passed as
+    # floats, so that the value comes back as a float.
+    env = {k: (float(np.asarray(v).flat[0]) if solver.fixed.get(k) and np.ndim(v) and solver.n
+               else v) for k, v in solver.env.items()}
+    value = evaluate(step["formula"], env)
+    if isinstance(value, float):
+        solver.put(key, value, True)
+    else:
+        solver.put(key, np.broadcast_to(value, (solver.n,)).astype(float), False)
+
+
+STEP = StepType(place=place)
