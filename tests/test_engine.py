@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import openpyxl
 import pytest
+import schedula as sh
+from formulas.tokens.operand import Error
 from openpyxl.utils import get_column_letter
 from openpyxl.workbook.defined_name import DefinedName
 
@@ -536,22 +538,114 @@ def test_verifying_a_book_imports_no_scipy(tmp_path):
 
 
 def test_min_and_max_pick_the_first_winner_as_per_cell_calls_do():
-    """MIN and MAX of one value per row run on arrays in vector calls: the winner is the first
-    smallest (largest) argument itself, as formulas' per-cell call gives it (value and type);
-    rows with an int, a bool, a text, a NaN or an error take the per-cell path."""
-    pairs = [(0.5, 0.5), (1.5, -2.5), (-2.5, 1.5), (1e-300, -1e-300),
-             (3.0, 3), (3, 3.0), (2.0, True), ("4", 1.0), (1.0, "#N/A"), (float("nan"), 1.0),
-             (1.0, float("nan"))]
+    """MIN, MAX and COUNT of one value per row run on arrays in vector calls: the winner is the
+    first smallest (largest) argument itself, as formulas' per-cell call gives it (value and
+    type), ints among the numbers; rows with a text that reads as a number, a NaN, an integer
+    beyond 2^53 or (for MIN and MAX) an error take the per-cell path."""
+    pairs = [(0.5, 0.5), (1.5, -2.5), (-2.5, 1.5), (1e-300, -1e-300), (0.0, -0.0), (-0.0, 0.0),
+             (3.0, 3), (3, 3.0), (56, 62.3), (2.0, True), ("4", 1.0), ("abc", 2), (1.0, "#N/A"),
+             (float("nan"), 1.0), (1.0, float("nan")), (2 ** 60, 2 ** 60 + 1), (None, None),
+             (None, 7)]
     wb = openpyxl.Workbook()
     ws = wb.active
     for r, (a, b) in enumerate(pairs, start=1):
         for col, v in ((1, a), (2, b)):
             ws.cell(row=r, column=col, value=f"={v}" if v == "#N/A" else v)
-        for col, f in enumerate(("MIN", "MAX"), start=3):
+        for col, f in enumerate(("MIN", "MAX", "COUNT"), start=3):
             ws.cell(row=r, column=col, value=f"={f}(A{r},B{r})")
-            ws.cell(row=r, column=col + 2, value=f"={f}(B{r},A{r},B{r})")
+            ws.cell(row=r, column=col + 3, value=f"={f}(B{r},A{r},B{r})")
+            ws.cell(row=r, column=col + 6, value=f"={f}(A{r},2.5)+{f}(A{r},-1)")
     vector = engine.Engine(wb)
     got = vector.run()
     want = engine.Engine(wb, vectorize=False).run()
-    assert vector.stats["vector_groups"] >= 4
+    assert vector.stats["vector_groups"] >= 9
+    assert vector.stats["numeric_nodes"] >= 12          # each MIN, MAX and COUNT ran on arrays
     assert_as_per_cell(got, want)
+
+
+# Values a range can hold, as the value grid holds them: numbers of each type, booleans, text
+# (some of which reads as a number), empty cells and every error.
+RANGE_VALUES = [1.5, -2.0, 3, 0.0, -0.0, 1e300, -1e-300, 7.25, np.float64(-4.5), np.int64(9),
+                True, False, "abc", "", "—", "2.5", sh.EMPTY, float("nan"), 2 ** 60,
+                *(Error.errors[code] for code in ("#N/A", "#DIV/0!", "#VALUE!", "#NUM!",
+                                                  "#REF!", "#NAME?", "#NULL!"))]
+PLAIN = [v for v in RANGE_VALUES[:17] if not (isinstance(v, str) and v == "2.5")]
+
+
+def _range_arguments(rng, pool) -> list:
+    """One to three arguments: object arrays of random shapes drawn from `pool`, and now and
+    then a number, a boolean or a text of the call's own."""
+    args = []
+    for _ in range(rng.integers(1, 4)):
+        if rng.random() < 0.2:
+            args.append([2.0, 5, True, "abc", "3"][rng.integers(5)])
+            continue
+        shape = (int(rng.integers(1, 40)), int(rng.integers(1, 3)))
+        a = np.empty(shape, object)
+        a.reshape(-1)[:] = [pool[i] for i in rng.integers(len(pool), size=a.size)]
+        args.append(a)
+    return args
+
+
+def _same_result(a, b) -> bool:
+    """The same value of the same type, the same error, NaN for NaN; arrays element-wise."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.shape == b.shape
+                and type(a) is type(b)
+                and all(_same_result(x, y) for x, y in zip(a.reshape(-1), b.reshape(-1))))
+    if isinstance(a, float) and isinstance(b, float) and a != a and b != b:
+        return type(a) is type(b)
+    return type(a) is type(b) and a == b and str(a) == str(b)
+
+
+@pytest.mark.parametrize("name", sorted(engine.AGGREGATES))
+def test_aggregates_over_ranges_give_what_formulas_gives(name):
+    """MIN, MAX and COUNT over ranges computed on arrays give what formulas' own function gives
+    for the same arguments, value and type: over numbers, text, booleans, empty cells and each
+    error; an error in the range propagates (MIN, MAX) or is not counted (COUNT) as there."""
+    from formulas.functions import get_functions
+    func = get_functions()[name]
+    node = engine._ranges_node(func, name)
+    rng = np.random.default_rng(20261125)
+    on_arrays = 0
+    for pool in (PLAIN, RANGE_VALUES, [sh.EMPTY, "—", True], [sh.EMPTY]):
+        for _ in range(150):
+            args = _range_arguments(rng, pool)
+            want = func(*args)
+            got = node(*args)
+            assert _same_result(got, want), (name, args, got, want)
+            on_arrays += pool is PLAIN and all(isinstance(a, np.ndarray) for a in args)
+    # Ranges of plain values (no error, no numeric text) are computed on arrays, not by formulas.
+    table = np.array([PLAIN * 3], object)
+    assert not engine._aggregate_rows(name, table)[1].any()
+    assert on_arrays > 50
+
+
+def test_aggregates_over_ranges_in_a_book_match_excel_model(tmp_path):
+    """A summary's MIN, MAX and COUNT over long columns mixing numbers, text, booleans, empty
+    cells and errors give what formulas.ExcelModel gives (and what the per-cell path gives)."""
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    ws.title = "Data"
+    rng = np.random.default_rng(7)
+    columns = {"A": [1.5, -2.0, 3, "—", True, None, 1e-300, -0.0],
+               "B": [4.25, "abc", False, None, "#N/A", 2, -7.5],
+               "C": ["—", None, True],
+               "D": [0.5, "#DIV/0!", "x", 12, -3.25]}
+    for letter, pool in columns.items():
+        for r in range(1, 401):
+            v = pool[rng.integers(len(pool))]
+            if isinstance(v, str) and v.startswith("#"):
+                ws[f"{letter}{r}"] = f"={v}"
+            elif v is not None:
+                ws[f"{letter}{r}"] = v
+    for i, f in enumerate(("MIN", "MAX", "COUNT")):
+        for j, args in enumerate(("A1:A400", "B1:B400", "C1:C400", "D1:D400",
+                                  "A1:A400,C1:C400,2.5", "A1:B400")):
+            ws.cell(row=1 + j, column=6 + i, value=f"={f}({args})")
+    path = tmp_path / "aggregates.xlsx"
+    wb.save(path)
+    got = engine.evaluate_file(path)
+    compare(got, engine.evaluate_formulas_model(path))
+    assert_as_per_cell(got, engine.Engine(openpyxl.load_workbook(path), vectorize=False).run())
+    assert engine.error_code(got[("Data", "F2")]) == "#N/A" and got[("Data", "H2")] > 0

@@ -59,6 +59,7 @@ import contextlib
 import functools
 import graphlib
 import io
+import itertools
 import math
 import re
 from collections.abc import Iterator
@@ -69,7 +70,7 @@ import numpy as np
 import schedula as sh
 from formulas.errors import AnchorRangeName, InvalidRangeName
 from formulas.functions import (COMPILING, FUNCTIONS, Array, flatten, get_functions,
-                                parse_ranges, replace_empty, wrap_func)
+                                is_number, parse_ranges, replace_empty, wrap_func)
 from formulas.functions.operators import OPERATORS
 from formulas.ranges import Ranges
 from formulas.tokens.function import Function
@@ -776,13 +777,11 @@ NUMERIC_FORMS = {
         "ABS": np.abs, "EXP": np.exp}.items()},
 }
 _NUMBER_TYPES = frozenset({float, int, np.float64, np.int64})
-_FLOAT_TYPES = frozenset({float, np.float64})
 
 
-def _rows_of(args, n: int, types: frozenset):
-    """The arguments of a node over n rows as (object arrays of n, the rows where every
-    argument is of `types`, float arrays of n with those rows filled); None when an argument is
-    not a plain array or scalar."""
+def _columns_of(args, n: int, types: frozenset):
+    """The arguments of a node over n rows as object arrays of n (a scalar of `types`, or an
+    array of one value, repeated); None when an argument is not such an array or scalar."""
     flat = []
     for a in args:
         if isinstance(a, np.ndarray) and a.size in (1, n):
@@ -792,6 +791,16 @@ def _rows_of(args, n: int, types: frozenset):
         else:
             return None
         flat.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
+    return flat
+
+
+def _rows_of(args, n: int, types: frozenset):
+    """The arguments of a node over n rows as (object arrays of n, the rows where every
+    argument is of `types`, float arrays of n with those rows filled); None when an argument is
+    not a plain array or scalar."""
+    flat = _columns_of(args, n, types)
+    if flat is None:
+        return None
     plain = np.ones(n, bool)
     for a in flat:
         plain &= np.fromiter((type(v) in types for v in a), bool, n)
@@ -826,32 +835,106 @@ def _numeric_call(form, func, args, n: int):
     return out.reshape(n, 1).view(Array)
 
 
-# MIN and MAX of one value per row (the cosine rule's domain test: ABS(s-MAX(p,q))>MIN(p,q)).
-# formulas gives the first smallest (largest) argument itself, as Python's min (max) does; on
-# rows where every argument is a finite float the winner is picked from the arguments here.
-EXTREMES = {"MIN": np.less, "MAX": np.greater}
+# MIN, MAX and COUNT computed on arrays: in vector calls one result per row over that row's
+# arguments (the cosine rule's domain test ABS(s-MAX(p,q))>MIN(p,q)), elsewhere one result over
+# every value of the ranges they read (a summary's MIN of a 3,601-row sweep column).  formulas
+# gives MIN (MAX) the first smallest (largest) number itself, as Python's min (max) does, and 0
+# when there is none, and COUNT the number of numbers; what they skip in a range (empty cells,
+# booleans, text that is not a number, and for COUNT errors) is skipped here too.  A row holding
+# anything else (an error for MIN or MAX, text that reads as a number, a NaN or an infinity, an
+# integer beyond 2^53, another type) is left to formulas' own call, as is a call with an
+# argument of its own that is not a number (MAX(TRUE, ...)).
+AGGREGATES = frozenset({"MIN", "MAX", "COUNT"})
+_NUMBER, _INTEGER, _SKIPPED, _TEXT, _ERROR, _TOKEN, _OTHER = range(7)
+_KIND_OF_TYPE = {float: _NUMBER, np.float64: _NUMBER, int: _INTEGER, np.int64: _INTEGER,
+                 bool: _SKIPPED, np.bool_: _SKIPPED, str: _TEXT, XlError: _ERROR,
+                 type(sh.EMPTY): _TOKEN}
+_EXACT_INTEGER = 2.0 ** 53      # every integer up to it is a float exactly: comparisons agree
 
 
-def _extreme_call(better, func, args, n: int):
-    """MIN or MAX (`better`: np.less, np.greater) over n rows: the argument that wins, itself,
-    on rows of finite floats; `func` row by row on the rest.  None when an argument is not a
-    plain array or scalar (the caller runs `func` row by row)."""
-    rows = _rows_of(args, n, _FLOAT_TYPES)
-    if rows is None:
-        return None
-    flat, plain, xs = rows
-    for x in xs:
-        plain &= np.isfinite(x)
-    best, value = flat[0], xs[0]
-    for a, x in zip(flat[1:], xs[1:]):
-        wins = better(x, value)
-        best, value = np.where(wins, a, best), np.where(wins, x, value)
+def _numbers_in(table: np.ndarray, skip_errors: bool):
+    """Of an object array of values as ranges hold them: (where the numbers are, the numbers
+    as floats with 0 elsewhere, where a value needs formulas' own judgement)."""
+    flat = table.reshape(-1)
+    kinds = np.fromiter(map(_KIND_OF_TYPE.get, map(type, flat), itertools.repeat(_OTHER)),
+                        np.int8, flat.size)
+    numbers = (kinds == _NUMBER) | (kinds == _INTEGER)
+    x = np.zeros(flat.size)
+    bad = kinds == _OTHER
+    try:
+        x[numbers] = flat[numbers].astype(float)
+    except OverflowError:           # an integer beyond any float
+        return numbers, x, np.ones(table.shape, bool)
+    bad |= numbers & ~np.isfinite(x)
+    bad |= (kinds == _INTEGER) & (np.abs(x) > _EXACT_INTEGER)
+    if not skip_errors:
+        bad |= kinds == _ERROR
+    text = np.flatnonzero(kinds == _TEXT)
+    numeric = {v for v in set(flat[text].tolist()) if is_number(v)}
+    if numeric:
+        bad[text] |= np.fromiter((v in numeric for v in flat[text]), bool, text.size)
+    for i in np.flatnonzero(kinds == _TOKEN):
+        bad[i] |= flat[i] is not sh.EMPTY
+    return numbers.reshape(table.shape), x.reshape(table.shape), bad.reshape(table.shape)
+
+
+def _aggregate_rows(name: str, table: np.ndarray):
+    """MIN, MAX or COUNT of each row of an object table, as formulas computes it on rows that
+    hold no value _numbers_in leaves to formulas; and the rows that hold one."""
+    numbers, x, bad = _numbers_in(table, skip_errors=name == "COUNT")
+    if name == "COUNT":
+        return [int(k) for k in numbers.sum(axis=1)], bad.any(axis=1)
+    if name == "MIN":
+        winner = np.argmin(np.where(numbers, x, np.inf), axis=1)
+    else:
+        winner = np.argmax(np.where(numbers, x, -np.inf), axis=1)
+    found = numbers.any(axis=1)
+    return ([table[i, j] if f else 0 for i, (j, f) in enumerate(zip(winner.tolist(),
+                                                                      found.tolist()))],
+            bad.any(axis=1))
+
+
+def _aggregate_call(name: str, func, args, n: int):
+    """MIN, MAX or COUNT over n rows (one value per argument and row): on arrays where
+    _aggregate_rows applies, `func` row by row on the rest.  None when an argument is not a
+    plain array or number (the caller runs `func` row by row)."""
+    columns = _columns_of(args, n, _NUMBER_TYPES)
+    if columns is None or any(a.dtype != object for a in columns if isinstance(a, np.ndarray)):
+        return None     # an array of numpy numbers: its values are not the objects it holds
+    table = np.stack(columns, axis=1)
+    values, bad = _aggregate_rows(name, table)
     out = np.empty(n, object)
-    out[:] = list(best)
-    for i in np.flatnonzero(~plain):
-        out[i] = _single(func(*[np.asarray(a[i:i + 1], object).reshape(1, 1) for a in flat]))
+    out[:] = values
+    cols = [np.reshape(a, (n, 1)) if _size(a) == n else None for a in args]
+    for i in np.flatnonzero(bad).tolist():
+        out[i] = _single(func(*[a if c is None else c[i:i + 1] for a, c in zip(args, cols)]))
     return out.reshape(n, 1).view(Array)
 
+
+def _ranges_node(func, name: str):
+    """Wrap a MIN, MAX or COUNT node for calls outside vector calls: one result over every value
+    of its arguments (the ranges' values in order, row by row), computed on arrays where
+    _aggregate_rows applies to all of them, else by `func`."""
+    def node(*args, **kw):
+        if kw:
+            return func(*args, **kw)
+        try:
+            values = parse_ranges(*args)[0]
+        except Exception:       # formulas' own call decides (a range it cannot read)
+            return func(*args)
+        if not any(isinstance(a, np.ndarray) and a.size > 1 for a in values):
+            return func(*args)
+        parts = []
+        for a in values:
+            if isinstance(a, np.ndarray) and a.dtype == object:
+                parts.append(a.reshape(-1))
+            elif type(a) in _NUMBER_TYPES:
+                parts.append(np.array([a], object))
+            else:
+                return func(*args)
+        result, bad = _aggregate_rows(name, np.concatenate(parts).reshape(1, -1))
+        return func(*args) if bad[0] else result[0]
+    return node
 
 
 def _is_broadcast(a: np.ndarray) -> bool:
@@ -875,10 +958,10 @@ class _NotScalar(Exception):
     """A row-by-row node returned more than one value: the group cannot be vectorized."""
 
 
-def _vector_node(func, batch: _Batch, elementwise: bool, numeric=None, extreme=None):
+def _vector_node(func, batch: _Batch, elementwise: bool, numeric=None, aggregate=None):
     """Wrap a node of the compiled graph for (n, 1) calls.  A node with a numeric form runs it
-    on the rows of finite numbers, MIN and MAX (`extreme`) pick their winner on rows of finite
-    floats.  Element-wise nodes run once; if their output is not (n, 1) (an exception collapsed
+    on the rows of finite numbers, MIN, MAX and COUNT (`aggregate`, their name) on the rows of
+    plain numbers (AGGREGATES).  Element-wise nodes run once; if their output is not (n, 1) (an exception collapsed
     it), or the node is not element-wise, it runs row by row on (1, 1) slices, exactly as in a
     per-cell call."""
     def node(*args, **kw):
@@ -890,8 +973,8 @@ def _vector_node(func, batch: _Batch, elementwise: bool, numeric=None, extreme=N
             if out is not None:
                 batch.numeric += 1
                 return out
-        if extreme is not None and not kw:
-            out = _extreme_call(extreme, func, args, n)
+        if aggregate is not None and not kw:
+            out = _aggregate_call(aggregate, func, args, n)
             if out is not None:
                 batch.numeric += 1
                 return out
@@ -923,17 +1006,17 @@ def _compile(graph, batch: _Batch | None = None, host: Ranges | None = None):
 
 
 def _wrap_nodes(builder, batch: _Batch | None) -> None:
-    if batch is not None:
-        for node_id, node in builder.dsp.function_nodes.items():
-            node["function"] = _wrap(node["function"], re.sub(r"<\d+>$", "", node_id), batch)
+    for node_id, node in builder.dsp.function_nodes.items():
+        node["function"] = _wrap(node["function"], re.sub(r"<\d+>$", "", node_id), batch)
 
 
 def _wrap(func, name: str, batch: _Batch | None):
-    """A node's function as the graph runs it: for vector calls, wrapped by its name."""
+    """A node's function as the graph runs it: for vector calls, wrapped by its name; outside
+    them, MIN, MAX and COUNT wrapped to read their ranges on arrays."""
     if batch is None:
-        return func
+        return _ranges_node(func, name) if name in AGGREGATES else func
     return _vector_node(func, batch, name in ELEMENTWISE, NUMERIC_FORMS.get(name),
-                        EXTREMES.get(name))
+                        name if name in AGGREGATES else None)
 
 
 def _formulas_graph(formula: str, batch: _Batch | None, extra: dict):
