@@ -34,6 +34,7 @@ def pipe_tree(pipe):
             inputs = [i for i in inputs if i is not sh.START]
             if func is sh.bypass:           # formulas' link to a repeated subexpression
                 return tree(inputs[0])
+            func = getattr(func, "formulas_function", func)    # the engine's MIN over ranges
             return ("call", func, tuple(tree(i) for i in inputs))
         if k in pipe.defaults:
             return ("const", type(pipe.defaults[k]), pipe.defaults[k])
