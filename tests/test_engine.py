@@ -18,6 +18,8 @@ from openpyxl.utils import get_column_letter
 from openpyxl.workbook.defined_name import DefinedName
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+from linkbook.engine import adapter, references  # noqa: E402
+from linkbook.engine import vector as vectorized  # noqa: E402
 from linkbook.engine import evaluator as engine  # noqa: E402
 
 TOL = 1e-12
@@ -224,7 +226,7 @@ def test_per_cell_mode_matches_excel_model(book_path, model_values):
 def test_modes_chosen(book_path):
     eng = engine.Engine(openpyxl.load_workbook(book_path))
     eng.run()
-    by_shape = {(g.sheet, engine._a1(g.members[0].row, g.members[0].col)): g
+    by_shape = {(g.sheet, references.cell_name(g.members[0].row, g.members[0].col)): g
                 for g in eng.groups}
     assert by_shape[(SWEEP, "B5")].mode == "vector"
     assert by_shape[(SWEEP, "B5")].batch.row_by_row == 0
@@ -316,10 +318,10 @@ def test_shape_of_ranges_sheets_and_names():
     "=SUM(A:A)",
 ])
 def test_lexer_finds_what_the_tokenizer_finds(formula):
-    refs = engine.References(["Sheet", "Stroke sweep", "Sweep", "It's"],
+    refs = references.References(["Sheet", "Stroke sweep", "Sweep", "It's"],
                              {n: "'Sheet'!$Z$1" for n in ("a_1", "a_2", "branch")})
-    lexed = engine._lex_spans(formula, refs)
-    tokens = engine._tokenize(formula).spans
+    lexed = references.lex_spans(formula, refs)
+    tokens = adapter.tokenize(formula).spans
     if formula in ("=A1:INDEX(A1:A4,2)", "=SUM(A:A)"):
         assert lexed != tokens   # the lexer misses these; the tokenizer path takes over
     else:
@@ -348,7 +350,7 @@ def test_circular_reference_raises():
 PANEL = [0.5, -0.5, 0.0, 2.0, -3.7, 1e-300, 1e300, 7, True, False, "abc", "2.5", None,
          "#N/A", "#DIV/0!"]
 SECOND = [0.5, -1, 0, 2, 3.7, True, "abc", None, "#VALUE!"]
-ONE_ELEMENTWISE = sorted(f for f in engine.ELEMENTWISE if f.isalpha() and f not in {
+ONE_ELEMENTWISE = sorted(f for f in vectorized.ELEMENTWISE if f.isalpha() and f not in {
     "ATAN2", "POWER", "MOD", "ROUND", "ROUNDDOWN", "ROUNDUP", "IFERROR", "IFNA", "CHOOSE",
     "IF", "NA", "PI", "bypass", "LOG", "TRUNC"}) + ["LOG", "TRUNC"]
 ONE_ARG = list(ONE_ELEMENTWISE)
@@ -358,7 +360,7 @@ TWO_ARG = ["ATAN2", "POWER", "MOD", "ROUND", "ROUNDDOWN", "ROUNDUP", "IFERROR", 
 ONE_ARG += ["FACT", "SQRTPI", "N", "VALUE", "LEN", "UPPER", "TRIM"]
 TWO_ARG += ["MAX", "MIN", "SUM", "AND", "OR", "XOR", "COUNT", "AVERAGE", "PRODUCT", "LEFT",
             "EXACT", "CONCATENATE", "CEILING", "FIND"]
-assert set(ONE_ARG + TWO_ARG) <= engine.VECTOR_SAFE
+assert set(ONE_ARG + TWO_ARG) <= vectorized.VECTOR_SAFE
 OPERATORS = ["+", "-", "*", "/", "^", "&", "=", "<>", "<", ">", "<=", ">="]
 
 
@@ -467,7 +469,7 @@ def numeric_book(rows: int = 600) -> openpyxl.Workbook:
     exponent = np.where(np.arange(a.size) % 2, np.round(b % 7 - 3), b % 7 - 3)
     wb = openpyxl.Workbook()
     ws = wb.active
-    forms = sorted(engine.NUMERIC_FORMS)
+    forms = sorted(vectorized.NUMERIC_FORMS)
     for i, (x, y) in enumerate(zip(a.tolist(), b.tolist())):
         r = 1 + i
         ws.cell(row=r, column=1, value=x)
@@ -497,7 +499,7 @@ def test_numeric_forms_give_formulas_own_bits_and_types():
     # Every form ran on its column, and ^ on the column of moderate powers; 2^710 in the other ^
     # column overflows, which makes formulas' own call raise for the whole column, so that node
     # ran row by row, as a per-cell call does.
-    assert vector.stats["numeric_nodes"] == len(engine.NUMERIC_FORMS)
+    assert vector.stats["numeric_nodes"] == len(vectorized.NUMERIC_FORMS)
     assert vector.stats["row_by_row_nodes"] == 1
     assert set(got) == set(want)
     errors = 0
@@ -598,14 +600,14 @@ def _same_result(a, b) -> bool:
     return type(a) is type(b) and a == b and str(a) == str(b)
 
 
-@pytest.mark.parametrize("name", sorted(engine.AGGREGATES))
+@pytest.mark.parametrize("name", sorted(vectorized.AGGREGATES))
 def test_aggregates_over_ranges_give_what_formulas_gives(name):
     """MIN, MAX and COUNT over ranges computed on arrays give what formulas' own function gives
     for the same arguments, value and type: over numbers, text, booleans, empty cells and each
     error; an error in the range propagates (MIN, MAX) or is not counted (COUNT) as there."""
     from formulas.functions import get_functions
     func = get_functions()[name]
-    node = engine._ranges_node(func, name)
+    node = vectorized._ranges_node(func, name)
     rng = np.random.default_rng(20261125)
     on_arrays = 0
     for pool in (PLAIN, RANGE_VALUES, [sh.EMPTY, "—", True], [sh.EMPTY]):
@@ -617,7 +619,7 @@ def test_aggregates_over_ranges_give_what_formulas_gives(name):
             on_arrays += pool is PLAIN and all(isinstance(a, np.ndarray) for a in args)
     # Ranges of plain values (no error, no numeric text) are computed on arrays, not by formulas.
     table = np.array([PLAIN * 3], object)
-    assert not engine._aggregate_rows(name, table)[1].any()
+    assert not vectorized._aggregate_rows(name, table)[1].any()
     assert on_arrays > 50
 
 
