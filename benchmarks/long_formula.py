@@ -31,9 +31,9 @@ ROOT = Path(__file__).resolve().parents[1]
 CELL = '<c r="I9" s="8"><f>I17-a_1</f>'
 GRAMMAR_ONLY = """
 import sys
-from linkbook import engine, grammar
+from linkbook.engine import adapter, grammar
 formula = open(sys.argv[1], encoding="utf-8").read()
-parsed = grammar.parse(formula, engine._plain_functions())
+parsed = grammar.parse(formula, adapter.plain_functions())
 print(f"parsed: {len(parsed.nodes):,} nodes" if parsed else "outside the grammar")
 """
 

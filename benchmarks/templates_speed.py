@@ -38,7 +38,10 @@ WORK = """
 import contextlib, io, sys, time
 from pathlib import Path
 import openpyxl, numpy
-from linkbook import builder, charts, cli, engine, office, package, verifier, workbook
+from linkbook.apps import cli
+from linkbook.book import builder, charts, package, workbook
+from linkbook.check import verifier
+from linkbook.engine import evaluator, office
 args = ["build", sys.argv[2], "-o", sys.argv[3]] if sys.argv[1] == "build" else sys.argv[1:]
 with contextlib.redirect_stdout(io.StringIO()):
     start = time.perf_counter()

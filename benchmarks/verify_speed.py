@@ -54,29 +54,29 @@ CASES = {
 # Each job runs in its own interpreter and prints a JSON line: {"seconds": …, "peak_mb": …, …}.
 JOBS = {
     "build": """
-from linkbook.cli import main
+from linkbook.apps.cli import main
 assert main(["build", NAME, *ARGS, "-o", BOOK]) == 0
 """,
     "vector": """
-from linkbook.verifier import verify
+from linkbook.check.verifier import verify
 report = verify(Path(BOOK), "vector")
 EXTRA["ok"] = report.ok
 EXTRA["cells"] = report.cells
 EXTRA["max_abs"] = report.max_abs
 """,
     "excelmodel": """
-from linkbook.engine import evaluate_formulas_model
+from linkbook.engine.evaluator import evaluate_formulas_model
 EXTRA["cells"] = len(evaluate_formulas_model(Path(BOOK)))
 """,
     "office": """
-from linkbook.office import recalculate
+from linkbook.engine.office import recalculate
 with tempfile.TemporaryDirectory() as d:
     recalculate(Path(BOOK), Path(d))
 """,
     "reference": """
-from linkbook.safety import load_workbook_safely
-from linkbook.verifier import Reference, inputs_of
-from linkbook.workbook import read_meta
+from linkbook.base.safety import load_workbook_safely
+from linkbook.check.verifier import Reference, inputs_of
+from linkbook.base.sheets import read_meta
 wb = load_workbook_safely(Path(BOOK))
 meta = read_meta(wb)
 params = inputs_of(wb, meta)
@@ -107,7 +107,7 @@ sys.path.insert(0, {src!r})
 import formulas, numpy, openpyxl
 from formulas.functions import get_functions
 get_functions()
-import linkbook.cli, linkbook.engine, linkbook.verifier
+import linkbook.apps.cli, linkbook.engine.evaluator, linkbook.check.verifier
 NAME, ARGS, BOOK = {name!r}, {args!r}, {book!r}
 EXTRA = {{}}
 t0 = time.perf_counter()

@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from linkbook.engine import evaluator as engine
-from linkbook.engine import grammar
+from linkbook.engine import adapter, grammar, groups, plan, references
 from linkbook.language import templates
 
 def pipe_tree(pipe):
@@ -34,6 +34,7 @@ def pipe_tree(pipe):
             inputs = [i for i in inputs if i is not sh.START]
             if func is sh.bypass:           # formulas' link to a repeated subexpression
                 return tree(inputs[0])
+            func = getattr(func, "formulas_function", func)    # the engine's MIN over ranges
             return ("call", func, tuple(tree(i) for i in inputs))
         if k in pipe.defaults:
             return ("const", type(pipe.defaults[k]), pipe.defaults[k])
@@ -45,20 +46,20 @@ def pipe_tree(pipe):
 def formulas_reading(formula: str):
     """(spans, keys, functions, pipe tree) by `formulas`' parser; None if it rejects it."""
     try:
-        info = engine._formulas_tokenize(formula)
+        info = adapter.formulas_tokenize(formula)
     except engine.UnsupportedFormulaError:
         return None
     return (info.spans, info.keys, info.functions,
-            pipe_tree(engine._Pipe.of(info.builder, {})))
+            pipe_tree(adapter.Pipe.of(info.builder, {})))
 
 
 def grammar_reading(formula: str):
     """The same by linkbook.grammar and the engine's pipe of its graph; None if it declines."""
-    parsed = grammar.parse(formula, engine._plain_functions())
+    parsed = grammar.parse(formula, adapter.plain_functions())
     if parsed is None:
         return None
     return (parsed.spans, parsed.keys, set(parsed.functions),
-            pipe_tree(engine._Pipe.of_parsed(parsed, None, {})))
+            pipe_tree(adapter.Pipe.of_parsed(parsed, None, {})))
 
 
 def assert_same_reading(formula: str) -> None:
@@ -80,7 +81,7 @@ def skeleton_representatives(names) -> list[str]:
             for row in ws.iter_rows():
                 for cell in row:
                     if cell.data_type == "f":
-                        text = engine._formula_text(cell)
+                        text = references.formula_text(cell)
                         seen.setdefault(re.sub(r"[0-9]+", "9", text), text)
     return list(seen.values())
 
@@ -90,7 +91,7 @@ BUNDLED = [p.stem for p in templates.bundled()]
 
 def test_grammar_reads_every_bundled_formula_as_formulas_does():
     formulas = skeleton_representatives(BUNDLED)
-    declined = [f for f in formulas if grammar.parse(f, engine._plain_functions()) is None]
+    declined = [f for f in formulas if grammar.parse(f, adapter.plain_functions()) is None]
     assert not declined, f"grammar declines bundled formulas: {declined[:3]}"
     for formula in formulas:
         assert_same_reading(formula)
@@ -162,7 +163,7 @@ def in_grammar():
 @given(in_grammar())
 def test_grammar_reads_formulas_of_its_grammar_as_formulas_does(expression):
     formula = "=" + expression
-    assert grammar.parse(formula, engine._plain_functions()) is not None, formula
+    assert grammar.parse(formula, adapter.plain_functions()) is not None, formula
     assert_same_reading(formula)
 
 
@@ -173,7 +174,7 @@ def test_grammar_reads_formulas_of_its_grammar_as_formulas_does(expression):
     "=COS(-(A1%))/COS(-A1%)", "=TRUE+true", "='TRUE'!A1", "=TRUEX+1", "=SIGN*2+A1",
 ])
 def test_precedence_cases(formula):
-    assert grammar.parse(formula, engine._plain_functions()) is not None, formula
+    assert grammar.parse(formula, adapter.plain_functions()) is not None, formula
     assert_same_reading(formula)
 
 
@@ -185,18 +186,18 @@ def test_precedence_cases(formula):
     "=PI()*PI", "=LOG10+LOG10(2)", "=_xleta.x!A1+1", '="a\nb"&A1', "=A1+" + "1" * 5000,
 ])
 def test_outside_the_grammar_is_left_to_formulas(formula):
-    assert grammar.parse(formula, engine._plain_functions()) is None
+    assert grammar.parse(formula, adapter.plain_functions()) is None
 
 
 def _evaluate(wb, use_grammar: bool, monkeypatch) -> dict:
-    engine._COMPILED.clear()
-    engine._READ_SKELETONS.clear()
+    plan.COMPILED.clear()
+    groups.READ_SKELETONS.clear()
     with monkeypatch.context() as m:
         if not use_grammar:
             m.setattr(grammar, "parse", lambda *a: None)
         values = engine.evaluate(wb)
-    engine._COMPILED.clear()
-    engine._READ_SKELETONS.clear()
+    plan.COMPILED.clear()
+    groups.READ_SKELETONS.clear()
     return values
 
 
@@ -215,9 +216,9 @@ def test_a_node_without_a_value_hands_the_call_to_formulas_compiled_graph():
     grammar's graph then runs formulas' own compiled graph, which decides."""
     from formulas.ranges import Ranges
     formula = "=SUM(A1:A2)+1"
-    pipe = engine._compile(engine._tokenize(formula).builder)
-    assert isinstance(pipe, engine._Pipe) and pipe.compiled is None
-    graph = engine._formulas_tokenize(formula).builder.compile()
+    pipe = adapter.compile_formula(adapter.tokenize(formula).builder)
+    assert isinstance(pipe, adapter.Pipe) and pipe.compiled is None
+    graph = adapter.formulas_tokenize(formula).builder.compile()
     outcomes = []
     for func in (pipe, graph):
         try:
@@ -234,7 +235,7 @@ DEEP = "=" + "COS(" * 40 + "-A1%" + ")" * 40 + "+" + "(" * 40 + "B1" + ")" * 40
 
 @pytest.mark.parametrize("formula", [LONG_SUM, DEEP], ids=["long sum", "deep nesting"])
 def test_long_and_deep_formulas_are_read_as_formulas_reads_them(formula):
-    assert grammar.parse(formula, engine._plain_functions()) is not None
+    assert grammar.parse(formula, adapter.plain_functions()) is not None
     assert_same_reading(formula)
 
 
@@ -245,12 +246,12 @@ def test_long_and_deep_formulas_are_read_as_formulas_reads_them(formula):
 def test_texts_that_hash_alike_are_compared_in_full(formula, monkeypatch):
     """With a modulus of 3 nearly every pair of texts hashes alike: the graph must not change,
     since equal hashes only send the texts to be compared."""
-    expected = grammar.parse(formula, engine._plain_functions())
+    expected = grammar.parse(formula, adapter.plain_functions())
     grammar._hash.cache_clear()
     grammar._power.cache_clear()
     try:
         monkeypatch.setattr(grammar, "_MODULUS", 3)
-        colliding = grammar.parse(formula, engine._plain_functions())
+        colliding = grammar.parse(formula, adapter.plain_functions())
     finally:
         monkeypatch.undo()
         grammar._hash.cache_clear()
@@ -262,7 +263,7 @@ def _peak_bytes(formula: str) -> int:
     import tracemalloc
     tracemalloc.start()
     try:
-        assert grammar.parse(formula, engine._plain_functions()) is not None
+        assert grammar.parse(formula, adapter.plain_functions()) is not None
         return tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()

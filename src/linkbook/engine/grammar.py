@@ -1,7 +1,7 @@
 """A fast reader of the formula grammar linkbook writes, for the engine.
 
-`formulas`' parser costs about 1.5 ms a formula, most of a small book's verify once the libraries
-are loaded.  This one reads the subset of Excel's grammar that linkbook's books use — numbers,
+`formulas`' parser is slow enough to be most of a small book's verify once the libraries are
+loaded.  This one reads the subset of Excel's grammar that linkbook's books use — numbers,
 strings, TRUE/FALSE, cell and range references (A1 style, optionally on a sheet, quoted or not),
 defined names, the arithmetic, text and comparison operators, postfix %, and calls of functions
 that `formulas` implements — in one regex pass and one operator-precedence pass, and gives the

@@ -1,0 +1,230 @@
+"""Formula cells joined into groups: the cells of one sheet whose formulas have one shape (a
+column of a sweep table is one group), each a Group of Members; and the grouping itself
+(Grouper), of every sheet or only of what some cells need."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .adapter import TokenInfo, tokenize
+from .errors import UnsupportedFormulaError
+from .references import (RefDesc, References, cell_name, constant_value, formula_shape,
+                         formula_text, lex_spans, skeleton_of)
+from .vector import Batch
+from ..base.xlsx import coordinate_to_tuple
+
+# Skeletons whose references the `formulas` tokenizer has been seen to read exactly as the
+# lexer does, with the functions they call: a formula of a known skeleton is not re-tokenized.
+READ_SKELETONS: dict[str, set[str]] = {}
+
+
+@dataclass
+class Member:
+    """A formula cell of a group."""
+    row: int
+    col: int
+    formula: str
+
+
+@dataclass
+class EachCell:
+    """A member compiled on its own ('each' mode)."""
+    func: object
+    inputs: list  # per compiled input: ('ranges', Ranges template, rects) or ('name', RefDesc)
+    rects: list
+
+
+@dataclass
+class Group:
+    """Formula cells of one sheet with one shape, evaluated by one compiled function (or, in
+    'each' mode, one per member); `gid` is its index in the evaluation's groups."""
+    gid: int
+    sheet: str
+    shape: str
+    members: list[Member]
+    info: TokenInfo            # of members[0]
+    descs: list[RefDesc]       # per reference of the shape: the same for every member
+    mode: str = "vector"
+    func: object = None
+    inputs: list[RefDesc] = field(default_factory=list)   # per compiled input, in order
+    batch: Batch = field(default_factory=Batch)
+    each: list[EachCell] = field(default_factory=list)
+    rows: np.ndarray = None
+    cols: np.ndarray = None
+
+    def reads(self, i: int) -> list[tuple[str, int, int, int, int]]:
+        """Rectangles (sheet, top, left, bottom, right) read by member i."""
+        if self.mode == "each":
+            return self.each[i].rects
+        m = self.members[i]
+        return [d.rect(m.row, m.col) for d in self.inputs]
+
+
+def tokenize_member(member: Member, sheet: str, stats: dict) -> TokenInfo:
+    """The tokenizer's reading of a member's formula (counted in `stats`); its errors name the
+    cell."""
+    stats["tokenized_cells"] += 1
+    try:
+        return tokenize(member.formula)
+    except UnsupportedFormulaError as ex:
+        raise UnsupportedFormulaError(f"{sheet}!{cell_name(member.row, member.col)}: {ex}") from ex
+
+
+class Grouper:
+    """Reads the cells of a workbook's sheets: their constants (self.constants, by sheet) and
+    their formulas, joined into groups (self.groups)."""
+
+    def __init__(self, refs: References, stats: dict, excel_model_constants: bool = False):
+        self.refs = refs
+        self.stats = stats
+        self.excel_model_constants = excel_model_constants
+        self.constants: dict[str, dict[tuple[int, int], object]] = {}
+        self.groups: list[Group] = []
+
+    def read_cells(self, worksheets) -> dict[str, list[tuple[int, int, str]]]:
+        """The formulas of `worksheets` by sheet, sorted by row and column; their constants go
+        to self.constants."""
+        formulas_by_sheet = {}
+        for ws in worksheets:
+            consts, forms = {}, []
+            for (row, col), cell in ws._cells.items():  # only cells that exist (ExcelModel too)
+                if cell.value is None:
+                    continue
+                if cell.data_type == "f":
+                    forms.append((row, col, formula_text(cell)))
+                else:
+                    value = constant_value(cell, self.excel_model_constants)
+                    if value is not None:
+                        consts[(row, col)] = value
+            forms.sort()
+            self.constants[ws.title] = consts
+            formulas_by_sheet[ws.title] = forms
+            self.stats["formula_cells"] += len(forms)
+        return formulas_by_sheet
+
+    def group(self, formulas_by_sheet) -> None:
+        """Join the formulas of each sheet into groups of one shape (self.groups)."""
+        candidates: dict[tuple[str, str], list[Member]] = {}
+        for sheet, forms in formulas_by_sheet.items():
+            above, left = {}, {}   # last (row, col, shape, template) per column / per row
+            for row, col, formula in forms:
+                copied = self.copied_shape(formula, row, col, above, left)
+                if copied is not None:
+                    above[col] = left[row] = copied
+                    shape = copied[2]
+                else:
+                    try:
+                        shape, template = self.refs.fast_shape(formula, sheet, row, col)
+                        above[col] = left[row] = (row, col, shape, template)
+                    except UnsupportedFormulaError:
+                        shape = "\0" + formula   # the tokenizer decides below
+                candidates.setdefault((sheet, shape), []).append(Member(row, col, formula))
+        exact: dict[tuple[str, str], tuple[list[Member], TokenInfo, list[RefDesc]]] = {}
+        for (sheet, shape), members in candidates.items():
+            rep = members[0]
+            lexed = None if shape.startswith("\0") else lex_spans(rep.formula, self.refs)
+            skeleton = None if lexed is None else skeleton_of(rep.formula, lexed)
+            read = READ_SKELETONS.get(skeleton)
+            info = (TokenInfo(lexed, None, read, None) if read is not None
+                    else tokenize_member(rep, sheet, self.stats))
+            if lexed is not None and info.spans == lexed:
+                exact_shape, descs = self._exact_shape(rep, sheet, info)
+                if exact_shape == shape:
+                    READ_SKELETONS[skeleton] = info.functions
+                    exact[(sheet, shape)] = (members, info, descs)
+                    continue
+            if info.builder is None:
+                info = tokenize_member(rep, sheet, self.stats)
+            for m in members:  # the lexer misread this shape: re-read every member exactly
+                m_info = info if m is rep else tokenize_member(m, sheet, self.stats)
+                exact_shape, descs = self._exact_shape(m, sheet, m_info)
+                entry = exact.setdefault((sheet, "\0" + exact_shape), ([], m_info, descs))
+                entry[0].append(m)
+        for (sheet, shape), (members, info, descs) in exact.items():
+            self.groups.append(Group(len(self.groups), sheet, shape, members, info, descs))
+        self.stats["shapes"] = len(self.groups)
+
+    def group_needed(self, wb, cells) -> None:
+        """Group only what the formula cells among `cells` need, directly or not, following
+        the references of each shape (before any compile: that is the cost saved).  A sheet is
+        read and grouped when a needed group first reads it: a sheet that nothing needed reads
+        (the Motion sheet, for the sweep's angles) is never read at all."""
+        sheets = {ws.title: ws for ws in wb.worksheets}
+        grouped: set[str] = set()
+        needed: set[int] = set()
+        todo_sheets = {sheet for sheet, _ in cells} & set(sheets)
+        while todo_sheets:
+            self.group(self.read_cells([sheets[s] for s in sorted(todo_sheets)]))
+            grouped |= todo_sheets
+            needed, read_sheets = self.needed_groups(cells)
+            todo_sheets = (read_sheets & set(sheets)) - grouped
+        self.groups = [g for g in self.groups if g.gid in needed]
+        for gid, g in enumerate(self.groups):
+            g.gid = gid
+
+    def needed_groups(self, cells) -> tuple[set[int], set[str]]:
+        """The groups that the formula cells among `cells` need, and every sheet they read."""
+        owner = {}
+        for g in self.groups:
+            rows, cols = owner.get(g.sheet, (0, 0))
+            owner[g.sheet] = (max(rows, max(m.row for m in g.members)),
+                              max(cols, max(m.col for m in g.members)))
+        owner = {sheet: np.full((r + 1, c + 1), -1, dtype=np.int64)
+                 for sheet, (r, c) in owner.items()}
+        for g in self.groups:
+            owner[g.sheet][[m.row for m in g.members], [m.col for m in g.members]] = g.gid
+        todo = set()
+        for sheet, a1 in cells:
+            row, col = coordinate_to_tuple(a1)
+            grid = owner.get(sheet)
+            if grid is not None and row < grid.shape[0] and col < grid.shape[1]:
+                todo.add(int(grid[row, col]))
+        todo.discard(-1)
+        needed, sheets = set(), set()
+        while todo:
+            gid = todo.pop()
+            needed.add(gid)
+            sheets.update(d.sheet for d in self.groups[gid].descs)
+            todo |= self.owners_read(self.groups[gid], owner) - needed - {-1}
+        return needed, sheets
+
+    @staticmethod
+    def owners_read(g: Group, owner: dict[str, np.ndarray]) -> set[int]:
+        """The groups (in `owner`, one grid per sheet) owning a cell that group g's references
+        name, for any member."""
+        rows = np.array([m.row for m in g.members])
+        cols = np.array([m.col for m in g.members])
+        found = set()
+        for d in g.descs:
+            grid = owner.get(d.sheet)
+            if grid is None:
+                continue
+            r1, c1, r2, c2 = np.broadcast_arrays(*d.at(rows, cols), rows)[:4]
+            if not d.is_range:      # one cell per member: one look-up for all of them
+                inside = (r1 < grid.shape[0]) & (c1 < grid.shape[1])
+                found.update(grid[r1[inside], c1[inside]].ravel().tolist())
+                continue
+            for a, b, c, e in {(int(a), int(b), int(c), int(e))
+                               for a, b, c, e in zip(r1, c1, r2, c2)}:
+                found.update(grid[a:c + 1, b:e + 1].ravel().tolist())
+        return found
+
+    @staticmethod
+    def copied_shape(formula, row, col, above, left):
+        """The shape of the cell above (or to the left) if this formula is its copy; a copy has
+        the same shape by definition, and checking it is much cheaper than lexing.  The entries
+        keep the cell the template was made from, so every copy is a shift of that one."""
+        for prev in (above.get(col), left.get(row)):
+            if prev is None:
+                continue
+            prow, pcol, shape, template = prev
+            if template.shifted(row - prow, col - pcol) == formula:
+                return prev
+        return None
+
+    def _exact_shape(self, m: Member, sheet: str, info: TokenInfo):
+        try:
+            return formula_shape(m.formula, info.spans, self.refs, sheet, m.row, m.col)
+        except UnsupportedFormulaError as ex:
+            raise UnsupportedFormulaError(f"{sheet}!{cell_name(m.row, m.col)}: {ex}") from ex
