@@ -100,7 +100,7 @@ def _marghitu(case: dict) -> dict:
             "steps": [{"type": "crank", "point": "B", "pivot": "A", "length": i["AB"]},
                       {"type": "slider", "point": "C", "p": "B", "length": i["BC"],
                        "through": "A", "branch": 1}],
-            "dynamics": {"gravity": {"g": i["g"], "angle": -90}},
+            "dynamics": {"gravity": {"g": i["g"]}},          # the default direction: −y
             "bodies": [{"joints": ["A", "B"], "mass": i["m1"], "inertia": i["I1"],
                         "centre": {"frame": ["A", "B"], "distance": i["AB"] / 2}},
                        {"joints": ["B", "C"], "mass": i["m2"], "inertia": i["I2"],
@@ -187,8 +187,10 @@ def _draw_dynamics(data, name: str, moving: list[str]) -> dict:
                       "torque": data.draw(st.floats(-50.0, 50.0))})
     out = {"bodies": bodies, "loads": loads}
     if data.draw(st.booleans()):
-        out["dynamics"] = {"gravity": {"g": data.draw(st.floats(0.0, 20.0)),
-                                       "angle": data.draw(st.floats(-180.0, 180.0))}}
+        gravity = {"g": data.draw(st.floats(0.0, 20.0))}
+        if data.draw(st.booleans()):           # else the default direction, −y
+            gravity["angle"] = data.draw(st.floats(-180.0, 180.0))
+        out["dynamics"] = {"gravity": gravity}
     return out
 
 
@@ -249,7 +251,8 @@ def _balances(got: dict, dyn: dict, kin: _Kinematics, power_in, links: list[list
         −M_S + Σ r_P × F + Σ T + Σ r_G × m g = Σ (r_G × m a_G + I α)    (about the origin)
     S and M_S: the shaking force and moment (what the links do to the ground)."""
     gravity = dyn.get("dynamics", {}).get("gravity")
-    g = _vector({"magnitude": gravity["g"], "angle": gravity["angle"]}) if gravity else (0, 0)
+    g = _vector({"magnitude": gravity["g"], "angle": gravity.get("angle", -90.0)}) \
+        if gravity else (0.0, 0.0)
     power = [power_in]
     force_x, force_y = [-got["shaking_x"]], [-got["shaking_y"]]
     moment = [-got["shaking_moment"]]
