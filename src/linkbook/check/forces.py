@@ -452,9 +452,9 @@ class _System:
 def _equations(top: _Topology, loads: _Loads, rows: _Rows, pins) -> _System:
     unknowns = 2 * len(pins) + 2 * sum(b.block for b in top.bodies) + 1
     if unknowns != 3 * len(top.bodies):
-        raise ValueError(f"the description makes {unknowns} unknowns for "
-                         f"{3 * len(top.bodies)} equations of {len(top.bodies)} moving links: "
-                         "its links and steps do not make a mechanism of one degree of freedom")
+        raise ValueError(f"{unknowns} unknowns for {3 * len(top.bodies)} equations: the links "
+                         f"{[b.joints for b in top.bodies]} are no mechanism of one degree of "
+                         "freedom (a pin sliding in a slotted link is not supported yet)")
     system = _System(top, rows)
     for i, body, point in pins:                       # the force of i on j, and its reaction
         x, y = system.unknown("F" + top.pair(i, body.number) + "x"), system.unknown("")
