@@ -1,0 +1,348 @@
+"""The independent force reference (linkbook.check.forces): two cases derived by hand, the
+slider-crank a book printed, and the balances of power and momentum on random masses and loads of
+the bundled mechanisms. Every expected value comes from outside the code under test: statics and
+virtual work with the kinematic reference's angular velocities, a closed-form slider-crank, the
+book's numbers, and the energy and momentum the kinematic reference's motion implies."""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from conftest import published
+from linkbook.check.forces import forces
+from linkbook.check.reference import solve
+from linkbook.language import templates
+
+EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "25"))
+MM = 1e-3
+
+
+def _with(description: dict, **dynamics) -> dict:
+    """A template's description with bodies, loads and gravity added."""
+    return {**description, **dynamics}
+
+
+def test_static_fourbar_by_virtual_work():
+    """No masses, only a torque T on the rocker B0-B (body 4). The pins are frictionless and the
+    links rigid, so the efforts' powers sum to zero (virtual work): T12·ω12 + T·ω14 = 0, hence
+    T12 = −T·ω14/ω12, with ω14 from the kinematic reference (not from the force solver).
+    Statics of the links: the coupler A-B-C carries no load but its two pins, so it is a
+    two-force member: F23 ∥ (B − A), and its pins' forces balance, F34 = F23. The crank has two
+    pins and a couple: F12 + F32 = 0, F12 = F23; the rocker likewise: F14 = −F34."""
+    t = templates.load("fourbar")
+    torque, w12 = 7.5, 3.0
+    params = {**t.values(), "omega_in": w12, "alpha_in": 0.0}
+    angles = np.arange(0.0, 360.0, 5.0)
+    description = _with(t.mechanism.description,
+                        loads=[{"body": ["B0", "B"], "torque": torque}])
+    got = forces(description, params, angles, t.length_unit)
+    motion = solve(t.mechanism.description, params, angles)
+    assert got["bodies"] == {2: ("A0", "A"), 3: ("A", "B", "C"), 4: ("B", "B0")}
+    np.testing.assert_allclose(got["T12"], -torque * motion["omega_theta14"] / w12, rtol=1e-10)
+    points = motion["points"]
+    ax, ay = (np.asarray(c) for c in points["A"])
+    bx, by = (np.asarray(c) for c in points["B"])
+    size = got["F23"]
+    assert np.all(np.abs(got["F23x"] * (by - ay) - got["F23y"] * (bx - ax))
+                  <= 1e-10 * size * np.hypot(bx - ax, by - ay))
+    for key, sign in (("F12", 1.0), ("F34", 1.0), ("F14", -1.0)):
+        for c in "xy":
+            np.testing.assert_allclose(got[key + c], sign * got["F23" + c], rtol=0,
+                                       atol=1e-10 * size.max())
+
+
+def test_inline_slider_crank_piston_inertia_by_hand():
+    """In-line slider-crank, crank r = 50 mm, rod l = 200 mm, turning at a constant ω; only the
+    piston has mass (m), no gravity. Its position x_B = r·cos θ + D, D = √(l² − r² sin² θ):
+        x′  = −r sin θ − r² sin θ cos θ / D
+        x″  = −r cos θ − r² cos 2θ / D − r⁴ sin² θ cos² θ / D³
+    and v_B = ω·x′, a_B = ω²·x″ (α = 0). The crank and rod are massless and the pins and the
+    guide frictionless (the guide's force is normal to the motion), so the motor's power feeds
+    only the piston's kinetic energy: T12·ω = d(½ m v_B²)/dt = m·a_B·v_B. That is, the piston's
+    inertia force −m·a_B times its velocity ratio v_B/ω, balanced: T12 = −(−m·a_B)·v_B/ω.
+    The piston's x equation has the rod's push alone (the guide's force is along y):
+    F34x = m·a_B; the rod is a two-force member, F23 ∥ (B − A), and the crank passes its load
+    on, F12 = F23."""
+    r, l, w, m = 50.0, 200.0, 30.0, 2.0
+    description = {"input": {"key": "theta"}, "ground": {"A0": [0, 0]},
+                   "steps": [{"type": "crank", "point": "A", "pivot": "A0", "length": "r"},
+                             {"type": "slider", "point": "B", "p": "A", "length": "l",
+                              "through": "A0", "branch": 1}],
+                   "bodies": [{"joints": ["B"], "block": True, "mass": "m"}]}
+    params = {"r": r, "l": l, "m": m, "omega_in": w, "alpha_in": 0.0}
+    angles = np.arange(0.0, 360.0, 7.5)
+    got = forces(description, params, angles, "mm")
+    th = np.radians(angles)
+    rm, lm = r * MM, l * MM
+    d = np.sqrt(lm ** 2 - rm ** 2 * np.sin(th) ** 2)
+    v = w * (-rm * np.sin(th) - rm ** 2 * np.sin(th) * np.cos(th) / d)
+    a = w ** 2 * (-rm * np.cos(th) - rm ** 2 * np.cos(2 * th) / d
+                  - rm ** 4 * np.sin(th) ** 2 * np.cos(th) ** 2 / d ** 3)
+    scale = m * np.max(np.abs(a)) * np.max(np.abs(v)) / w
+    np.testing.assert_allclose(got["T12"], m * a * v / w, rtol=0, atol=1e-10 * scale)
+    np.testing.assert_allclose(got["F34x"], m * a, rtol=0, atol=1e-10 * m * np.max(np.abs(a)))
+    ay = rm * np.sin(th)            # B − A = (x_B − r cos θ, 0 − r sin θ) = (D, −r sin θ)
+    assert np.all(np.abs(got["F23x"] * -ay - got["F23y"] * d) <= 1e-10 * got["F23"] * lm)
+    np.testing.assert_allclose(got["F12x"], got["F23x"], rtol=1e-12)
+
+
+def _marghitu(case: dict) -> dict:
+    """The book's slider-crank as a description: A the origin, the crank A→B, the slider C on
+    the x axis through A, ahead of B's foot (branch 1)."""
+    i = case["inputs"]
+    return {"input": {"key": "phi"}, "ground": {"A": [0, 0]},
+            "steps": [{"type": "crank", "point": "B", "pivot": "A", "length": i["AB"]},
+                      {"type": "slider", "point": "C", "p": "B", "length": i["BC"],
+                       "through": "A", "branch": 1}],
+            "dynamics": {"gravity": {"g": i["g"]}},          # the default direction: −y
+            "bodies": [{"joints": ["A", "B"], "mass": i["m1"], "inertia": i["I1"],
+                        "centre": {"frame": ["A", "B"], "distance": i["AB"] / 2}},
+                       {"joints": ["B", "C"], "mass": i["m2"], "inertia": i["I2"],
+                        "centre": {"frame": ["B", "C"], "distance": i["BC"] / 2}},
+                       {"joints": ["C"], "block": True, "mass": i["m3"], "inertia": i["I3"]}],
+            "loads": [{"at": "C", "force": [i["F_ext"], 0.0]}]}
+
+
+def test_marghitu_slider_crank_published():
+    """Marghitu (2009), p. 144: F12, the crank's force on the rod at B. The book numbers the
+    links from 0 (the ground); here the ground is 1, so its F12 is our F23."""
+    case = published()["marghitu_slider_crank_forces"]
+    i = case["inputs"]
+    got = forces(_marghitu(case), {"omega_in": i["omega"], "alpha_in": i["alpha"]},
+                 [i["phi"]], "m")
+    assert got["joints"]["F23"] == "B"
+    for book, ours in (("F12x", "F23x"), ("F12y", "F23y")):
+        assert got[ours][0] == pytest.approx(case["published"][book], rel=case["rel_tolerance"])
+
+
+def test_marghitu_slider_crank_derived():
+    """The other unknowns of the same example, not printed on the page we have: closed forms
+    solved from the book's data link by link (each link's ΣF and ΣM; derived, not published),
+    in the book's numbering F01 → our F12, F23 → F34, F03 → F14, M → T12. The shaking force is
+    what the links push the ground with, −(F01 + F03); its moment about A, −M − r_C × F03."""
+    case = published()["marghitu_slider_crank_forces"]
+    i = case["inputs"]
+    got = forces(_marghitu(case), {"omega_in": i["omega"], "alpha_in": i["alpha"]},
+                 [i["phi"]], "m")
+    r2 = math.sqrt(2.0)
+    derived = {"T12": 3 + 105 * r2, "F12x": -100 - 2 * r2, "F12y": 115 + r2,
+               "F34x": -100 - r2, "F34y": 95 + 1.5 * r2, "F14x": 0.0, "F14y": -85 - 1.5 * r2,
+               "N14": -85 - 1.5 * r2, "M14": 0.0, "shaking_x": 100 + 2 * r2,
+               "shaking_y": -30 + r2 / 2, "shaking_moment": -20 * r2}
+    for key, want in derived.items():
+        assert got[key][0] == pytest.approx(want, rel=1e-12, abs=1e-12), key
+
+
+# --------------------------------------------------------------------------------------------
+# The balances of power and momentum on random masses and loads
+# --------------------------------------------------------------------------------------------
+
+# The moving links of the bundled mechanisms, as this test reads their drawings (a one-point
+# entry is a slider's block).
+LINKS = {
+    "fourbar": [["A0", "A"], ["A", "B", "C"], ["B0", "B"]],
+    "slider-crank": [["A0", "A"], ["A", "B", "C"], ["B"]],
+    "watt-sixbar": [["A0", "A"], ["A", "B"], ["B0", "B", "C"], ["C", "D"], ["D0", "D"]],
+    "jansen": [["O", "A"], ["A", "B"], ["A", "C"], ["Z", "B", "D"], ["Z", "C"], ["D", "E"],
+               ["C", "E", "F"]],
+    "boom-cylinder": [["O", "B", "T"]],
+}
+
+def _draw_dynamics(data, name: str, moving: list[str]) -> dict:
+    """Random masses (some links massless), centres (`local` in the link's frame), inertias,
+    point forces (as components or magnitude and angle), torques and gravity."""
+    bodies, loads = [], []
+    for joints in LINKS[name]:
+        if not data.draw(st.booleans()):
+            continue
+        entry = {"joints": joints, "mass": data.draw(st.floats(0.05, 20.0)),
+                 "inertia": data.draw(st.floats(0.0, 0.5))}
+        if len(joints) == 1:
+            entry["block"] = True
+        else:
+            entry["centre"] = {"frame": joints[:2],
+                               "local": [data.draw(st.floats(-120.0, 120.0)),
+                                         data.draw(st.floats(-60.0, 60.0))]}
+        bodies.append(entry)
+    for _ in range(data.draw(st.integers(0, 2))):
+        at = data.draw(st.sampled_from(moving))
+        if data.draw(st.booleans()):
+            force = [data.draw(st.floats(-500.0, 500.0)), data.draw(st.floats(-500.0, 500.0))]
+        else:
+            force = {"magnitude": data.draw(st.floats(0.0, 500.0)),
+                     "angle": data.draw(st.floats(-180.0, 180.0))}
+        loads.append({"at": at, "force": force})
+    if data.draw(st.booleans()):
+        links = [j for j in LINKS[name] if len(j) > 1]
+        loads.append({"body": data.draw(st.sampled_from(links))[:2],
+                      "torque": data.draw(st.floats(-50.0, 50.0))})
+    out = {"bodies": bodies, "loads": loads}
+    if data.draw(st.booleans()):
+        gravity = {"g": data.draw(st.floats(0.0, 20.0))}
+        if data.draw(st.booleans()):           # else the default direction, −y
+            gravity["angle"] = data.draw(st.floats(-180.0, 180.0))
+        out["dynamics"] = {"gravity": gravity}
+    return out
+
+
+class _Kinematics:
+    """Positions, velocities and accelerations in SI units, read from the kinematic reference."""
+
+    def __init__(self, solved: dict, unit: float):
+        self.s, self.unit, self.n = solved, unit, len(solved["assembled"])
+
+    def point(self, name: str):
+        x, y = (np.broadcast_to(np.asarray(c, dtype=float), (self.n,)) * self.unit
+                for c in self.s["points"][name])
+        if f"vx_{name}" not in self.s:          # a ground point
+            zero = np.zeros(self.n)
+            return (x, y), (zero, zero), (zero, zero)
+        return ((x, y), tuple(self.s[f"{k}_{name}"] * self.unit for k in ("vx", "vy")),
+                tuple(self.s[f"{k}_{name}"] * self.unit for k in ("ax", "ay")))
+
+    def spin(self, joints: list[str]):
+        """ω and α of a rigid link, from its first and last joints: Δv = ω k × r,
+        Δa = α k × r − ω² r."""
+        if len(joints) == 1:
+            return np.zeros(self.n), np.zeros(self.n)
+        (p, v, a), (q, w, b) = self.point(joints[0]), self.point(joints[-1])
+        rx, ry = q[0] - p[0], q[1] - p[1]
+        r2 = rx * rx + ry * ry
+        return ((rx * (w[1] - v[1]) - ry * (w[0] - v[0])) / r2,
+                (rx * (b[1] - a[1]) - ry * (b[0] - a[0])) / r2)
+
+    def centre(self, entry: dict):
+        """The centre of mass's position, velocity and acceleration: G = A + u·ê + v·ê⊥ on the
+        frame A→B, moving with the link (v_G = v_A + ω k × AG, a_G = a_A + α k × AG − ω² AG)."""
+        joints = entry["joints"]
+        if entry.get("block"):
+            return self.point(joints[0])
+        (a, va, aa), (b, _, _) = self.point(joints[0]), self.point(joints[1])
+        u, v = (c * self.unit for c in entry["centre"]["local"])
+        ex, ey = b[0] - a[0], b[1] - a[1]
+        norm = np.hypot(ex, ey)
+        ex, ey = ex / norm, ey / norm
+        rx, ry = u * ex - v * ey, u * ey + v * ex
+        w, al = self.spin(joints)
+        return ((a[0] + rx, a[1] + ry), (va[0] - w * ry, va[1] + w * rx),
+                (aa[0] - al * ry - w * w * rx, aa[1] + al * rx - w * w * ry))
+
+
+def _vector(force) -> tuple[float, float]:
+    if isinstance(force, dict):
+        angle = math.radians(force["angle"])
+        return force["magnitude"] * math.cos(angle), force["magnitude"] * math.sin(angle)
+    return force[0], force[1]
+
+
+def _balances(got: dict, dyn: dict, kin: _Kinematics, power_in, links: list[list[str]]):
+    """The power and the momentum balances' residuals, each with the sum of its terms' sizes:
+        T12·ω12 (or F_in·v_in) + Σ F·v_P + Σ T·ω + Σ m g·v_G = Σ (m a_G·v_G + I α ω)
+        −S + Σ F + Σ m g = Σ m a_G
+        −M_S + Σ r_P × F + Σ T + Σ r_G × m g = Σ (r_G × m a_G + I α)    (about the origin)
+    S and M_S: the shaking force and moment (what the links do to the ground)."""
+    gravity = dyn.get("dynamics", {}).get("gravity")
+    g = _vector({"magnitude": gravity["g"], "angle": gravity.get("angle", -90.0)}) \
+        if gravity else (0.0, 0.0)
+    power = [power_in]
+    force_x, force_y = [-got["shaking_x"]], [-got["shaking_y"]]
+    moment = [-got["shaking_moment"]]
+    for load in dyn["loads"]:
+        if "torque" in load:
+            link = next(j for j in links if load["body"] == j[:2])
+            power.append(load["torque"] * kin.spin(link)[0])
+            moment.append(np.full(kin.n, load["torque"]))
+            continue
+        fx, fy = _vector(load["force"])
+        (x, y), (vx, vy), _ = kin.point(load["at"])
+        power.append(fx * vx + fy * vy)
+        force_x.append(np.full(kin.n, fx))
+        force_y.append(np.full(kin.n, fy))
+        moment.append(x * fy - y * fx)
+    for entry in dyn["bodies"]:
+        m, inertia = entry["mass"], entry["inertia"]
+        (x, y), (vx, vy), (ax, ay) = kin.centre(entry)
+        w, al = kin.spin(entry["joints"])
+        power += [m * (g[0] * vx + g[1] * vy), -(m * (ax * vx + ay * vy)), -inertia * al * w]
+        force_x += [np.full(kin.n, m * g[0]), -m * ax]
+        force_y += [np.full(kin.n, m * g[1]), -m * ay]
+        moment += [m * (x * g[1] - y * g[0]), -m * (x * ay - y * ax), -inertia * al]
+    return [(sum(terms), sum(np.abs(t) for t in terms))
+            for terms in (power, force_x, force_y, moment)]
+
+
+@pytest.mark.parametrize("name", sorted(LINKS))
+def test_power_and_momentum_balance(name):
+    """On every row, for random masses, centres, inertias, loads, gravity and input rates: the
+    input's power equals the rate of the kinetic energy less the loads' and gravity's power, and
+    the shaking force and moment close the mechanism's momentum balance (to 1e-9 of the terms)."""
+    t = templates.load(name)
+    description = t.mechanism.description
+    angle_input = description["input"].get("kind", "angle") == "angle"
+    angles = np.asarray(t.sweep.angles()[:-1] if angle_input else t.sweep.angles(), dtype=float)
+    moving = sorted({p for j in LINKS[name] for p in j} - set(description["ground"]))
+
+    @settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.too_slow])
+    @given(st.data())
+    def check(data):
+        dyn = _draw_dynamics(data, name, moving)
+        speed, accel = ("omega_in", "alpha_in") if angle_input else ("v_in", "a_in")
+        rates = {speed: data.draw(st.floats(-30.0, 30.0) if angle_input
+                                  else st.floats(-500.0, 500.0)),
+                 accel: data.draw(st.floats(-100.0, 100.0) if angle_input
+                                  else st.floats(-1000.0, 1000.0))}
+        params = {**t.values(), **rates}
+        got = forces(_with(description, **dyn), params, angles, t.length_unit)
+        kin = _Kinematics(solve(description, params, angles), MM)
+        assert np.isfinite(got["shaking_moment"]).all()
+        power_in = got["T12"] * rates[speed] if angle_input else got["F_in"] * rates[speed] * MM
+        for residual, size in _balances(got, dyn, kin, power_in, LINKS[name]):
+            assert np.all(np.abs(residual) <= 1e-9 * size + 1e-12), np.max(np.abs(residual))
+
+    check()
+
+
+# --------------------------------------------------------------------------------------------
+# What it refuses, and the rows it cannot solve
+# --------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name,message", [
+    ("inverted-slider-crank", r"\(slide B\): force analysis of a slide step is not supported yet"),
+    ("pump", r"\(slot P\): force analysis of a slot step is not supported yet"),
+    # the slotted link's pin A slides: the drawing's rigid link C-B0-A locks the crank
+    ("whitworth", r"13 unknowns for 12 equations.*slotted link is not supported yet"),
+    ("quick-return", r"\(point C\): its frame B0→A is no rigid link"),
+])
+def test_what_it_cannot_analyse_is_refused(name, message):
+    t = templates.load(name)
+    with pytest.raises(ValueError, match=message):
+        forces(t.mechanism.description, t.values(), [0.0], t.length_unit)
+
+
+def test_a_body_entry_naming_no_link_is_refused():
+    t = templates.load("fourbar")
+    description = _with(t.mechanism.description, bodies=[{"joints": ["A0", "B"], "mass": 1.0,
+                                                          "centre": {"frame": ["A0", "B"],
+                                                                     "distance": 1.0}}])
+    with pytest.raises(ValueError, match=r"bodies\[0\]"):
+        forces(description, t.values(), [0.0], t.length_unit)
+
+
+def test_rows_that_do_not_close_are_nan():
+    """A four-bar whose crank is too long to turn all round: where the loop cannot close the
+    positions are NaN, and so is every force; elsewhere they are numbers."""
+    t = templates.load("fourbar")
+    params = {**t.values(), "a2": 60.0}
+    angles = np.arange(0.0, 360.0, 10.0)
+    closed = solve(t.mechanism.description, params, angles)["assembled"]
+    assert closed.any() and not closed.all()
+    got = forces(_with(t.mechanism.description, loads=[{"at": "C", "force": [10.0, 0.0]}]),
+                 params, angles, t.length_unit)
+    for key in ("T12", "F23x", "F14", "shaking_moment"):
+        assert np.array_equal(np.isfinite(got[key]), closed), key
