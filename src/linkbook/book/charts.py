@@ -21,7 +21,8 @@ from . import frames
 from ..base.palette import PART_COLOURS, PATH_COLOUR, drawing_colours, link_label
 from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, Model, header, unit_text
 from ..language.templates import Template
-from .workbook import CHARTS, GRID, MECH, MOTION_SHEET, SWEEP, Built
+from ..base.sheets import CHARTS, GRID, MECH, MOTION_SHEET, SWEEP
+from .workbook import Built
 
 LINE_EMU = 22000          # 1.7 pt
 DRAWING_CM = 15.0
