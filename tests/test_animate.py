@@ -20,7 +20,7 @@ from linkbook.book import builder
 from linkbook.apps import cli
 from linkbook.engine import evaluator as engine
 from linkbook.check import verifier
-from linkbook.book import workbook
+from linkbook.base.sheets import read_meta
 from linkbook.apps.animate import AnimationError, frame_at, frames_of, render, write_mp4
 
 BUNDLED = sorted(p.stem for p in Path(__file__).resolve().parents[1].glob("templates/*.toml"))
@@ -71,7 +71,7 @@ def test_vary_refuses_a_formula_input(books):
 
 def _reference_joints(path: Path, angles) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     wb = openpyxl.load_workbook(path)
-    meta = workbook.read_meta(wb)
+    meta = read_meta(wb)
     ref = verifier.Reference(meta).solve(verifier.inputs_of(wb, meta), np.asarray(angles, float))
     return ref["points"], np.asarray(ref["assembled"], dtype=bool)
 
@@ -81,7 +81,7 @@ def test_an_edited_book_animates_as_edited(books, tmp_path):
     joints are the reference's for the edited inputs."""
     edited = tmp_path / "edited.xlsx"
     wb = openpyxl.load_workbook(books["fourbar"])
-    meta = workbook.read_meta(wb)
+    meta = read_meta(wb)
     wb["Mechanism"][meta["inputs"]["a2"]["cell"]] = 25.0
     wb["Mechanism"][meta["inputs"]["b3"]["cell"]] = 90.0
     wb.save(edited)

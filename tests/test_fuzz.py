@@ -31,7 +31,7 @@ from hypothesis import strategies as st
 
 from linkbook.book import builder
 from linkbook.apps import cli
-from linkbook.book import workbook as layout
+from linkbook.base import sheets as layout
 
 ROOT = Path(__file__).resolve().parents[1]
 SECONDS = 20

@@ -37,6 +37,7 @@ from linkbook.book import package
 from linkbook.language import templates
 from linkbook.check import verifier
 from linkbook.book import workbook  # noqa: E402
+from linkbook.base.sheets import MECH, SWEEP  # noqa: E402
 
 REL_TOL = 1e-9          # LibreOffice stores 15 significant digits
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")      # cannot turn fully: #N/A rows
@@ -299,7 +300,7 @@ def test_print_setup_keeps_charts_whole():
     b = workbook.build(t)
     charts.add_charts(b, t, b.model)
     pages.apply_print_setup(b.workbook)
-    mech = b.workbook[workbook.MECH]
+    mech = b.workbook[MECH]
     chart_col = openpyxl.utils.column_index_from_string(
         re.match(r"[A-Z]+", mech._charts[0].anchor).group())
     assert chart_col - 1 in [br.id for br in mech.col_breaks.brk]
@@ -309,7 +310,7 @@ def test_print_setup_keeps_charts_whole():
             assert 75 <= ws.page_setup.scale <= 100
         else:
             assert ws.page_setup.scale is None
-    assert b.workbook[workbook.SWEEP].print_title_rows
+    assert b.workbook[SWEEP].print_title_rows
 
 
 # ---------------------------------------------------------------- with LibreOffice

@@ -17,7 +17,7 @@ from openpyxl.comments import Comment
 from openpyxl.styles import Alignment, Font, PatternFill
 
 from linkbook.book import package
-from linkbook.book import workbook
+from linkbook.book import style, workbook
 
 
 def _parts(path: Path) -> dict[str, bytes]:
@@ -62,9 +62,9 @@ def _every_kind() -> openpyxl.Workbook:
     ws["K2"] = np.bool_(True)
     ws["L2"] = Decimal("0.1000000000000000055511151231257827")
     ws["M2"] = -0.0
-    workbook.set_formula(ws["A3"], '=IF(B3<>"–",A2&"<x>",NA())')
+    style.set_formula(ws["A3"], '=IF(B3<>"–",A2&"<x>",NA())')
     ws["A3"].number_format = "0.000"
-    workbook.set_formula(ws["B3"], "=SUM(A2:C2)")
+    style.set_formula(ws["B3"], "=SUM(A2:C2)")
     ws["B3"].fill = PatternFill("solid", fgColor="FFFF00")
     ws["C4"].alignment = Alignment(wrap_text=True)     # styled, no value
     ws["D4"]                                           # neither: not written
@@ -73,7 +73,7 @@ def _every_kind() -> openpyxl.Workbook:
     ws.merge_cells("A9:C9")
     ws["A9"] = "merged"
     second = wb.create_sheet("Sweep θ")
-    workbook.set_formula(second["B5"], "=Sheet!A2*2")
+    style.set_formula(second["B5"], "=Sheet!A2*2")
     wb.create_sheet("Empty")
     return wb
 
@@ -117,7 +117,7 @@ def test_random_sheets_as_openpyxl_writes_them(tmp_path, cells, heights):
         for (row, col), (value, fmt) in cells.items():
             c = ws.cell(row, col)
             if isinstance(value, package.Formula):
-                workbook.set_formula(c, value)
+                style.set_formula(c, value)
             else:
                 c.value = value
                 if isinstance(value, str):
@@ -133,13 +133,13 @@ def test_random_sheets_as_openpyxl_writes_them(tmp_path, cells, heights):
 
 
 def test_table_cells_are_openpyxl_cells(tmp_path):
-    """workbook.put makes the cell openpyxl's cell() would: same type, value and style."""
+    """style.put makes the cell openpyxl's cell() would: same type, value and style."""
     wb = openpyxl.Workbook()
     ws = wb.active
-    style = workbook.table_style(ws, "0.000")
-    workbook.put(ws, 3, 2, package.Formula("=A1*2"), style)
-    workbook.put(ws, 4, 2, 1.5, style)
-    workbook.put(ws, 5, 2, package.Formula("=A1"))
+    three_decimals = style.table_style(ws, "0.000")
+    style.put(ws, 3, 2, package.Formula("=A1*2"), three_decimals)
+    style.put(ws, 4, 2, 1.5, three_decimals)
+    style.put(ws, 5, 2, package.Formula("=A1"))
     for row, value, fmt in ((3, "=A1*2", "0.000"), (4, 1.5, "0.000"), (5, "=A1", "General")):
         made = ws.cell(row, 2)
         expected = openpyxl.Workbook().active.cell(row, 2, value)
@@ -153,9 +153,9 @@ def test_text_is_never_a_formula(tmp_path):
     wb = openpyxl.Workbook()
     ws = wb.active
     ws["A1"] = '=HYPERLINK("http://example.com","click")'
-    workbook.put(ws, 2, 1, "=1+1")
-    workbook.put(ws, 3, 1, "#N/A")
-    workbook.put(ws, 4, 1, package.Formula("=1+1"))
+    style.put(ws, 2, 1, "=1+1")
+    style.put(ws, 3, 1, "#N/A")
+    style.put(ws, 4, 1, package.Formula("=1+1"))
     assert [ws.cell(r, 1).data_type for r in (2, 3, 4)] == ["s", "s", "f"]
     path = tmp_path / "text.xlsx"
     with package.cells_held_back(wb) as cells:
@@ -207,7 +207,7 @@ def test_characters_no_workbook_can_hold_are_refused(value, code):
     writer must, or the part would not parse."""
     wb = openpyxl.Workbook()
     if value.startswith("="):
-        workbook.put(wb.active, 2, 3, package.Formula(value))
+        style.put(wb.active, 2, 3, package.Formula(value))
     else:                       # text set past openpyxl's own check, as put() sets formulas
         cell = wb.active.cell(2, 3)
         cell._value, cell.data_type = value, "s"

@@ -16,7 +16,7 @@ from linkbook.book import builder
 from linkbook.apps import cli
 from linkbook.engine import evaluator as engine
 from linkbook.language import templates
-from linkbook.book import workbook
+from linkbook.base.sheets import read_meta
 
 BUNDLED = [p.stem for p in templates.bundled()]
 
@@ -51,7 +51,7 @@ def test_a_metre_drawing_names_its_grid_square_in_metres(metre_book):
     for value in re.findall(r'<c:(?:min|max) val="([^"]+)"', text):
         assert "E" not in value.upper() and len(value) <= 8, value
     wb = openpyxl.load_workbook(metre_book)
-    meta = workbook.read_meta(wb)
+    meta = read_meta(wb)
     values = engine.evaluate(wb)
     for frame in meta["frames"]["frames"]:
         label = values[("Drawing data", frame["cells"]["label"])]

@@ -11,7 +11,7 @@ from conftest import template
 
 from linkbook.book import builder
 from linkbook.apps import cli
-from linkbook.book import workbook as layout
+from linkbook.base import sheets as layout
 from linkbook.language.templates import InputError, with_overrides
 
 

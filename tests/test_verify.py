@@ -16,6 +16,7 @@ from linkbook.book import builder
 from linkbook.engine import evaluator as engine
 from linkbook.language import templates
 from linkbook.apps.cli import main
+from linkbook.base.sheets import read_meta
 
 BUNDLED = sorted(p.stem for p in templates.bundled())
 
@@ -217,7 +218,7 @@ def _drawn(path: Path) -> tuple[dict, dict]:
     """{drawn point name: (x, y)} as the book computes it, and the frame's grid square."""
     wb = openpyxl.load_workbook(path)
     values = engine.evaluate(wb)
-    meta = builder.workbook.read_meta(wb)
+    meta = read_meta(wb)
     pos, frame = meta["position"], meta["frames"]["frames"][0]
     points = {name: (values[("Mechanism", f"N{link['rows'][0] + k}")],
                      values[("Mechanism", f"O{link['rows'][0] + k}")])

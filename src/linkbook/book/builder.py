@@ -12,6 +12,8 @@ from ..engine import evaluator as engine
 from . import package
 from . import workbook
 from .controls import Control
+from .stroke import grid_is_fine
+from ..base.sheets import GRID, MECH, STROKE
 from ..base.files import write_atomic
 from ..language.excel import one_group
 from ..language.model import COLUMN
@@ -37,7 +39,7 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
     built.warnings += closure_warnings(built, t, angles)
     workbook.set_radian_windows(built, radian_windows(built, angles))
     values = engine.evaluate(built.workbook) if values_needed else None
-    charts.add_charts(built, t, built.model)
+    charts.add_charts(built, t, built.model, values)
     _print_setup(built.workbook)
     return built, values
 
@@ -46,7 +48,7 @@ def _print_setup(wb) -> None:
     """Page layout for printing and previews; the Mechanism sheet (inputs, current position and
     drawing side by side) prints one page wide, landscape, so no block is cut off."""
     from .pages import apply_print_setup
-    apply_print_setup(wb, fit_to_width=(workbook.MECH,))
+    apply_print_setup(wb, fit_to_width=(MECH,))
 
 
 def _angle_columns(built: workbook.Built):
@@ -195,7 +197,7 @@ def _refuse_beyond_verify(path: Path) -> None:
 # ---------------------------------------------------------------- how big a book will be
 # A book of at most this many sweep rows and grid cells stays inside the budget whatever its
 # mechanism (300 formula cells a row would be 1.5 million cells; a grid cell holds at most about
-# 8 kB, workbook.EXCEL_FORMULA_CHARS), so its size is not estimated: every bundled template.
+# 8 kB, grid.EXCEL_FORMULA_CHARS), so its size is not estimated: every bundled template.
 SMALL_BOOK = 5_000
 SMALL_ROWS = 3            # sweep rows of the small books a size is measured on
 OTHER_PARTS = 2 * 2**20   # charts, drawings, styles, controls: bytes, generously
@@ -208,7 +210,7 @@ def table_cells(t: Template) -> int:
     rows = (t.sweep.stop - t.sweep.start) / t.sweep.step + 2
     if not t.mechanism.grid:
         return int(rows)
-    fine = 0 if workbook.grid_is_fine(t) else 360 / t.stroke_step + 1
+    fine = 0 if grid_is_fine(t) else 360 / t.stroke_step + 1
     return int(rows + (rows + fine) * len(t.grid_values))
 
 
@@ -231,7 +233,7 @@ def book_size(t: Template, with_values: bool = False) -> tuple[int, int]:
     xml = first["rows"][1] + (rows - rows_small) * (per_row[1] + per_row[2] * grow)
     if t.mechanism.grid:
         columns = len(t.grid_values)
-        fine = 0 if workbook.grid_is_fine(t) else int(round(360 / t.stroke_step)) + 1
+        fine = 0 if grid_is_fine(t) else int(round(360 / t.stroke_step)) + 1
         size, refs = first["grid cell"]
         grid_cells = (rows + 1 + fine + 1) * columns
         grow = len(str(max(rows, fine) + 10)) - 1 + len(column_letter(columns + 1)) - 1
@@ -256,7 +258,7 @@ def _layout_size(t: Template) -> dict:
     built = workbook.build(t)
     out = {"rows": [0, 0, 0], "grid cell": [0, 0]}
     for ws in built.workbook.worksheets:
-        grid = ws.title in (workbook.GRID, workbook.STROKE)
+        grid = ws.title in (GRID, STROKE)
         rows = out["rows"]
         for cell in ws._cells.values():
             value = cell._value

@@ -12,12 +12,13 @@ from __future__ import annotations
 from openpyxl.styles import Alignment
 from openpyxl.utils import get_column_letter, quote_sheetname
 
-from ..language.model import LENGTH, Model
+from ..base.sheets import DASH, DRAWING_COLUMNS, MECH, SWEEP
+from ..language.model import LENGTH, Model, unit_text
 from ..language.templates import Template
-from .workbook import (BOLD, DASH, DERIVED_FILL, DRAWING_COLUMNS, LINE_HEIGHT, MECH, NOTE,
-                       SWEEP, TITLE, Formula, _head, _text, _wrap_across, column_range,
-                       label_lines, number_format, numbers_only, put, set_formula, table_style,
-                       text_width, unit_text)
+from .package import Formula
+from .style import (BOLD, DERIVED_FILL, LINE_HEIGHT, NOTE, TITLE, column_range, label_lines,
+                    number_format, numbers_only, put, put_head, put_text, set_formula,
+                    table_style, text_width, wrap_across)
 
 SHEET = "Drawing data"
 HALF = 5                 # the frame: -HALF … HALF grid squares on both axes
@@ -48,11 +49,11 @@ def square_label(text: str, unit: str) -> str:
 def frames_sheet(wb, t: Template, model: Model, meta: dict) -> dict:
     """The sheet of live frames: one block of columns per equal-scale chart (the drawing first)."""
     ws = wb.create_sheet(SHEET)
-    _text(ws, "A1", "Drawing frames", TITLE)
-    _text(ws, "A2", f"Each drawing is a fixed square of {2 * HALF} × {2 * HALF} grid squares. "
-                    "These formulas centre it on the live extents and pick the grid square "
-                    f"(1, 2 or 5 × 10ⁿ {t.length_unit}), so it stays in view and to scale after "
-                    "any edit.", NOTE)
+    put_text(ws, "A1", "Drawing frames", TITLE)
+    put_text(ws, "A2", f"Each drawing is a fixed square of {2 * HALF} × {2 * HALF} grid "
+                       "squares. These formulas centre it on the live extents and pick the grid "
+                       f"square (1, 2 or 5 × 10ⁿ {t.length_unit}), so it stays in view and to "
+                       "scale after any edit.", NOTE)
     pos, sweep = meta["position"], meta["sweep"]
     frames, col = [], 1
     extent = _drawing_extent(model, sweep)
@@ -137,9 +138,9 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
     label, value = get_column_letter(col), get_column_letter(col + 1)
     ws.column_dimensions[label].width = max(text_width(text) for _, text, _ in FRAME_CELLS)
     ws.column_dimensions[value].width = 22     # the scale bar's legend: grid square 0.005 mm
-    _text(ws, f"{label}3", title, BOLD)
-    _head(ws, 4, col, "Frame")
-    _head(ws, 4, col + 1, f"Value [{t.length_unit}]")
+    put_text(ws, f"{label}3", title, BOLD)
+    put_head(ws, 4, col, "Frame")
+    put_head(ws, 4, col + 1, f"Value [{t.length_unit}]")
     cells = {k: f"{value}{FIRST_ROW + i}" for i, (k, _, _) in enumerate(FRAME_CELLS)}
     ref = {k: f"${value}${FIRST_ROW + i}" for i, (k, _, _) in enumerate(FRAME_CELLS)}
     c = col + 2
@@ -149,8 +150,8 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
         for j, axis in enumerate(("x", "y")):
             letter = (x_letter, y_letter)[j]
             ws.column_dimensions[letter].width = MAPPED_WIDTH
-            _head(ws, 4, c + j, f"{s[axis]} [squares]" if s["kind"] == "sweep"
-                  else f"links {axis} [squares]")
+            put_head(ws, 4, c + j, f"{s[axis]} [squares]" if s["kind"] == "sweep"
+                     else f"links {axis} [squares]")
             centre = ref["cx"] if axis == "x" else ref["cy"]
             source = f"{quote_sheetname(sheet)}!{s['source'][j]}"
             style = table_style(ws, MAPPED_FORMAT)
@@ -166,7 +167,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
     c += 1
     note, first_copy = (f"What the frame must hold, as numbers ({DASH} where a coordinate is "
                         "#N/A): the extents' MIN and MAX read these"), c
-    _text(ws, f"{get_column_letter(c)}3", note, NOTE)
+    put_text(ws, f"{get_column_letter(c)}3", note, NOTE)
     ranges = []
     for axis in sources:
         ranges.append([])
@@ -180,7 +181,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
                             "rows": [FIRST_ROW, last], **source["of"]})
             ranges[-1].append(column_range(SHEET, get_column_letter(c), FIRST_ROW, last))
             c += 1
-    _wrap_across(ws, 3, get_column_letter(first_copy), get_column_letter(c - 1), note)
+    wrap_across(ws, 3, get_column_letter(first_copy), get_column_letter(c - 1), note)
     formulas = {
         "xmin": _extreme("MIN", ranges[0]), "xmax": _extreme("MAX", ranges[0]),
         "ymin": _extreme("MIN", ranges[1]), "ymax": _extreme("MAX", ranges[1]),
@@ -194,7 +195,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
     }
     for i, (key, text, is_length) in enumerate(FRAME_CELLS):
         r = FIRST_ROW + i
-        _text(ws, f"{label}{r}", text)
+        put_text(ws, f"{label}{r}", text)
         set_formula(ws[f"{value}{r}"], formulas[key])
         ws[f"{value}{r}"].fill = DERIVED_FILL
         if is_length:
@@ -206,7 +207,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
     lines = 1
     for j, axis in enumerate(("x", "y")):
         head = f"scale bar {axis} [squares]"
-        _head(ws, bar_head, col + j, head)
+        put_head(ws, bar_head, col + j, head)
         width = ws.column_dimensions[get_column_letter(col + j)].width
         lines = max(lines, len(label_lines(head, width / 1.1)))     # bold: a tenth wider
         for k, point in enumerate(BAR, start=1):

@@ -11,8 +11,8 @@ One streaming copy of the zip does all of it:
 - with `values`, every formula cell gets its cached value (cached.py);
 - with `cells` (from `cells_held_back`), every sheet's `<sheetData>` is written here: openpyxl
   saves the book with its worksheets emptied of cells, and this module writes the cells as
-  openpyxl would have, byte for byte but with shared strings, four times as fast (openpyxl's
-  writer took most of a big book's build).
+  openpyxl would have, byte for byte but with shared strings, as text built directly rather
+  than through openpyxl's XML writer (the slow part of saving a big book).
 
 Every other part, and every other byte of the parts it touches, is copied unchanged. Worksheet
 parts are streamed in chunks cut at row ends, so a sheet of 90 MB is never in memory twice (the
@@ -67,8 +67,9 @@ AFTER_CONTROLS = ("legacyDrawingHF", "drawingHF", "picture", "oleObjects", "cont
 
 def add_cached_values(path_in, path_out, values: dict) -> int:
     """Copy path_in to path_out with a cached value in every formula cell found in `values`
-    ((sheet title, 'B7') -> float | str | bool | error). Errors may be office.CellError, the
-    plain code string ('#N/A') or any object whose str() is a known code (formulas' XlError).
+    ((sheet title, 'B7') -> float | str | bool | error). Errors may be xlsx.CellError (a
+    recalculation's), the plain code string ('#N/A') or any object whose str() is a known code
+    (formulas' XlError).
     Returns how many formula cells got a value; formula cells missing from `values` keep what
     they had. path_out may be path_in: the file is replaced only when the copy is complete."""
     return finish(path_in, path_out, values=values, tidy=False)

@@ -98,7 +98,7 @@ def _wrap_title_rows(ws, sheet: "_SheetShape", room_cm: float) -> bool:
     printed page: merged across the page's columns and wrapped there, the row as tall as its
     lines (text that overflows a page edge is cut in print)."""
     from openpyxl.styles import Alignment
-    from .workbook import LINE_HEIGHT, label_lines
+    from .style import LINE_HEIGHT, label_lines
     last, x = 1, 0.0
     for i in sorted(sheet.col_cm):
         if x + sheet.col_cm[i] > room_cm:
