@@ -39,7 +39,7 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
     built.warnings += closure_warnings(built, t, angles)
     workbook.set_radian_windows(built, radian_windows(built, angles))
     values = engine.evaluate(built.workbook) if values_needed else None
-    charts.add_charts(built, t, built.model, values)
+    charts.add_charts(built, t, built.model)
     _print_setup(built.workbook)
     return built, values
 

@@ -19,7 +19,6 @@ from openpyxl.utils import column_index_from_string, get_column_letter, quote_sh
 
 from . import frames
 from ..base.palette import PART_COLOURS, PATH_COLOUR, drawing_colours, link_label
-from ..engine import evaluator as engine
 from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, Model, header, unit_text
 from ..language.templates import Template
 from ..base.sheets import CHARTS, GRID, MECH, MOTION_SHEET, SWEEP
@@ -118,15 +117,12 @@ def _angle_axis(chart: ScatterChart, t: Template) -> None:
     chart.x_axis.majorUnit = 30 if t.sweep.stop - t.sweep.start >= 180 else None
 
 
-def add_charts(built: Built, t: Template, model: Model, values: dict | None = None) -> None:
-    """The drawing on the Mechanism sheet, the Charts sheet's charts and the grid's family of
-    curves. `values`: the engine's value of every cell, if the build has them (else the motion
-    charts evaluate the columns they draw)."""
+def add_charts(built: Built, t: Template, model: Model) -> None:
     wb, meta = built.workbook, built.meta
     _drawing(wb, t, model, meta)
     row = _sweep_charts(wb, t, model, meta)
     if "motion" in meta:
-        _motion_charts(wb, t, model, meta, row, values)
+        _motion_charts(wb, t, model, meta, row)
     if "grid" in meta:
         _family_chart(wb, t, model, meta)
 
@@ -193,8 +189,7 @@ def _framed(wb, chart: ScatterChart, meta: dict, index: int) -> None:
     _frame_axes(chart, SWEEP_CHART_CM / WIDTH_RATIO)   # as wide as the other sweep charts
 
 
-def _motion_charts(wb, t, model: Model, meta: dict, anchor_row: int,
-                   values: dict | None) -> None:
+def _motion_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:
     """From the Motion sheet: the angular velocities, the angular accelerations, and the main
     output's (else the traced point's) velocity and acceleration, against the input."""
     motion = meta["motion"]
@@ -211,14 +206,14 @@ def _motion_charts(wb, t, model: Model, meta: dict, anchor_row: int,
     specs = [("Angular velocities", omegas, ANG_SPEED), ("Angular accelerations", alphas,
                                                            ANG_ACCEL)]
     specs += [(f"{by_key[k].symbol}: {by_key[k].label}", [k], by_key[k].unit) for k in pair]
-    drawn = _motion_values(wb, motion, [k for _, keys, _ in specs for k in keys], values)
+    reference = _reference_sweep(t)
     for title, keys, unit in specs:
         if not keys:
             continue
         y_title = (header(by_key[keys[0]].symbol, unit, t.length_unit) if len(keys) == 1
                    else f"[{unit_text(unit, t.length_unit)}]")
         chart = _chart(title, x_title, y_title)
-        alike = coinciding(keys, drawn)
+        alike = coinciding(keys, reference)
         for k in keys:
             name = by_key[k].symbol
             if alike.get(k):
@@ -236,26 +231,12 @@ def _motion_charts(wb, t, model: Model, meta: dict, anchor_row: int,
 EQUAL_REL = 1e-9      # two series within this share of their peak at every row are one curve
 
 
-def _motion_values(wb, motion: dict, keys: list[str], values: dict | None) -> dict:
-    """{key: its Motion column's values over the sweep (NaN where a cell holds an error)}, as the
-    engine evaluates the formulas the charts draw (`values`, or evaluated here): what is drawn
-    says which curves coincide."""
+def _reference_sweep(t: Template) -> dict:
+    """Every column over the sweep as the independent reference computes it: it, not the
+    formulas being charted, says which curves coincide."""
     import numpy as np
-    if not keys:
-        return {}
-    r0, r1 = motion["rows"]
-    cells = {k: [(MOTION_SHEET, f"{motion['columns'][k]}{r}") for r in range(r0, r1 + 1)]
-             for k in keys}
-    if values is None:
-        values = engine.evaluate(wb, only={cell for column in cells.values() for cell in column})
-    return {k: np.array([_number(values.get(cell)) for cell in column])
-            for k, column in cells.items()}
-
-
-def _number(value) -> float:
-    """A cell's value as a float: NaN for an error (#N/A where the loop cannot close)."""
-    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
-        else float("nan")
+    from ..check import reference as generic
+    return generic.solve(t.mechanism.description, t.values(), np.array(t.sweep.angles()))
 
 
 def same_curve(a, b) -> bool:
@@ -269,11 +250,10 @@ def same_curve(a, b) -> bool:
     return bool(np.abs(a[shown] - b[shown]).max() <= EQUAL_REL * max(peak, 1e-300))
 
 
-def coinciding(keys: list[str], columns: dict) -> dict[str, list[str]]:
-    """{key: the other keys whose series equals its own over the whole sweep}, from the
-    `columns` of values by key."""
-    known = [k for k in keys if k in columns]
-    return {k: [o for o in known if o != k and same_curve(columns[k], columns[o])]
+def coinciding(keys: list[str], reference: dict) -> dict[str, list[str]]:
+    """{key: the other keys whose series equals its own over the whole sweep}."""
+    known = [k for k in keys if k in reference]
+    return {k: [o for o in known if o != k and same_curve(reference[k], reference[o])]
             for k in known}
 
 

@@ -37,7 +37,6 @@ UNIT_DECIMALS = {"mm": 0, "cm": 1, "in": 1, "ft": 2, "m": 3}
 
 
 def number_format(unit: str, length_unit: str = "mm") -> str:
-    """The number format of a quantity in `unit`, in a book whose lengths are in `length_unit`."""
     fmt = FORMATS.get(unit, "0.0000")
     if unit.startswith(LENGTH):
         more = UNIT_DECIMALS.get(length_unit, 0) * (2 if unit == AREA else 1)
@@ -47,7 +46,6 @@ def number_format(unit: str, length_unit: str = "mm") -> str:
 
 # ---------------------------------------------------------------- cells and names
 def define_name(wb: Workbook, name: str, sheet: str, cell: str) -> None:
-    """The book-wide name `name` for the absolute reference to `cell` on `sheet`."""
     col = "".join(ch for ch in cell if ch.isalpha())
     row = "".join(ch for ch in cell if ch.isdigit())
     wb.defined_names[name] = DefinedName(name, attr_text=f"{quote_sheetname(sheet)}!${col}${row}")
@@ -256,6 +254,5 @@ def numbers_only(ws, col: int, head_row: int, sources: list[str | None], head: s
 
 
 def column_range(sheet: str, letter: str, first: int, last: int) -> str:
-    """The absolute reference to rows first..last of column `letter` on `sheet`."""
     return f"{quote_sheetname(sheet)}!${letter}${first}:${letter}${last}"
 
