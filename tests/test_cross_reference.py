@@ -1,4 +1,4 @@
-"""Two independent references must agree: the generic one (src/linkbook/check/reference.py, from the
+"""Two independent references must agree: the generic one (src/linkbook/check/reference/, from the
 bundled templates' descriptions) and the per-mechanism solver it replaced (tests/legacy_reference.py,
 written from docs/mechanisms.md, with its own loop equations in the mechanisms' own unknowns).
 

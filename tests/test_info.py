@@ -1,5 +1,5 @@
 """`linkbook info`: a book's numbers at the terminal, each one equal to the independent
-reference's (generic.py), also after the book is edited; a template summarised in memory."""
+reference's (check/reference/), also after the book is edited; a template summarised in memory."""
 from __future__ import annotations
 
 import json

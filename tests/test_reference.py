@@ -1,4 +1,4 @@
-"""Tests of the generic independent reference solver (src/linkbook/check/reference.py), on the textbook's
+"""Tests of the generic independent reference solver (src/linkbook/check/reference/), on the textbook's
 eight mechanisms as the bundled templates describe them.
 
 The solver is checked against what it must honour, never against numbers it produced itself:
