@@ -254,6 +254,7 @@ def _reads(rect, key) -> bool:
         left <= column_index_from_string(letters) <= right
 
 
+@pytest.mark.slow        # IronCalc on every book
 @pytest.mark.parametrize("name", BUNDLED)
 def test_ironcalc_computes_every_bundled_book_as_linkbook_does(name, tmp_path):
     """A fourth application as a smoke test: no #NAME?, and every chain of cells where

@@ -39,6 +39,7 @@ def _build(tmp_path: Path, name: str, sets=(), values=False) -> tuple[Path, obje
 
 
 # ---------------------------------------------------------------- Open XML validity
+@pytest.mark.slow        # the Open XML validator on every book
 @pytest.mark.parametrize("values", [False, True], ids=["plain", "values"])
 @pytest.mark.parametrize("name", BUNDLED)
 def test_openxml_audit_finds_nothing(tmp_path, name, values):

@@ -21,6 +21,10 @@ from linkbook.language import templates
 from linkbook.language.mechanisms import ANGLE_KIND, BRANCH_KIND
 from test_properties import dimensions
 
+# the two references against each other on random dimensions: the full suite (CI) runs it,
+# the fast tier leaves it out
+pytestmark = pytest.mark.slow
+
 EXAMPLES = int(os.environ.get("LINKBOOK_CROSS_EXAMPLES", "60"))
 ANGLES = np.arange(0.0, 360.0, 7.5)
 

@@ -119,6 +119,7 @@ def test_a_pump_with_excels_most_columns_is_refused_up_front():
 @pytest.mark.parametrize("name,sets,step", [
     ("fourbar", (), 0.5), ("pump", (f"s1={','.join(str(20 + i) for i in range(20))}",), None),
     ("jansen", (), 1.0)])
+@pytest.mark.slow        # three large books built
 def test_the_size_estimate_is_within_a_quarter_of_the_book(tmp_path, name, sets, step):
     """The up-front estimate against the written file's own inflated size (its zip directory)
     and formula cells."""

@@ -135,6 +135,7 @@ def model_values(book_path):
     return engine.evaluate_formulas_model(book_path)
 
 
+@pytest.mark.slow        # formulas' ExcelModel
 def test_every_cell_matches_excel_model(book_path, model_values):
     ours = engine.evaluate_file(book_path)
     compare(ours, model_values)

@@ -33,6 +33,9 @@ from linkbook.book import builder
 from linkbook.apps import cli
 from linkbook.base import sheets as layout
 
+# hundreds of damaged books and templates: the full suite (CI) runs it, the fast tier leaves it out
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 SECONDS = 20
 # Example counts: FUZZ_EDITS=1000 (etc.) in the environment runs more of them locally.

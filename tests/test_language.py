@@ -364,6 +364,7 @@ def test_every_option_of_every_step_type_is_verified():
     assert values[("Mechanism", summary["fb2_coupler"]["cell"])] == pytest.approx(80.0)
 
 
+@pytest.mark.slow        # many random books, each built and verified
 def test_every_option_on_random_dimensions():
     from hypothesis import HealthCheck, given, settings
     from hypothesis import strategies as st

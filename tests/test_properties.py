@@ -104,6 +104,7 @@ def scaled(t: templates.Template, factor: float) -> templates.Template:
                                grid_values=tuple(v * factor for v in t.grid_values))
 
 
+@pytest.mark.slow        # books at 1e-5 to 1e5 of their size
 @settings(max_examples=MAGNITUDE_EXAMPLES, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
 @given(family=st.sampled_from(FAMILIES), power=st.integers(-5, 5), stretch=st.floats(0.5, 2.0))

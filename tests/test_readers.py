@@ -20,6 +20,10 @@ import openpyxl
 import pytest
 from defusedxml import ElementTree
 
+# every bundled book read by three third-party readers, built two ways: the full suite (CI)
+# runs it, the fast tier leaves it out
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 BACKENDS = {"lxml": "True", "openpyxl's own XML writer": "False"}
 # docProps/core.xml holds the time of the build

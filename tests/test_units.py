@@ -87,6 +87,7 @@ def test_a_length_written_as_a_number_cannot_be_converted(tmp_path, capsys):
     assert "mechanism.ground.B0" in capsys.readouterr().err
 
 
+@pytest.mark.slow        # every template in every unit
 @settings(max_examples=20, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
 @given(name=st.sampled_from(BUNDLED), unit=st.sampled_from(list(templates.LENGTH_UNITS)))

@@ -55,6 +55,7 @@ def test_vector_engine_equals_excelmodel_on_every_cell(name, tmp_path):
         assert errors == 0      # Example 2 assembles at every angle
 
 
+@pytest.mark.slow        # the per-cell engine over a whole book
 def test_errors_come_through_cell_by_cell(tmp_path):
     """A non-Grashof four-bar: ExcelModel and the vector engine give #N/A on the same cells."""
     t = template("fourbar", ("a1=100", "a2=60", "a3=50", "a4=40"), 10)
