@@ -20,6 +20,7 @@ from linkbook.book import builder
 from linkbook.apps import cli
 from linkbook.engine import evaluator as engine
 from linkbook.check import verifier
+from linkbook.base.sheets import read_record
 from linkbook.book import workbook
 from linkbook.apps.animate import AnimationError, frame_at, frames_of, render, write_mp4
 
@@ -71,8 +72,9 @@ def test_vary_refuses_a_formula_input(books):
 
 def _reference_joints(path: Path, angles) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     wb = openpyxl.load_workbook(path)
-    meta = workbook.read_meta(wb)
-    ref = verifier.Reference(meta).solve(verifier.inputs_of(wb, meta), np.asarray(angles, float))
+    record = read_record(wb)
+    ref = verifier.Reference(record).solve(verifier.inputs_of(wb, record),
+                                           np.asarray(angles, float))
     return ref["points"], np.asarray(ref["assembled"], dtype=bool)
 
 

@@ -19,6 +19,7 @@ from openpyxl.workbook.defined_name import DefinedName
 from openpyxl.worksheet.datavalidation import DataValidation
 
 from ..base import __version__
+from ..base.record import BuildRecord
 from ..language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS
 from ..language.model import (ACCEL, ANG_ACCEL, ANG_SPEED, AREA, COLUMN, CONSTANT, DEG, LENGTH, MOTION, RAD,
                     SPEED, Model, Resolver, header, parenthesize, render, unit_text)
@@ -61,11 +62,13 @@ def number_format(unit: str, length_unit: str = "mm") -> str:
 
 @dataclass
 class Built:
-    """The workbook and the record of where everything is (stored in the hidden sheet)."""
+    """The workbook and the record of where everything is (stored in the hidden sheet): as
+    the writer assembled it (`meta`) and typed (`record`)."""
     workbook: Workbook
     model: Model
     meta: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)   # for the builder's user, not the book
+    record: BuildRecord | None = None
 
 
 def build(t: Template) -> Built:
@@ -106,8 +109,9 @@ def build(t: Template) -> Built:
         meta["grid"]["stroke_row"] = _stroke_row(wb[GRID], t, meta["grid"], meta["stroke"])
     from .frames import frames_sheet      # it lays its cells out with this module's helpers
     meta["frames"] = frames_sheet(wb, t, model, meta)
-    write_meta(wb.create_sheet(META), meta)
-    return Built(wb, model, meta)
+    record = BuildRecord.from_json(meta)      # a key the record does not know fails here
+    write_meta(wb.create_sheet(META), record)
+    return Built(wb, model, meta, record=record)
 
 
 # ---------------------------------------------------------------- cells and names
