@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from dataclasses import MISSING, dataclass, field, fields, is_dataclass
 
+from .palette import link_label
+
 FORMAT_VERSION = 1
 SWEEP_SHEET = "Sweep"       # the sweep's sheet in books that did not record it (sheets.SWEEP)
 
@@ -198,7 +200,7 @@ class NumbersOnly(Part):
 
 
 @dataclass(frozen=True)
-class Table(Part):
+class GridTable(Part):
     """The Grid sheet (one column per value of the adjustment `param`, the quantity `key` in
     its cells, the stroke in `stroke_row`) or the Stroke sweep (the same columns sampled more
     finely; a grid that samples finely enough is its own stroke sweep and recorded twice)."""
@@ -290,8 +292,8 @@ class BuildRecord(Part):
     controls: dict[str, tuple[ControlSpec, ...]] = _entry(_map(_list(_part(ControlSpec))))
     description: dict | None = _entry(_optional(_object), None)   # the mechanism language's
     motion: Motion | None = _entry(_optional(_part(Motion)), None)
-    grid: Table | None = _entry(_optional(_part(Table)), None)
-    stroke: Table | None = _entry(_optional(_part(Table)), None)
+    grid: GridTable | None = _entry(_optional(_part(GridTable)), None)
+    stroke: GridTable | None = _entry(_optional(_part(GridTable)), None)
     frames: Frames | None = _entry(_optional(_part(Frames)), None)
 
     @classmethod
@@ -340,9 +342,8 @@ def upgrade(data: dict) -> dict:
 
 
 def _labelled(link, i: int):
-    """A drawn link with its legend's name (books built before labels: numbered from 1)."""
+    """A drawn link with its legend's name (palette.link_label: books built before labels
+    number their links from 1)."""
     if not isinstance(link, dict) or "label" in link or not isinstance(link.get("joints"), list):
         return link
-    joints = link["joints"]
-    body = joints[:-1] if len(joints) > 2 and joints[0] == joints[-1] else joints
-    return {**link, "label": f"link {i}: {''.join(map(str, body))}"}
+    return {**link, "label": link_label(link, i)}

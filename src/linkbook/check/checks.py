@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -99,9 +100,19 @@ ROUNDING = 1e-12             # rad: what rounding can do to an input angle's eff
 EDGE_SLOPE = 1e6             # at an isolated limit position: ROUNDING·EDGE_SLOPE = 1e-6
 
 
+@dataclass(frozen=True)
+class Rules:
+    """How the values were computed and how they are judged: how the engine shows an error
+    (`is_error`; `error_code` gives its code, or None), and the bound: `tol` per PER units of a
+    quantity's magnitude, `relative` for an application that keeps 15 digits."""
+    is_error: Callable
+    error_code: Callable
+    tol: float = ABS_TOL
+    relative: bool = False
+
+
 def compare(check: Check, sheet: str, cells: list[str], got: list, expected, unit: str,
-            is_error, error_code, tol: float = ABS_TOL, relative: bool = False,
-            slope=None, dead=None, sine=None) -> None:
+            rules: Rules, slope=None, dead=None, sine=None) -> None:
     """`slope(i)`: |∂x/∂θ| of cell i from the reference, asked only for a cell that misses the
     strict bound. Near a limit position (an ACOS argument close to ±1, the pump's cos θ14 close
     to 0) every evaluation loses digits in proportion to it, so such a cell may differ by
@@ -109,6 +120,8 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
     `sine` (rates): per row, the reference's smallest sine between a loop's two constraint
     gradients; near a dead centre the rounding of any evaluation of a rate grows like 1/sine²,
     and so may a cell that misses the strict bound: base bound / sine²."""
+    is_error, error_code, tol, relative = rules.is_error, rules.error_code, rules.tol, \
+        rules.relative
     period = ANGLE_UNITS.get(unit)
     for i, (cell, value, exp) in enumerate(zip(cells, got,
                                                np.broadcast_to(expected, (len(cells),)))):

@@ -6,13 +6,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable
-
 import numpy as np
 
 from . import reference as generic
 from ..base.record import BuildRecord
-from .checks import (ANGLE_UNITS, EDGE_SLOPE, SENSITIVITY_STEP, Check, compare,
+from .checks import (ANGLE_UNITS, EDGE_SLOPE, SENSITIVITY_STEP, Check, Rules, compare,
                      expected_of, unit_scale)
 from .reading import UnusableFile
 
@@ -42,8 +40,8 @@ class Reference:
 
 
 def slope_of(solver: Reference, params: dict, angles: np.ndarray, key: str, unit: str,
-             param: str | None = None, column_values=(), scale: float = math.degrees(1.0),
-             motion: bool = False):
+             param: str | None = None, column_values=(),
+             scale: float = math.degrees(1.0), motion: bool = False):
     """|∂x/∂θ| per row (per column value, for a grid) by a central difference of the reference,
     computed for one row when asked. `scale`: input units per unit of θ (degrees per radian of a
     crank; the mechanism's size for an actuator's length). `motion`: x is a velocity or an
@@ -75,18 +73,14 @@ def slope_of(solver: Reference, params: dict, angles: np.ndarray, key: str, unit
 
 @dataclass
 class Judging:
-    """One book being judged: its record and cell values, how the engine shows an error, the
-    bound (`tol`, `relative` for an application that keeps 15 digits), the reference and the
-    book's inputs and size. The sweep's check sets the reference's results the later checks
+    """One book being judged: its record and cell values, the rules they are judged by (how
+    the engine shows an error, the bound), the reference and the book's inputs and size. The sweep's check sets the reference's results the later checks
     compare with (`angles`, `ref`; the current position's `angle` and `one`). `checks` holds
     the checks made so far, in the report's order."""
     wb: object
     record: BuildRecord
     values: dict
-    is_error: Callable
-    error_code: Callable
-    tol: float
-    relative: bool
+    rules: Rules
     solver: Reference
     model: object
     params: dict
@@ -107,13 +101,11 @@ class Judging:
         return [self.values.get((sheet, x)) for x in cells]
 
     def compare(self, check: Check, sheet: str, cells: list[str], expected, unit: str,
-                slope=None, dead=None, sine=None, tol: float | None = None,
-                relative: bool | None = None) -> None:
-        """checks.compare of `cells` (their values in the book) with `expected`, with this
-        book's bound unless `tol` and `relative` say otherwise."""
-        compare(check, sheet, cells, self.got(sheet, cells), expected, unit, self.is_error,
-                self.error_code, self.tol if tol is None else tol,
-                self.relative if relative is None else relative, slope, dead, sine)
+                slope=None, dead=None, sine=None, rules: Rules | None = None) -> None:
+        """checks.compare of `cells` (their values in the book) with `expected`, by this
+        book's rules unless `rules` says otherwise."""
+        compare(check, sheet, cells, self.got(sheet, cells), expected, unit,
+                rules or self.rules, slope, dead, sine)
 
     def run(self, block: str, name: str, sheet: str, cells: list[str], expected, unit: str,
             slope=None, rate: float = 1.0, dead=None, sine=None) -> None:

@@ -8,13 +8,14 @@ the Motion sheet, the assembly and summary (summary.py) and the grid (grid.py)."
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from . import reference as generic
 from ..base import sheets as layout
 from ..base.record import BuildRecord
-from .checks import ABS_TOL, Check, Mismatch, column_unit, expected_of
+from .checks import ABS_TOL, Check, Mismatch, Rules, column_unit, expected_of
 from .context import Judging, Reference
 from .reading import input_at, input_column, inputs_of, mechanism_size
 
@@ -27,12 +28,18 @@ MIN_RATE = 1e-9
 
 def check_book(wb, record: BuildRecord, values: dict, is_error, error_code, *,
                tol: float = ABS_TOL, relative: bool = False) -> list[Check]:
-    """Every check of the book's formula cells against the reference, in the report's order."""
+    """Every check of the book's formula cells against the reference, in the report's order
+    (`values` computed by an engine that shows an error as `is_error` and `error_code` say)."""
+    return judge_book(wb, record, values, Rules(is_error, error_code, tol, relative))
+
+
+def judge_book(wb, record: BuildRecord, values: dict, rules: Rules) -> list[Check]:
+    """check_book, with the rules given whole."""
     from . import drawing, grid, summary
     solver = Reference(record)
     params = inputs_of(wb, record)
-    j = Judging(wb, record, values, is_error, error_code, tol, relative, solver,
-                solver.mechanism.build(), params, mechanism_size(record, params))
+    j = Judging(wb, record, values, rules, solver, solver.mechanism.build(), params,
+                mechanism_size(record, params))
     _check_sweep(j)
     _check_position(j)
     drawing.check_drawing(j)
@@ -84,8 +91,8 @@ def _check_constants(j: Judging) -> None:
         if key in ratios:
             c = Check(f"reversals of {ratios[key]}", key, j.size)
             j.compare(c, layout.MECH, [info.cell], np.array([generic.time_ratio(
-                j.solver.description, j.params, ratios[key])]), info.unit, tol=RATIO_TOL,
-                relative=True)
+                j.solver.description, j.params, ratios[key])]), info.unit,
+                rules=replace(j.rules, tol=RATIO_TOL, relative=True))
             j.checks.append(c)
             continue
         j.run("constants", key, layout.MECH, [info.cell], np.array([float(j.ref[key])]),

@@ -4,8 +4,10 @@ not calculate shows) is judged as its formula's value is, with the same bounds."
 from __future__ import annotations
 
 from ..base.record import BuildRecord
-from .checks import STORED, Check, Mismatch, show
-from .judge import check_book
+from dataclasses import replace
+
+from .checks import STORED, Check, Mismatch, Rules, show
+from .judge import judge_book
 from .reading import cell_order
 
 
@@ -59,13 +61,13 @@ def _same(a, b, error_code) -> bool:
     return a == b
 
 
-def check_stored(wb, record: BuildRecord, values, stored, is_error, error_code,
-                 relative) -> Check:
+def check_stored(wb, record: BuildRecord, values: dict, stored: dict, rules: Rules) -> Check:
     """Each stored value judged as its formula's value is, with the same bounds: a value stored
     that its formula does not give (an edit of the file, a stale save) differs, named with what
     the formula gives and what is stored. Only the stored values that differ from the formula's
     own are judged again."""
     from ..base.xlsx import CellError
+    is_error, error_code = rules.is_error, rules.error_code
     c = Check(STORED, "value ≠ the formula's", cells=len(stored))
     differ = {k: v for k, v in stored.items() if not _same(v, values.get(k), error_code)}
     # a value of another kind (TRUE for 1, the text "1.5" for 1.5) differs outright: a reader
@@ -83,7 +85,8 @@ def check_stored(wb, record: BuildRecord, values, stored, is_error, error_code,
     def any_code(v) -> str | None:
         return str(v) if isinstance(v, CellError) else error_code(v)
 
-    again = check_book(wb, record, {**values, **differ}, any_error, any_code, relative=relative)
+    again = judge_book(wb, record, {**values, **differ},
+                       replace(rules, is_error=any_error, error_code=any_code))
     named = set()
     for check in again:
         for m in check.mismatches:

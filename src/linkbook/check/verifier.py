@@ -9,12 +9,13 @@ summary.py and grid.py (the blocks), report.py (the verdict).
 """
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 from ..base.pause import gc_paused
-from .checks import ABS_TOL, PER, TOLERANCE_RULE, Check, Mismatch
+from .checks import ABS_TOL, PER, TOLERANCE_RULE, Check, Mismatch, Rules
 from .context import Reference
-from .judge import check_book
+from .judge import check_book, judge_book
 from .reading import (RECORD_ERRORS, UnusableFile, cell_order, formula_cells, inputs_of,
                       mechanism_size, read_book, record_mismatch, stored_values)
 from .report import Report, cell_ranges, cell_runs, likely_causes
@@ -36,7 +37,7 @@ def verify(path: Path, engine: str = "vector") -> Report:
     except RECORD_ERRORS as exc:
         raise UnusableFile(record_mismatch(path, exc)) from None
     from ..engine import evaluator as engines
-    is_error, error_code, relative = engines.is_error, engines.error_code, False
+    rules = Rules(engines.is_error, engines.error_code)
     try:
         if engine == "vector":
             values = engines.evaluate(wb)
@@ -44,27 +45,26 @@ def verify(path: Path, engine: str = "vector") -> Report:
             # ExcelModel rounds number constants to 15 decimals (engine.evaluate's
             # excel_model_constants): judged with the relative bound, as LibreOffice is
             values = engines.evaluate_formulas_model(path)
-            relative = True
+            rules = replace(rules, relative=True)
         else:
             # a real application (LibreOffice, Gnumeric) recalculates a copy: judged alike
             from ..engine import office
             if engine not in office.APPLICATIONS:
                 raise UnusableFile(f"unknown engine {engine!r}")
             values = office.recalculated_values(path, engine)
-            is_error, error_code, relative = office.is_error, office.error_code, True
+            rules = Rules(office.is_error, office.error_code, relative=True)
     except engines.EngineError as exc:
         raise UnusableFile(f"{path}: {exc}") from None
     formulas = formula_cells(wb)
     try:
-        checks = check_book(wb, record, values, is_error, error_code, relative=relative)
+        checks = judge_book(wb, record, values, rules)
         judged = set().union(*(c.judged for c in checks))
         replaced, absent = not_formulas(wb, judged - formulas)
         if replaced:
             checks.append(check_replaced(wb, replaced))
         stored = stored_values(wb, path, formulas & judged)
         if stored:
-            checks.append(check_stored(wb, record, values, stored, is_error, error_code,
-                                       relative))
+            checks.append(check_stored(wb, record, values, stored, rules))
         return Report(str(path), record.mechanism, engine, checks, len(formulas),
                       sorted(formulas - judged, key=cell_order), params,
                       mechanism_size(record, params), likely_causes(wb, checks),
