@@ -42,7 +42,7 @@ def formula_cells(wb) -> set[tuple[str, str]]:
 
 
 def checks_of(b, values):
-    return check_book(b.workbook, b.meta, values, engine.is_error, engine.error_code)
+    return check_book(b.workbook, b.record, values, engine.is_error, engine.error_code)
 
 
 def value_at(b, values, key: str, angle: float, sheet: str = "Sweep"):

@@ -20,7 +20,7 @@ from linkbook.book import builder
 from linkbook.apps import cli
 from linkbook.engine import evaluator as engine
 from linkbook.check import verifier
-from linkbook.base.sheets import read_meta
+from linkbook.base.sheets import read_meta, read_record
 from linkbook.apps.animate import AnimationError, frame_at, frames_of, render, write_mp4
 
 BUNDLED = sorted(p.stem for p in Path(__file__).resolve().parents[1].glob("templates/*.toml"))
@@ -71,8 +71,9 @@ def test_vary_refuses_a_formula_input(books):
 
 def _reference_joints(path: Path, angles) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     wb = openpyxl.load_workbook(path)
-    meta = read_meta(wb)
-    ref = verifier.Reference(meta).solve(verifier.inputs_of(wb, meta), np.asarray(angles, float))
+    record = read_record(wb)
+    ref = verifier.Reference(record).solve(verifier.inputs_of(wb, record),
+                                           np.asarray(angles, float))
     return ref["points"], np.asarray(ref["assembled"], dtype=bool)
 
 

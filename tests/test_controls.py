@@ -159,7 +159,7 @@ def _cell_index(cell: str) -> list[int]:
 
 
 def _expected_joints(built, inputs: dict, angle: float) -> dict[str, tuple[float, float]]:
-    ref = verifier.Reference(built.meta).solve(inputs, np.array([angle]))
+    ref = verifier.Reference(built.record).solve(inputs, np.array([angle]))
     return {name: (float(x[0]), float(y[0])) for name, (x, y) in ref["points"].items()}
 
 
@@ -187,7 +187,7 @@ def test_libreoffice_moves_the_drawing_with_the_controls(tmp_path, name, values)
         if got["kind"] == "Scroll":
             assert got["page"] == want["page"] and got["horizontal"]
 
-    inputs = verifier.inputs_of(built.workbook, built.meta)
+    inputs = verifier.inputs_of(built.workbook, built.record)
     for move, after in zip(moves, report["after"]):
         angle = move[1] if move[0] < 2 else 95
         if move[0] == 2:

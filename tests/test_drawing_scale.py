@@ -21,6 +21,7 @@ from linkbook.engine import evaluator as engine
 from linkbook.book import frames
 from linkbook.engine import office
 from linkbook.language.mechanisms import LENGTH_KIND
+from linkbook.base.record import BuildRecord
 from linkbook.check.verifier import inputs_of
 
 pytestmark = pytest.mark.libreoffice
@@ -130,4 +131,4 @@ def test_the_mapped_drawing_stays_inside_its_frame(rendered, name, edit):
     assert drawn > 0
     if edit:
         t = template(name)
-        assert inputs_of(wb, meta)[_first_length(t)] == 2 * t.values()[_first_length(t)]
+        assert inputs_of(wb, BuildRecord.from_json(meta))[_first_length(t)] == 2 * t.values()[_first_length(t)]

@@ -13,7 +13,7 @@ from test_cli import run
 from linkbook.engine import evaluator as engine
 from linkbook.apps.export import tables, table_text
 from linkbook.apps.info import Book
-from linkbook.base.sheets import read_meta, write_meta
+from linkbook.base.sheets import read_meta, write_meta_json
 from linkbook.base.xlsx import column_letter
 
 
@@ -110,7 +110,7 @@ def test_text_read_as_a_formula_is_prefixed(tmp_path, text):
 def test_every_table_sheet_of_the_pump(tmp_path):
     """The grid's two header rows and its stroke row; the stroke sweep's header of s1 values."""
     b, values = built("pump")
-    book = Book("pump.xlsx", b.workbook, b.meta, values)
+    book = Book("pump.xlsx", b.workbook, b.record, values)
     found = tables(book)
     assert [t.sheet for t in found] == ["Sweep", "Motion", "Grid", "Stroke sweep"]
     grid = next(t for t in found if t.sheet == "Grid")
@@ -140,7 +140,7 @@ def test_a_record_that_does_not_match_the_book_is_one_line(tmp_path):
     wb = openpyxl.load_workbook(book)
     meta = read_meta(wb)
     del meta["sweep"]
-    write_meta(wb["linkbook"], meta)
+    write_meta_json(wb["linkbook"], meta)
     wb.save(book)
     for command in (("export", str(book), "-o", str(tmp_path / "csv")), ("info", str(book))):
         done = run(*command)

@@ -32,6 +32,7 @@ from hypothesis import strategies as st
 from linkbook.book import builder
 from linkbook.apps import cli
 from linkbook.base import sheets as layout
+from linkbook.base.sheets import write_meta_json
 
 # hundreds of damaged books and templates: the full suite (CI) runs it, the fast tier leaves it out
 pytestmark = pytest.mark.slow
@@ -139,7 +140,7 @@ def _edit_book(wb, data) -> str:
                                           "mechanism", "controls", "constants"]))
         meta[path] = data.draw(st.sampled_from([None, {}, [], 7, "x", {"rows": [5, 10 ** 9]}]))
         del wb[layout.META]
-        layout.write_meta(wb.create_sheet(layout.META), meta)
+        write_meta_json(wb.create_sheet(layout.META), meta)
     elif kind == "record json" and layout.META in wb.sheetnames:
         ws = wb[layout.META]
         ws["A2"] = str(ws["A2"].value)[:data.draw(st.integers(0, 200))]

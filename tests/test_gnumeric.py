@@ -147,7 +147,7 @@ def test_gnumeric_computes_the_sweep_and_motion_as_the_reference(case, tmp_path)
     worst, na_rows = _sweep_against_reference(b, values)
     assert worst <= 1e-9
     assert (na_rows > 0) == (case == "non-grashof")
-    checks = verifier.check_book(b.workbook, b.meta, values, office.is_error, office.error_code,
+    checks = verifier.check_book(b.workbook, b.record, values, office.is_error, office.error_code,
                                  relative=True)
     tables = {b.meta["sweep"]["sheet"], "Motion"}
     judged = [k for c in checks for k in c.judged if k[0] in tables]

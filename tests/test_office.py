@@ -385,7 +385,7 @@ def test_libreoffice_matches_reference(lo_books, case):
     assert worst <= REL_TOL
     assert (na_rows > 0) == (case == "non-grashof")
 
-    checks = verifier.check_book(b.workbook, b.meta, values, office.is_error, office.error_code,
+    checks = verifier.check_book(b.workbook, b.record, values, office.is_error, office.error_code,
                                tol=REL_TOL, relative=True)
     bad = [f"{c.block}/{c.name}: {m.sheet}!{m.cell} expected {m.expected!r}, LibreOffice "
            f"{m.got!r}" for c in checks for m in c.mismatches]
@@ -401,7 +401,7 @@ def _sweep_against_reference(b, values) -> tuple[float, int]:
     first, last = sweep["rows"]
     ws = b.workbook[sweep["sheet"]]
     angles = np.array([ws[f"A{r}"].value for r in range(first, last + 1)], dtype=float)
-    ref = verifier.Reference(b.meta).solve(verifier.inputs_of(b.workbook, b.meta), angles)
+    ref = verifier.Reference(b.record).solve(verifier.inputs_of(b.workbook, b.record), angles)
     worst, compared = 0.0, 0
     for key, letter in sweep["columns"].items():
         degrees = key.endswith("_deg")

@@ -209,7 +209,7 @@ def test_the_quick_return_ratio_follows_the_ram(sets):
     from linkbook.check import reference as generic
     from linkbook.check import verifier
     b, values = built("quick-return", sets)
-    inputs = verifier.inputs_of(b.workbook, b.meta)
+    inputs = verifier.inputs_of(b.workbook, b.record)
     expected = generic.time_ratio(b.meta["description"], inputs, "s16")
     got = values[("Mechanism", b.meta["constants"]["time_ratio"]["cell"])]
     if math.isnan(expected):

@@ -18,7 +18,8 @@ from pathlib import Path
 
 from ..engine import evaluator as engine
 from ..base import sheets as layout
-from ..base.palette import PATH_COLOUR, drawing_colours, link_label, nice_step
+from ..base.palette import PATH_COLOUR, drawing_colours, nice_step
+from ..base.record import BuildRecord, DamagedRecord, Position, Sweep
 
 DEFAULT_FPS = 20
 DEFAULT_SIZE = 600
@@ -63,11 +64,14 @@ def frames_of(path: Path, step: float | None = None, at: float | None = None) ->
     by `step`, or at the one value `at`) and read the drawing data of each."""
     from ..base.safety import load_workbook_safely
     wb = load_workbook_safely(path)
-    meta = layout.read_meta(wb)
-    if meta is None or "position" not in meta or "sweep" not in meta:
-        raise AnimationError(f"{path}: not a linkbook workbook (no build record sheet)")
     try:
-        return _frames(path, wb, meta, step, at)
+        record = layout.read_record(wb)
+        if record is None:
+            raise AnimationError(f"{path}: not a linkbook workbook (no build record sheet)")
+        return _frames(path, wb, record, step, at)
+    except DamagedRecord as exc:
+        raise AnimationError(f"{path}: the build record (sheet {layout.META}) is damaged: it "
+                             f"is {exc}") from None
     except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
         raise AnimationError(f"{path}: the build record (sheet {layout.META}) does not match "
                              f"the workbook ({type(exc).__name__}: {exc})") from None
@@ -78,45 +82,45 @@ def frame_at(path: Path, value: float) -> Animation:
     return frames_of(path, at=value)
 
 
-def _frames(path: Path, wb, meta: dict, step: float | None, at: float | None = None
+def _frames(path: Path, wb, record: BuildRecord, step: float | None, at: float | None = None
             ) -> Animation:
-    pos, sweep = meta["position"], meta["sweep"]
-    sheet, cell = pos["sheet"], pos["input_cell"]
+    pos, sweep = record.position, record.sweep
+    sheet, cell = pos.sheet, pos.input_cell
     if sheet not in wb.sheetnames:
         raise AnimationError(f"{path}: the sheet {sheet!r} is missing")
     column = _sweep_column(wb, sweep)
-    inputs = _input_values(column, step, _input_label(wb, sheet, cell, meta)[1] == "deg")
+    inputs = _input_values(column, step, _input_label(wb, sheet, cell, record)[1] == "deg")
     if at is not None:      # the sweep too: which joints never move (the pivots to mark)
         inputs = [at, *inputs]
     x_col, y_col = layout.DRAWING_COLUMNS
-    read = [(sheet, f"{col}{r}") for link in pos["drawing"] for r in range(link["rows"][0],
-                                                                        link["rows"][1] + 1)
-            for col in (x_col, y_col)] + [(sheet, c) for xy in pos["joints"].values() for c in xy]
+    read = [(sheet, f"{col}{r}") for link in pos.drawing for r in range(link.rows[0],
+                                                                      link.rows[1] + 1)
+            for col in (x_col, y_col)] + [(sheet, c) for xy in pos.joints.values() for c in xy]
     try:
         frames = [_frame(now, sheet, pos, value)
                   for value, now in zip(inputs, engine.vary(wb, (sheet, cell), inputs, read))]
     except engine.EngineError as exc:
         raise AnimationError(f"{path}: {exc}") from None
-    symbol, unit = _input_label(wb, sheet, cell, meta)
+    symbol, unit = _input_label(wb, sheet, cell, record)
     # a whole turn loops: by --step, or the sweep's own rows over 360° (its last step may be
     # shorter, when the step does not divide the turn)
     whole_turn = at is None and unit == "deg" and (
         abs(inputs[-1] + (inputs[1] - inputs[0]) - inputs[0] - 360.0) < 1e-9
         or (step is None and len(inputs) > 1 and abs(column[-1] - column[0] - 360.0) < 1e-9))
     fixed = _fixed_points([f for f in frames if f.links is not None] or frames)
-    return Animation(meta.get("title", path.stem), symbol, unit, meta.get("length_unit", ""),
-                     _link_names(pos), pos.get("traced"), frames[:1] if at is not None else frames,
-                     whole_turn=whole_turn, link_colours=drawing_colours(pos["drawing"]),
-                     link_kinds=[link.get("kind", "link") for link in pos["drawing"]],
-                     fixed=fixed)
+    return Animation(record.title, symbol, unit, record.length_unit,
+                     [link.label for link in pos.drawing], pos.traced,
+                     frames[:1] if at is not None else frames, whole_turn=whole_turn,
+                     link_colours=drawing_colours([link.to_json() for link in pos.drawing]),
+                     link_kinds=[link.kind or "link" for link in pos.drawing], fixed=fixed)
 
 
-def _sweep_column(wb, sweep: dict) -> list[float]:
+def _sweep_column(wb, sweep: Sweep) -> list[float]:
     """The Sweep sheet's input column as the book holds it now (numbers only)."""
-    if sweep.get("sheet") not in wb.sheetnames:
-        raise AnimationError(f"the sheet {sweep.get('sheet')!r} is missing")
-    ws = wb[sweep["sheet"]]
-    first, last = sweep["rows"]
+    if sweep.sheet not in wb.sheetnames:
+        raise AnimationError(f"the sheet {sweep.sheet!r} is missing")
+    ws = wb[sweep.sheet]
+    first, last = sweep.rows
     column = [ws[f"A{r}"].value for r in range(first, last + 1)]
     return [float(v) for v in column if _number(v)]
 
@@ -141,18 +145,18 @@ def _input_values(column: list[float], step: float | None, is_angle: bool = True
     return column
 
 
-def _frame(values: dict, sheet: str, pos: dict, value: float) -> Frame:
+def _frame(values: dict, sheet: str, pos: Position, value: float) -> Frame:
     x_col, y_col = layout.DRAWING_COLUMNS
     links = []
-    for link in pos["drawing"]:
-        r0, r1 = link["rows"]
+    for link in pos.drawing:
+        r0, r1 = link.rows
         xy = [(values.get((sheet, f"{x_col}{r}")), values.get((sheet, f"{y_col}{r}")))
               for r in range(r0, r1 + 1)]
         if not all(_number(x) and _number(y) for x, y in xy):
             return Frame(value, None)
         links.append([(float(x), float(y)) for x, y in xy])
     points = {}
-    for name, (cx, cy) in pos["joints"].items():
+    for name, (cx, cy) in pos.joints.items():
         x, y = values.get((sheet, cx)), values.get((sheet, cy))
         if _number(x) and _number(y):
             points[name] = (float(x), float(y))
@@ -163,17 +167,13 @@ def _number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def _link_names(pos: dict) -> list[str]:
-    return [link_label(link, i) for i, link in enumerate(pos["drawing"], start=1)]
-
-
-def _input_label(wb, sheet: str, cell: str, meta: dict) -> tuple[str, str]:
+def _input_label(wb, sheet: str, cell: str, record: BuildRecord) -> tuple[str, str]:
     """The input's symbol and unit as the book labels them (the cells beside the input)."""
     ws = wb[sheet]
     row = int("".join(ch for ch in cell if ch.isdigit()))
     symbol = ws[f"H{row}"].value
     unit = ws[f"J{row}"].value
-    return (symbol if isinstance(symbol, str) else meta.get("input", "input"),
+    return (symbol if isinstance(symbol, str) else record.input,
             unit if isinstance(unit, str) else "")
 
 

@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..base import sheets as layout
 from .info import Book
 
 # A text field starting with one of these is read as a formula by spreadsheets that open the
@@ -28,21 +27,20 @@ class Table:
 def tables(book: Book) -> list[Table]:
     """The book's table sheets in its tab order: Sweep, Motion, Grid, Stroke sweep (those it
     has)."""
-    meta, found = book.meta, {}
-    r0, r1 = meta["sweep"]["rows"]
-    found[meta["sweep"].get("sheet", layout.SWEEP)] = [r0 - 1, *range(r0, r1 + 1)]
-    if meta.get("motion"):
-        m = meta["motion"]
+    record, found = book.record, {}
+    r0, r1 = record.sweep.rows
+    found[record.sweep.sheet] = [r0 - 1, *range(r0, r1 + 1)]
+    if record.motion:
+        m = record.motion
         # the header above the current position's row; the table from the sweep's first row
-        found[m["sheet"]] = [m["current_row"] - 1, *range(m["rows"][0], m["rows"][1] + 1)]
-    if meta.get("grid"):
-        g = meta["grid"]
-        stroke = [g["stroke_row"]] if "stroke_row" in g else []
-        found[g["sheet"]] = [g["param_row"] - 1, g["param_row"],
-                             *range(g["rows"][0], g["rows"][1] + 1), *stroke]
-    if meta.get("stroke"):
-        s = meta["stroke"]
-        found[s["sheet"]] = [s["param_row"], *range(s["rows"][0], s["rows"][1] + 1)]
+        found[m.sheet] = [m.current_row - 1, *range(m.rows[0], m.rows[1] + 1)]
+    if record.grid:
+        g = record.grid
+        stroke = [g.stroke_row] if g.stroke_row is not None else []
+        found[g.sheet] = [g.param_row - 1, g.param_row, *range(g.rows[0], g.rows[1] + 1), *stroke]
+    if record.stroke:
+        s = record.stroke
+        found[s.sheet] = [s.param_row, *range(s.rows[0], s.rows[1] + 1)]
     return [Table(name, found[name]) for name in book.wb.sheetnames if name in found]
 
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..base import sheets as layout
+from ..base.record import BuildRecord
 from ..base.xlsx import coordinate_to_tuple
 
 # Motion columns whose largest magnitude the summary reports: angular velocities and
@@ -23,7 +24,7 @@ class Book:
     """A book ready to be read: its cells, its build record and every cell's value."""
     name: str
     wb: object
-    meta: dict
+    record: BuildRecord
     values: dict
 
 
@@ -34,12 +35,12 @@ def open_book(path: Path) -> Book:
     path = Path(path)
     if not path.is_file():
         raise UnusableFile(f"{path}: no such file")
-    wb, meta = read_book(path)
+    wb, record = read_book(path)
     try:
         values = engine.evaluate(wb)
     except engine.EngineError as exc:
         raise UnusableFile(f"{path}: {exc}") from None
-    return Book(str(path), wb, meta, values)
+    return Book(str(path), wb, record, values)
 
 
 def built_book(name_or_toml: str) -> Book:
@@ -47,17 +48,17 @@ def built_book(name_or_toml: str) -> Book:
     from ..language import templates
     from ..book.builder import make
     built, values = make(templates.load(name_or_toml))
-    return Book(name_or_toml, built.workbook, built.meta, values)
+    return Book(name_or_toml, built.workbook, built.record, values)
 
 
 def read_record(book: Book, read):
     """read(book), with a build record that does not match the book (a key missing, a cell
     moved) turned into the one line verify gives for it."""
-    from ..check.verifier import UnusableFile, _record_mismatch
+    from ..check.verifier import UnusableFile, record_mismatch
     try:
         return read(book)
     except (KeyError, IndexError, TypeError, ValueError, AttributeError) as exc:
-        raise UnusableFile(_record_mismatch(Path(book.name), exc)) from None
+        raise UnusableFile(record_mismatch(Path(book.name), exc)) from None
 
 
 def number(value) -> float | None:
@@ -88,17 +89,17 @@ def _row_of(cell: str) -> int:
 def _summary_row(book: Book, key: str) -> tuple[str, object, str] | None:
     """(label, value, unit) of summary cell `key` on the Mechanism sheet: the label and unit
     are the texts beside it in the book."""
-    info = book.meta.get("summary", {}).get(key)
+    info = book.record.summary.get(key)
     if info is None:
         return None
-    row = _row_of(info["cell"])
-    value = book.values.get((layout.MECH, info["cell"]))
+    row = _row_of(info.cell)
+    value = book.values.get((layout.MECH, info.cell))
     return _text(book, layout.MECH, f"A{row}"), value, _text(book, layout.MECH, f"D{row}")
 
 
 def _inputs(book: Book) -> list[dict]:
     """Each input as its row on the Mechanism sheet shows it: quantity, symbol, value, unit."""
-    rows = sorted(_row_of(info["cell"]) for info in book.meta["inputs"].values())
+    rows = sorted(_row_of(info.cell) for info in book.record.inputs.values())
     return [{"quantity": _text(book, layout.MECH, f"A{row}"),
              "symbol": _text(book, layout.MECH, f"B{row}"),
              "value": _plain(book.values.get((layout.MECH, f"C{row}"))),
@@ -108,7 +109,7 @@ def _inputs(book: Book) -> list[dict]:
 def _numbered(book: Book, base: str, suffix: str = ""):
     """Summary keys of the 1st, 2nd, … transmission angle or four-bar loop (summary_prefix)."""
     i = 1
-    while (key := layout.summary_prefix(base, i) + suffix) in book.meta.get("summary", {}):
+    while (key := layout.summary_prefix(base, i) + suffix) in book.record.summary:
         yield key
         i += 1
 
@@ -147,11 +148,11 @@ def split_header(text: str) -> tuple[str, str]:
 def _angle_ranges(book: Book) -> list[dict]:
     """The smallest and largest value of every angle the Sweep sheet shows in degrees (the
     input's own column left out), read from the book's degree views."""
-    sweep = book.meta["sweep"]
-    columns, rows = sweep["columns"], sweep["rows"]
+    sweep = book.record.sweep
+    columns, rows = sweep.columns, sweep.rows
     found = []
     for key, letter in sorted(columns.items(), key=lambda kv: coordinate_to_tuple(kv[1] + "1")):
-        if not key.endswith("_deg") or key == f"{book.meta['input']}_deg":
+        if not key.endswith("_deg") or key == f"{book.record.input}_deg":
             continue
         numbers = [x for x in map(number, column_values(book, layout.SWEEP, letter, rows))
                    if x is not None]
@@ -164,8 +165,8 @@ def _angle_ranges(book: Book) -> list[dict]:
 def _gaps(book: Book) -> list[dict]:
     """Every stretch of the sweep where the loop cannot close: its first and last input value
     (the sweep's gap columns, so no gap is left out)."""
-    sweep = book.meta["sweep"]
-    columns, rows = sweep["columns"], sweep["rows"]
+    sweep = book.record.sweep
+    columns, rows = sweep.columns, sweep.rows
     if "gap_from" not in columns:
         return []
     starts = [number(v) for v in column_values(book, layout.SWEEP, columns["gap_from"], rows)]
@@ -178,13 +179,13 @@ def _gaps(book: Book) -> list[dict]:
 def _peaks(book: Book) -> list[dict]:
     """The largest |value| down each Motion column of an angular or linear velocity or
     acceleration, and the input value where it occurs."""
-    motion = book.meta.get("motion")
+    motion = book.record.motion
     if not motion:
         return []
-    sheet, rows, header_row = motion["sheet"], motion["rows"], motion["current_row"] - 1
+    sheet, rows, header_row = motion.sheet, motion.rows, motion.current_row - 1
     inputs = column_values(book, sheet, "A", rows)
     peaks = []
-    for key, letter in sorted(motion["columns"].items(),
+    for key, letter in sorted(motion.columns.items(),
                               key=lambda kv: coordinate_to_tuple(kv[1] + "1")):
         if not key.startswith(PEAK_PREFIXES):
             continue
@@ -203,11 +204,11 @@ def summary(book: Book) -> dict:
     # a transmission angle's degree view repeats the transmission block's numbers
     shown_there = {r["what"].split()[-1] for r in transmissions}
     angles = [r for r in _angle_ranges(book) if r["what"] not in shown_there]
-    input_head = _header(book, layout.SWEEP, book.meta["sweep"]["rows"][0] - 1, "A")
+    input_head = _header(book, layout.SWEEP, book.record.sweep.rows[0] - 1, "A")
     not_closing = _summary_row(book, "not_closing")
     return {
-        "book": book.name, "mechanism": book.meta["mechanism"],
-        "title": book.meta.get("title", ""),
+        "book": book.name, "mechanism": book.record.mechanism,
+        "title": book.record.title,
         "input": dict(zip(("symbol", "unit"), split_header(input_head))),
         "inputs": _inputs(book), "fourbar_loops": _loops(book),
         "output": _ranges_of(book, "output"), "angles": angles,

@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import json
 
+from .record import FORMAT_VERSION, BuildRecord  # noqa: F401  (the version: the record's)
+
 MECH, SWEEP, MOTION_SHEET, CHARTS, GRID, STROKE, META = (
     "Mechanism", "Sweep", "Motion", "Charts", "Grid", "Stroke sweep", "linkbook")
-FORMAT_VERSION = 1
 DRAWING_COLUMNS = ("N", "O")   # x and y of the joints table and of the links the drawing plots
 DASH = "—"     # "no value here" in text cells (SMALL, MIN, MAX and COUNT skip text)
 GAPS_SHOWN = 3       # the assembly gaps the summary lists
@@ -21,8 +22,16 @@ def summary_prefix(base: str, i: int) -> str:
     return base + (str(i) if i > 1 else "")
 
 
-def write_meta(ws, meta: dict) -> None:
-    """The record as JSON in A2, continued in A3, A4, … when a large description needs it."""
+def write_meta(ws, record: BuildRecord | dict) -> None:
+    """The record as JSON in A2, continued in A3, A4, … when a large description needs it. A
+    dict is read as a record first, so that a key the record does not know fails here."""
+    if not isinstance(record, BuildRecord):
+        record = BuildRecord.from_json(record)
+    write_meta_json(ws, record.to_json())
+
+
+def write_meta_json(ws, meta) -> None:
+    """`meta` as the record's JSON, unchecked (a test writes a damaged record with it)."""
     ws.sheet_state = "hidden"
     ws["A1"] = "linkbook build record: which template, branch and layout this workbook has."
     ws["A1"].data_type = "s"
@@ -33,6 +42,8 @@ def write_meta(ws, meta: dict) -> None:
 
 
 def read_meta(wb) -> dict | None:
+    """The record's JSON as written (None without the sheet or when the text is not JSON);
+    read_record gives it typed."""
     if META not in wb.sheetnames:
         return None
     ws, parts, row = wb[META], [], 2
@@ -43,3 +54,16 @@ def read_meta(wb) -> dict | None:
         return json.loads("".join(parts)) if parts else None
     except json.JSONDecodeError:
         return None
+
+
+def read_record(wb) -> BuildRecord | None:
+    """The book's build record, typed and upgraded to today's shape; None without the record
+    sheet. DamagedRecord when its text is no record of this format; KeyError, TypeError or
+    ValueError when its entries are not what the writer records."""
+    if META not in wb.sheetnames:
+        return None
+    try:
+        data = read_meta(wb)
+    except RecursionError:
+        data = None
+    return BuildRecord.from_json(data)

@@ -53,7 +53,7 @@ def _print_setup(wb) -> None:
 
 def _angle_columns(built: workbook.Built):
     """(quantity, its sweep column letter) of every output angle shown in degrees."""
-    columns = built.meta["sweep"]["columns"]
+    columns = built.record.sweep.columns
     return [(q, columns[q.key]) for q in built.model.of_role(COLUMN) if q.in_degrees]
 
 
@@ -61,7 +61,7 @@ def _cut_columns(built: workbook.Built):
     """(quantity, its sweep column letter) of every angle that is one ATAN2: its cut at ±180°
     can fall on a sample (the crank at 180° puts a pin on the ground line), where the sign of
     a rounding error in a sine, which applications do not share, would pick +π or −π."""
-    columns = built.meta["sweep"]["columns"]
+    columns = built.record.sweep.columns
     return [(q, columns[q.key]) for q in built.model.of_role(COLUMN)
             if q.formula.startswith("ATAN2(") and one_group(q.formula)]
 
@@ -69,31 +69,31 @@ def _cut_columns(built: workbook.Built):
 def degree_window_sources(built: workbook.Built) -> set[tuple[str, str]]:
     """The sweep cells whose values choose the degree windows (and the radian windows of the
     ATAN2 columns)."""
-    sweep = built.meta["sweep"]
-    r0, r1 = sweep["rows"]
+    sweep = built.record.sweep
+    r0, r1 = sweep.rows
     columns = [(q, letter) for q, letter in _angle_columns(built) if not q.wrap_360]
-    return {(sweep["sheet"], f"{letter}{r}") for q, letter in columns + _cut_columns(built)
+    return {(sweep.sheet, f"{letter}{r}") for q, letter in columns + _cut_columns(built)
             for r in range(r0, r1 + 1)}
 
 
 def loop_witness_cells(built: workbook.Built) -> set[tuple[str, str]]:
     """The sweep cells of each loop step's witness column: a number exactly where it closes."""
-    sweep = built.meta["sweep"]
-    r0, r1 = sweep["rows"]
-    return {(sweep["sheet"], f"{sweep['columns'][key]}{r}") for key in built.model.closes
+    sweep = built.record.sweep
+    r0, r1 = sweep.rows
+    return {(sweep.sheet, f"{sweep.columns[key]}{r}") for key in built.model.closes
             for r in range(r0, r1 + 1)}
 
 
 def closure_warnings(built: workbook.Built, t: Template, values: dict) -> list[str]:
     """One line for the first loop step that cannot close somewhere in the sweep (the steps
     after it fail there with it): which step, and over which input values."""
-    sweep, model = built.meta["sweep"], built.model
-    r0, r1 = sweep["rows"]
+    sweep, model = built.record.sweep, built.model
+    r0, r1 = sweep.rows
     inputs = t.sweep.angles()
     for key, (step, _) in zip(model.closes, model.loop_steps):
-        letter = sweep["columns"][key]
+        letter = sweep.columns[key]
         failing = [inputs[r - r0] for r in range(r0, r1 + 1)
-                   if not isinstance(values.get((sweep["sheet"], f"{letter}{r}")), float)]
+                   if not isinstance(values.get((sweep.sheet, f"{letter}{r}")), float)]
         if failing:
             return [f"{step}: the loop cannot close {_where(t, inputs, failing)}; every cell "
                     "that depends on it is #N/A there"]
@@ -123,8 +123,6 @@ def _where(t: Template, inputs: list[float], failing: list[float]) -> str:
 def degree_windows(built: workbook.Built, values: dict) -> dict[str, float]:
     """For each output angle: the start of a 360° window that puts the cut in the widest empty
     arc of its sampled values (a multiple of 10°, in [-180°, 180°)). A full turn keeps [0°, 360°)."""
-    sweep = built.meta["sweep"]
-    r0, r1 = sweep["rows"]
     out = {}
     for q, letter in _angle_columns(built):
         if q.wrap_360:
@@ -143,10 +141,10 @@ def radian_windows(built: workbook.Built, values: dict) -> dict[str, float]:
 
 
 def _sampled_degrees(built: workbook.Built, values: dict, letter: str) -> list[float]:
-    sweep = built.meta["sweep"]
-    r0, r1 = sweep["rows"]
+    sweep = built.record.sweep
+    r0, r1 = sweep.rows
     return sorted(math.degrees(v) % 360.0 for r in range(r0, r1 + 1)
-                  if isinstance(v := values.get((sweep["sheet"], f"{letter}{r}")), float)
+                  if isinstance(v := values.get((sweep.sheet, f"{letter}{r}")), float)
                   and math.isfinite(v))
 
 
@@ -172,8 +170,8 @@ def build_file(t: Template, path: Path, with_values: bool = False) -> workbook.B
     def write(tmp: Path) -> None:
         with package.cells_held_back(built.workbook) as cells:
             built.workbook.save(tmp)
-        controls = {sheet: [Control.of(c) for c in items]
-                    for sheet, items in built.meta.get("controls", {}).items()}
+        controls = {sheet: [Control.of(c.to_json()) for c in items]
+                    for sheet, items in built.record.controls.items()}
         package.finish(tmp, tmp, values=values if with_values else None, controls=controls,
                        cells=cells)
         _refuse_beyond_verify(tmp)

@@ -18,6 +18,7 @@ from openpyxl import Workbook
 from openpyxl.utils import column_index_from_string
 
 from ..base import __version__
+from ..base.record import BuildRecord
 from ..base.sheets import (CHARTS, FORMAT_VERSION, GRID, MECH, META, MOTION_SHEET, STROKE, SWEEP,
                            write_meta)
 from ..language.model import COLUMN, MOTION, Model
@@ -34,11 +35,13 @@ from .sweep import default_window, degree_formula, radian_window, sweep_numbers_
 
 @dataclass
 class Built:
-    """The workbook and the record of where everything is (stored in the hidden sheet)."""
+    """The workbook and the record of where everything is (stored in the hidden sheet): as
+    the writer assembled it (`meta`) and typed (`record`)."""
     workbook: Workbook
     model: Model
     meta: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)   # for the builder's user, not the book
+    record: BuildRecord | None = None
 
 
 def build(t: Template) -> Built:
@@ -78,8 +81,9 @@ def build(t: Template) -> Built:
                           stroke_sheet(wb.create_sheet(STROKE), t, model, names, meta["grid"]))
         meta["grid"]["stroke_row"] = stroke_row(wb[GRID], t, meta["grid"], meta["stroke"])
     meta["frames"] = frames_sheet(wb, t, model, meta)
-    write_meta(wb.create_sheet(META), meta)
-    return Built(wb, model, meta)
+    record = BuildRecord.from_json(meta)      # a key the record does not know fails here
+    write_meta(wb.create_sheet(META), record)
+    return Built(wb, model, meta, record=record)
 
 
 def set_degree_windows(built: Built, windows: dict[str, float]) -> None:

@@ -12,6 +12,7 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from ..base.record import BuildRecord
 from ..base.xlsx import excel_name_problem
 from .domain import (BRANCH_WORDS, InputError, check_input, check_lengths_together,
                      check_value, check_written_lengths, parse_number)
@@ -499,15 +500,16 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
     return out
 
 
-def from_record(meta: dict) -> Mechanism:
+def from_record(record: BuildRecord) -> Mechanism:
     """The mechanism a workbook's build record describes (verify reads an edited book back). A
-    book written before the mechanism language records only a bundled mechanism's name."""
-    kinds = {symbol: info["kind"] for symbol, info in meta["inputs"].items()}
-    grid = (meta["grid"]["param"], meta["grid"]["key"]) if "grid" in meta else None
-    description = meta.get("description")
+    book written before the mechanism language records only a bundled mechanism's name: its
+    description is that template's (the one older record the record's upgrade cannot fill in
+    from the record alone)."""
+    grid = (record.grid.param, record.grid.key) if record.grid is not None else None
+    description = record.description
     if description is None:
-        data = bundled_template_data(str(meta.get("mechanism")))
+        data = bundled_template_data(record.mechanism)
         if data is None:
-            raise DescriptionError("workbook", f"unknown mechanism {meta.get('mechanism')!r}")
+            raise DescriptionError("workbook", f"unknown mechanism {record.mechanism!r}")
         description = data["mechanism"]
-    return compile_mechanism(meta["mechanism"], description, kinds, "workbook", grid)
+    return compile_mechanism(record.mechanism, description, record.kinds(), "workbook", grid)

@@ -1,0 +1,118 @@
+"""What the judging of one book shares: the reference solver of the mechanism its record
+describes, the slope of a reference value (the allowance near a limit position), and the
+context every block's check reads (the record, the values, how errors show, the bound, the
+reference's results) and adds its checks to, in the report's order."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+import numpy as np
+
+from . import reference as generic
+from ..base.record import BuildRecord
+from .checks import (ANGLE_UNITS, EDGE_SLOPE, SENSITIVITY_STEP, Check, Rules, compare,
+                     expected_of, unit_scale)
+from .reading import UnusableFile
+
+
+class Reference:
+    """The independent solver of one book's mechanism: the generic reference (reference.py),
+    given the description the book records, with the book's own input values."""
+
+    def __init__(self, record: BuildRecord):
+        from ..language.model import DescriptionError
+        from ..language.templates import from_record
+        try:
+            self.mechanism = from_record(record)
+        except (DescriptionError, KeyError, TypeError, AttributeError) as exc:
+            raise UnusableFile(f"the mechanism recorded in the book is unusable: {exc}") \
+                from None
+        self.description = self.mechanism.description
+
+    def solve(self, params: dict, angles) -> dict:
+        return generic.solve(self.description, params, angles)
+
+    def fourbar_loops(self, params: dict):
+        return generic.fourbar_loops(self.description, params)
+
+    def limit_angles(self, params: dict, length: float, loop: int = 0) -> list[float]:
+        return generic.limit_angles(self.description, params, length, loop)
+
+
+def slope_of(solver: Reference, params: dict, angles: np.ndarray, key: str, unit: str,
+             param: str | None = None, column_values=(),
+             scale: float = math.degrees(1.0), motion: bool = False):
+    """|∂x/∂θ| per row (per column value, for a grid) by a central difference of the reference,
+    computed for one row when asked. `scale`: input units per unit of θ (degrees per radian of a
+    crank; the mechanism's size for an actuator's length). `motion`: x is a velocity or an
+    acceleration (else the reference is asked for positions only, which is quicker)."""
+    period = ANGLE_UNITS.get(unit)
+    h = SENSITIVITY_STEP
+    if not motion:
+        from ..language.mechanisms import MOTION_SYMBOLS
+        params = {k: v for k, v in params.items()
+                  if k not in MOTION_SYMBOLS[solver.mechanism.input_kind]}
+
+    def at(i: int, j: int = 0) -> float:
+        p = {**params, param: column_values[j]} if param else params
+        deg = float(angles[i]) + scale * np.array([-h, 0.0, h])
+        x = expected_of(solver.solve(p, deg), key)
+        pairs = [(a, b, span) for a, b, span in ((0, 2, 2 * h), (0, 1, h), (1, 2, h))
+                 if np.isfinite(x[a]) and np.isfinite(x[b])]
+        if not pairs:
+            # Both neighbours fail to close: a limit position, a double root, where any solver
+            # (the reference's Newton included) gets only about √ε: allow 1e-6 there.
+            return EDGE_SLOPE
+        a, b, span = pairs[0]
+        d = x[b] - x[a]
+        if period:
+            d = (d + period / 2) % period - period / 2
+        return abs(d) / span
+    return at
+
+
+@dataclass
+class Judging:
+    """One book being judged: its record and cell values, the rules they are judged by (how
+    the engine shows an error, the bound), the reference and the book's inputs and size. The sweep's check sets the reference's results the later checks
+    compare with (`angles`, `ref`; the current position's `angle` and `one`). `checks` holds
+    the checks made so far, in the report's order."""
+    wb: object
+    record: BuildRecord
+    values: dict
+    rules: Rules
+    solver: Reference
+    model: object
+    params: dict
+    size: float
+    checks: list[Check] = field(default_factory=list)
+    scale: float = 1.0             # input units per radian of a crank; S of an actuator
+    angles: np.ndarray | None = None
+    ref: dict | None = None
+    slopes: dict = field(default_factory=dict)
+    angle: float = 0.0
+    one: dict | None = None
+
+    @property
+    def mechanism(self):
+        return self.solver.mechanism
+
+    def got(self, sheet: str, cells: list[str]) -> list:
+        return [self.values.get((sheet, x)) for x in cells]
+
+    def compare(self, check: Check, sheet: str, cells: list[str], expected, unit: str,
+                slope=None, dead=None, sine=None, rules: Rules | None = None) -> None:
+        """checks.compare of `cells` (their values in the book) with `expected`, by this
+        book's rules unless `rules` says otherwise."""
+        compare(check, sheet, cells, self.got(sheet, cells), expected, unit,
+                rules or self.rules, slope, dead, sine)
+
+    def run(self, block: str, name: str, sheet: str, cells: list[str], expected, unit: str,
+            slope=None, rate: float = 1.0, dead=None, sine=None) -> None:
+        """A new check of `cells` against `expected`, added to `checks`."""
+        c = Check(block, name, self.size, rate, unit_scale(unit, self.size))
+        self.compare(c, sheet, cells, expected, unit, slope, dead, sine)
+        self.checks.append(c)
+
+    def slope(self, inputs, key: str, unit: str, **options):
+        return slope_of(self.solver, self.params, inputs, key, unit, scale=self.scale, **options)

@@ -1,0 +1,224 @@
+"""The judge of the drawing: the joints table, the drawing's rows and the links it draws (each
+joins two points the reference knows are joined), and each equal-scale frame (its extents,
+centre, grid square and legend, and every mapped cell) by the documented rule of a live frame."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import reference as generic
+from ..base import sheets as layout
+from ..base.record import Frame, Series
+from .checks import Check, Mismatch, compare_exact, expected_of
+from .context import Judging
+
+# The rule of a live frame (docs/mechanisms.md, "Drawings"), restated here from the documented
+# convention: the frame is centred on the extents of what a chart draws, and a grid square is
+# the smallest 1, 2 or 5 × 10ⁿ that fits MARGIN times the larger extent in 2·HALF squares.
+FRAME_HALF, FRAME_MARGIN = 5, 1.12
+FRAME_SQUARES = (1.0, 2.0, 5.0, 10.0)
+
+
+def check_drawing(j: Judging) -> None:
+    """The joints table, the drawing rows (the sliders' guides and blocks the reference's,
+    sized in the drawing's grid square), the drawn links and the frames."""
+    pos = j.record.position
+    joint_values = {name: (float(x[0]), float(y[0])) for name, (x, y) in j.one["points"].items()}
+    for joint in j.model.joints:
+        x_cell, y_cell = pos.joints[joint.name]
+        j.run("joints", joint.name, pos.sheet, [x_cell, y_cell],
+              np.array(joint_values[joint.name]), "length")
+    joints = {joint.name: joint_values[joint.name] for joint in j.model.joints}  # the table's
+    drawn, over_sweep = dict(joint_values), j.ref
+    if j.record.frames is not None:
+        description = j.solver.description
+        square = _drawing_square(j, joints)
+        sliders = generic.slider_drawing(description, j.params, j.ref, j.one, square)
+        drawn.update({name: (float(x[0]), float(y[0])) for name, (x, y) in sliders.items()})
+        over_sweep = {**j.ref, "points": {**j.ref["points"], **generic.slider_drawing(
+            description, j.params, j.ref, j.ref, square)}}
+    drawing_cells, drawing_expected = [], []
+    for link in pos.drawing:
+        for i, name in enumerate(link.joints):
+            r = link.rows[0] + i
+            drawing_cells += [f"N{r}", f"O{r}"]
+            drawing_expected += list(drawn.get(name, (math.nan, math.nan)))
+    j.run("joints", "drawing rows", pos.sheet, drawing_cells, np.array(drawing_expected),
+          "length")
+    j.checks.append(_check_links(j, over_sweep))
+    if j.record.frames is not None:
+        j.checks += _check_frames(j, joints, drawn)
+
+
+def joined_pairs(description: dict, ref: dict, size: float) -> set[frozenset]:
+    """Pairs of points the reference knows are joined, found without the description's list of
+    links: a step's new point and each point the step names (a crank's pivot, a dyad's two
+    ends, a slider's line, an actuator's ends; a vector's two ends), any two points of one
+    slider's guide or of one block (generic.slider_parts), and any two points whose distance
+    never changes over the sweep (a rigid link, the ground)."""
+    pairs = {frozenset((a, b)) for part in generic.slider_parts(description)
+             for a in part for b in part if a != b}
+    for step in description.get("steps", []):
+        if not isinstance(step, dict):
+            continue
+        named = _point_names({k: v for k, v in step.items()
+                              if k not in ("point", "columns", "type", "key")})
+        if isinstance(step.get("point"), str):
+            pairs.update(frozenset((step["point"], name)) for name in named)
+        else:       # a vector (from, to): the two points it measures between
+            pairs.update(frozenset((a, b)) for a in named for b in named if a != b)
+    points = ref.get("points", {})
+    names = sorted(points)
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            (xa, ya), (xb, yb) = points[a], points[b]
+            d = np.hypot(np.asarray(xa, float) - xb, np.asarray(ya, float) - yb)
+            d = d[np.isfinite(d)]
+            if d.size and np.ptp(d) <= 1e-9 * size:
+                pairs.add(frozenset((a, b)))
+    return pairs
+
+
+def _point_names(value) -> list[str]:
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, dict):
+        return [n for v in value.values() for n in _point_names(v)]
+    if isinstance(value, list):
+        return [n for v in value for n in _point_names(v)]
+    return []
+
+
+def _check_links(j: Judging, ref: dict) -> Check:
+    """Each segment the drawing draws joins two points the reference knows are joined (a check
+    of the drawing's structure: its cells are compared in "drawing rows")."""
+    pos = j.record.position
+    c = Check("joints", "drawn links", j.size)
+    joined = joined_pairs(j.solver.description, ref, j.size)
+    x_col = layout.DRAWING_COLUMNS[0]
+    for link in pos.drawing:
+        names = link.joints
+        for i, (a, b) in enumerate(zip(names, names[1:])):
+            if a != b and frozenset((a, b)) not in joined:
+                c.mismatches.append(Mismatch(pos.sheet, f"{x_col}{link.rows[0] + i + 1}",
+                                             "a link between joined points",
+                                             f"{a}–{b}, which nothing joins"))
+    return c
+
+
+# ---------------------------------------------------------------- frames
+def frame_squares(need: float) -> list[tuple[float, float]]:
+    """(power of ten, grid square) for `need` per square; two when `need` is within rounding of
+    a step (1, 2, 5 × 10ⁿ), where either evaluation may fall on either side."""
+    out = []
+    for r in (need * (1 - 1e-9), need, need * (1 + 1e-9)):
+        decade = 10.0 ** math.floor(math.log10(r))
+        square = decade * next(m for m in FRAME_SQUARES if r <= m * decade * (1 + 1e-15))
+        if (decade, square) not in out:
+            out.append((decade, square))
+    return out
+
+
+def _frame_extents(frame: Frame, ref: dict, joint_values: dict) -> tuple[dict, dict, float]:
+    """The least and greatest x and y of what a frame holds (the reference's), and the size
+    needed per grid square."""
+    ext = frame.extent
+    lo, hi = {}, {}
+    for i, axis in enumerate("xy"):
+        parts = [expected_of(ref, key) for key in getattr(ext, axis)]
+        if ext.position:
+            parts.append(np.array([xy[i] for xy in joint_values.values()]))
+        v = np.concatenate(parts) if parts else np.array([])
+        v = v[np.isfinite(v)]
+        lo[axis], hi[axis] = (float(v.min()), float(v.max())) if v.size else (0.0, 0.0)
+    need = max(hi["x"] - lo["x"], hi["y"] - lo["y"], 1e-12) * FRAME_MARGIN / (2 * FRAME_HALF)
+    return lo, hi, need
+
+
+def _drawing_square(j: Judging, joint_values: dict) -> float:
+    """The drawing's grid square by the rule, from the reference's extents (where the need is
+    within rounding of a step, the one the book chose)."""
+    frames = j.record.frames
+    frame = frames.frames[0]
+    options = [square for _, square in frame_squares(_frame_extents(frame, j.ref,
+                                                                    joint_values)[2])]
+    got = j.values.get((frames.sheet, frame.cells["square"]))
+    return next((o for o in options if isinstance(got, (int, float))
+                 and abs(got - o) <= 1e-12 * o), options[0])
+
+
+def _check_frames(j: Judging, joint_values: dict, drawn: dict) -> list[Check]:
+    """Each equal-scale chart's frame (extents, centre, grid square, the scale bar's legend)
+    from the reference's points (`joint_values`: the joints table's), and each mapped cell:
+    the reference's coordinate in squares of that frame (`drawn`: every drawn point's)."""
+    sheet = j.record.frames.sheet
+    checks = []
+    for frame in j.record.frames.frames:
+        name = "drawing" if frame.chart is None else f"chart {frame.chart + 1}"
+        cells = frame.cells
+        lo, hi, need = _frame_extents(frame, j.ref, joint_values)
+        centre = {"x": (lo["x"] + hi["x"]) / 2, "y": (lo["y"] + hi["y"]) / 2}
+        expected = {"xmin": lo["x"], "xmax": hi["x"], "ymin": lo["y"], "ymax": hi["y"],
+                    "cx": centre["x"], "cy": centre["y"], "need": need}
+        c = Check("frame", f"{name}: extents", j.size, 1.0, j.size)
+        keys = list(expected)
+        j.compare(c, sheet, [cells[k] for k in keys], np.array([expected[k] for k in keys]),
+                  "length")
+        checks.append(c)
+        square_check, square = _check_square(j, sheet, cells, need, name)
+        checks.append(square_check)
+        for s in frame.series:
+            checks += _check_mapped(j, sheet, s, drawn, centre, square, f"{name}: {s.title}")
+    return checks
+
+
+def _check_square(j: Judging, sheet: str, cells: dict, need: float, name: str
+                  ) -> tuple[Check, float]:
+    """The power of ten and the grid square: the rule's choice for the reference's `need`
+    (either one at a step); the legend's text names the square the book chose."""
+    c = Check("frame", f"{name}: grid square", j.size, 1.0, j.size)
+    options = frame_squares(need)
+    got = tuple(j.values.get((sheet, cells[k])) for k in ("decade", "square"))
+    chosen = next((o for o in options if all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and abs(v - e) <= 1e-12 * e
+        for v, e in zip(got, o))), None)
+    for k, v, e in zip(("decade", "square"), got, options[0]):
+        c.cells += 1
+        c.judged.add((sheet, cells[k]))
+        if chosen is None:
+            c.mismatches.append(Mismatch(sheet, cells[k], " or ".join(
+                f"{o[k == 'square']:g}" for o in options), v))
+    square = (chosen or options[0])[1]
+    places = max(0, -math.floor(round(math.log10(square), 6)))
+    compare_exact(c, sheet, [cells["label"]], j.got(sheet, [cells["label"]]),
+                  [f"grid square {square:.{places}f} {j.record.length_unit}"])
+    return c, square
+
+
+def _check_mapped(j: Judging, sheet: str, series: Series, joint_values: dict, centre: dict,
+                  square: float, name: str) -> list[Check]:
+    """A mapped column pair: (coordinate − centre) / square, the coordinate the reference's
+    (a joint at the current position, or a sweep column at the sweep's angles), judged with the
+    bound of a length scaled to squares."""
+    first, last = series.mapped_rows
+    out = []
+    for i, axis in enumerate("xy"):
+        letter = series.columns[i]
+        cells = [f"{letter}{r}" for r in range(first, last + 1)]
+        slope = None
+        if series.kind == "links":
+            world = np.full(len(cells), np.nan)
+            for link in j.record.position.drawing:
+                for k, joint in enumerate(link.joints):
+                    world[link.rows[0] + k - series.rows[0]] = \
+                        joint_values.get(joint, (math.nan, math.nan))[i]
+        else:
+            key = getattr(series, axis)
+            world = expected_of(j.ref, key)
+            if key in j.slopes:
+                slope = (lambda f: lambda k: f(k) / square)(j.slopes[key])
+        c = Check("frame", f"{name} {axis}", j.size, 1.0, j.size / square)
+        j.compare(c, sheet, cells, (world - centre[axis]) / square, "-", slope)
+        out.append(c)
+    return out

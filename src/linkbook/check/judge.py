@@ -1,0 +1,225 @@
+"""The judge: every formula cell the build record names, compared with the independent
+reference at the input values and adjustments the book's own cells hold (|Δ| within the bound
+where the loop closes, #N/A exactly where it cannot).
+
+check_book judges the blocks in the report's order: the sweep, the current position, its joints
+and drawing (drawing.py), the degree windows, the numbers-only copies, the derived constants,
+the Motion sheet, the assembly and summary (summary.py) and the grid (grid.py)."""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from . import reference as generic
+from ..base import sheets as layout
+from ..base.record import BuildRecord
+from .checks import ABS_TOL, Check, Mismatch, Rules, column_unit, expected_of
+from .context import Judging, Reference
+from .reading import input_at, input_column, inputs_of, mechanism_size
+
+ASSEMBLY_COLUMNS = ("closes", "gap_from", "gap_to")
+DASH = layout.DASH
+RATIO_TOL = 1e-6     # relative: a reversal's angle is located to 1e-6° (generic.time_ratio)
+WINDOW_STARTS = (-180.0, 180.0)   # where a degree view's 360° window may start
+MIN_RATE = 1e-9
+
+
+def check_book(wb, record: BuildRecord, values: dict, is_error, error_code, *,
+               tol: float = ABS_TOL, relative: bool = False) -> list[Check]:
+    """Every check of the book's formula cells against the reference, in the report's order
+    (`values` computed by an engine that shows an error as `is_error` and `error_code` say)."""
+    return judge_book(wb, record, values, Rules(is_error, error_code, tol, relative))
+
+
+def judge_book(wb, record: BuildRecord, values: dict, rules: Rules) -> list[Check]:
+    """check_book, with the rules given whole."""
+    from . import drawing, grid, summary
+    solver = Reference(record)
+    params = inputs_of(wb, record)
+    j = Judging(wb, record, values, rules, solver, solver.mechanism.build(), params,
+                mechanism_size(record, params))
+    _check_sweep(j)
+    _check_position(j)
+    drawing.check_drawing(j)
+    _check_degree_windows(j)
+    j.checks += _check_numbers_only(j)
+    _check_constants(j)
+    if record.motion is not None:
+        _check_motion(j)
+    if "closes" in record.sweep.columns:
+        j.checks += summary.check_assembly(j)
+    if record.grid is not None:
+        j.checks += grid.check_grid(j)
+    return j.checks
+
+
+def _check_sweep(j: Judging) -> None:
+    """The sweep table, column by column; sets the reference over the sweep's input values."""
+    mech, sweep = j.mechanism, j.record.sweep
+    j.angles = input_column(j.wb[sweep.sheet], "A", sweep.rows, mech.input_is_angle)
+    # the slope of a cell is taken per radian of a crank, per `size` of an actuator's stroke
+    j.scale = math.degrees(1.0) if mech.input_is_angle else j.size
+    j.ref = j.solver.solve(j.params, j.angles)
+    for key in sweep.columns:
+        if key == mech.input_column or key in ASSEMBLY_COLUMNS:
+            continue
+        unit = column_unit(j.model, key)
+        j.slopes[key] = j.slope(j.angles, key, unit)
+        j.run(layout.SWEEP, key, sweep.sheet, sweep.cells(key), expected_of(j.ref, key), unit,
+              j.slopes[key])
+
+
+def _check_position(j: Judging) -> None:
+    """The current position's cells; sets the reference at the current input value."""
+    mech, pos = j.mechanism, j.record.position
+    j.angle = input_at(j.wb[pos.sheet], pos.input_cell, f"the current input {mech.input_word}",
+                       mech.input_is_angle)
+    j.one = j.solver.solve(j.params, np.array([j.angle]))
+    for key, cell in pos.cells.items():
+        unit = column_unit(j.model, key)
+        j.run("position", key, pos.sheet, [cell], expected_of(j.one, key), unit,
+              j.slope(np.array([j.angle]), key, unit))
+
+
+def _check_constants(j: Judging) -> None:
+    """Derived constants: a time ratio from the reversals of its output (the reference's own
+    motion, not the template's formula); any other from the reference."""
+    ratios = time_ratios(j.solver.description)
+    for key, info in j.record.constants.items():   # solve() returns them as floats
+        if key in ratios:
+            c = Check(f"reversals of {ratios[key]}", key, j.size)
+            j.compare(c, layout.MECH, [info.cell], np.array([generic.time_ratio(
+                j.solver.description, j.params, ratios[key])]), info.unit,
+                rules=replace(j.rules, tol=RATIO_TOL, relative=True))
+            j.checks.append(c)
+            continue
+        j.run("constants", key, layout.MECH, [info.cell], np.array([float(j.ref[key])]),
+              info.unit)
+
+
+def time_ratios(description: dict) -> dict[str, str]:
+    """{expression key: output key} for the expressions declared a time ratio (time_ratio_of)."""
+    return {s["key"]: s["time_ratio_of"] for s in description.get("steps", [])
+            if isinstance(s, dict) and s.get("type") == "expression" and "time_ratio_of" in s}
+
+
+def _check_numbers_only(j: Judging) -> list[Check]:
+    """Each numbers-only column (what MIN and MAX read for an extent) holds its source cell's
+    own number, or a dash where the source is not a number (#N/A: the loop cannot close) or
+    there is no source (no joint in that row). The sources, a sweep column and the joints
+    table, are judged against the reference themselves, with their own allowances."""
+    sweep, pos = j.record.sweep, j.record.position
+    checks = []
+    for column in j.record.numbers_only:
+        first, last = column.rows
+        if column.sweep is not None:
+            letter, (r0, r1) = sweep.columns[column.sweep], sweep.rows
+            sources = [(sweep.sheet, f"{letter}{r}") for r in range(r0, r1 + 1)]
+            name = column.sweep
+        else:
+            sources = [(pos.sheet, pos.joints[joint][column.axis]) if joint else None
+                       for joint in column.joints]
+            name = f"joints {'xy'[column.axis]}"
+        c = Check(column.sheet, f"{name} numbers only", j.size)
+        for r, source in zip(range(first, last + 1), sources):
+            cell = f"{column.column}{r}"
+            want = j.values.get(source) if source else None
+            if not isinstance(want, (int, float)) or isinstance(want, bool):
+                want = DASH
+            got = j.values.get((column.sheet, cell))
+            c.cells += 1
+            c.judged.add((column.sheet, cell))
+            if got != want or isinstance(got, bool):
+                c.mismatches.append(Mismatch(column.sheet, cell, want, got))
+        checks.append(c)
+    return checks
+
+
+def _check_degree_windows(j: Judging) -> None:
+    """How a degree view shows its angle (docs/mechanisms.md): in one 360° window [lo, lo+360)
+    for the sweep column and the current position, lo in [-180°, 180°) ([0°, 360°) for an angle
+    that wraps). The build puts lo in the widest gap of the data it had; a user's edit moves the
+    data, not the window, so only the window itself is judged here, from the values shown.
+    The values are compared with the reference modulo 360° in the sweep and position checks."""
+    sweep, pos = j.record.sweep, j.record.position
+    rows = range(sweep.rows[0], sweep.rows[1] + 1)
+    eps = 1e-9 * 360.0
+    for key, letter in sweep.columns.items():
+        if not key.endswith("_deg") or key[:-4] not in j.ref or key == j.mechanism.input_column:
+            continue
+        c = Check(layout.SWEEP, f"{key} window", j.size)
+        j.checks.append(c)
+        cells = [(sweep.sheet, f"{letter}{r}") for r in rows]
+        if key in pos.cells:
+            cells.append((pos.sheet, pos.cells[key]))
+        shown = [(cell, float(v)) for cell in cells
+                 if isinstance(v := j.values.get(cell), (int, float)) and not isinstance(v, bool)
+                 and math.isfinite(v)]
+        if not shown:
+            continue
+        (low_cell, low), (high_cell, high) = (min(shown, key=lambda s: s[1]),
+                                              max(shown, key=lambda s: s[1]))
+        if j.model.get(key[:-4]).wrap_360:
+            first, last = 0.0, 0.0
+        else:
+            first, last = WINDOW_STARTS
+        # some lo in [first, last] with low >= lo and high < lo + 360
+        if low < first - eps:
+            bad, want = (low_cell, low), f"at least {first:g}°"
+        elif high >= last + 360.0 + eps:
+            bad, want = (high_cell, high), f"below {last + 360.0:g}°"
+        elif high - low >= 360.0 + eps:
+            bad, want = (high_cell, high), f"within 360° of {low:.10g}° ({low_cell[1]})"
+        else:
+            continue
+        c.mismatches.append(Mismatch(bad[0][0], bad[0][1],
+                                     f"one 360° window starting in [{first:g}°, {last:g}°]: "
+                                     f"{want}", bad[1]))
+
+
+def motion_rates(mech, params: dict, size: float) -> tuple[float, float]:
+    """The scale of velocities and accelerations: a crank's |ω| and ω² + |α| (per second, per
+    second²); an actuator's |v|/S and (v/S)² + |a|/S. A velocity's bound is the position's
+    bound times the first, an acceleration's times the second. Neither goes below 1e-9 (a
+    rate of one part in 10⁹ of the size per second is zero for any purpose; `formulas` reads
+    an input of 1e-184 as 0, to 15 decimals)."""
+    from ..language.mechanisms import MOTION_SYMBOLS
+    speed, accel = (float(params.get(k, 0.0)) for k in MOTION_SYMBOLS[mech.input_kind])
+    if not mech.input_is_angle:
+        speed, accel = speed / size, accel / size
+    return max(abs(speed), MIN_RATE), max(speed * speed + abs(accel), MIN_RATE)
+
+
+def _check_motion(j: Judging) -> None:
+    """The Motion sheet (the sweep's rows and the current position's row) and the traced
+    point's velocity under the current position."""
+    from ..language.model import ACCEL, ANG_ACCEL, AREA, LENGTH, RATIO
+    mech, motion = j.mechanism, j.record.motion
+    sheet = motion.sheet
+    rate1, rate2 = motion_rates(mech, j.params, j.size)
+    (r0, r1), now = motion.rows, motion.current_row
+    now_angle = np.array([j.angle])
+
+    def slope(inputs, key, unit):
+        return j.slope(inputs, key, unit, motion=True)
+
+    j.run(sheet, mech.input_column, sheet, [f"A{r}" for r in range(r0, r1 + 1)], j.angles,
+          mech.input_unit)
+    j.run(sheet, mech.input_column, sheet, [f"A{now}"], now_angle, mech.input_unit)
+    for key, letter in motion.columns.items():
+        unit = j.model.get(key).unit
+        # a determinant is a position measured (an area's scale is S², see unit_scale)
+        rate = {ACCEL: rate2, ANG_ACCEL: rate2, AREA: 1.0, LENGTH: 1.0, RATIO: 1.0}.get(unit,
+                                                                                    rate1)
+        j.run(sheet, key, sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)],
+              expected_of(j.ref, key), unit, slope(j.angles, key, unit), rate,
+              j.ref.get("dead_centre"), j.ref.get("sine"))
+        j.run("motion now", key, sheet, [f"{letter}{now}"], expected_of(j.one, key), unit,
+              slope(now_angle, key, unit), rate, j.one.get("dead_centre"), j.one.get("sine"))
+    for key, cell in (j.record.position.motion_cells or {}).items():
+        unit = j.model.get(key).unit
+        rate = rate2 if unit in (ACCEL, ANG_ACCEL) else rate1
+        j.run("position", key, layout.MECH, [cell], expected_of(j.one, key), unit,
+              slope(now_angle, key, unit), rate, j.one.get("dead_centre"), j.one.get("sine"))

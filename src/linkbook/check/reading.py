@@ -1,0 +1,158 @@
+"""Reading a book to judge it: the workbook and its build record (typed, base.record), its
+input values as its cells hold them, the mechanism's size, and which cells hold formulas and
+what values they store. A file that cannot be judged at all raises UnusableFile with one line."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..base import sheets as layout
+from ..base.record import BuildRecord, DamagedRecord
+from ..language.domain import (InputError, check_input, check_lengths_together, check_value,
+                               check_written_lengths)
+
+# what reading a record that does not match its book raises (a key missing, a value mistyped)
+RECORD_ERRORS = (KeyError, IndexError, TypeError, ValueError, AttributeError)
+
+
+class UnusableFile(Exception):
+    """The file cannot be verified at all (exit 2)."""
+
+
+def read_book(path: Path):
+    """(workbook, build record) of the book at `path`, read as the application reads it (the
+    fast XML view, or openpyxl where it must); UnusableFile with one line when it cannot be."""
+    from ..base.safety import UnsafeFile, read_workbook_safely
+    try:
+        wb = read_workbook_safely(path)
+    except UnsafeFile as exc:
+        raise UnusableFile(str(exc)) from None
+    return wb, book_record(path, wb)
+
+
+def record_mismatch(path: Path, exc: Exception) -> str:
+    return (f"{path}: the build record (sheet {layout.META}) does not match the workbook "
+            f"({type(exc).__name__}: {exc})")
+
+
+def book_record(path: Path, wb) -> BuildRecord:
+    """The book's build record; UnusableFile saying what is wrong when it is missing, damaged
+    or not the shape linkbook writes, or when a sheet it names was renamed in case only."""
+    try:
+        record = layout.read_record(wb)
+    except DamagedRecord as exc:
+        raise UnusableFile(f"{path}: the build record (sheet {layout.META}) is damaged: it is "
+                           f"{exc}") from None
+    except RECORD_ERRORS as exc:
+        raise UnusableFile(record_mismatch(path, exc)) from None
+    if record is None:
+        raise UnusableFile(f"{path}: not a linkbook workbook (no build record sheet)")
+    for sheet in sorted(({layout.MECH} | record.sheets()) - set(wb.sheetnames)):
+        # a sheet deleted is judged by the cells that read it; one renamed in case only, and
+        # the sheet of the inputs, are named here
+        for alike in (s for s in wb.sheetnames if s.casefold() == sheet.casefold()):
+            raise UnusableFile(f"{path}: the sheet {sheet!r} is missing (the book has "
+                               f"{alike!r}: the record names sheets exactly, so rename it back)")
+        if sheet == layout.MECH:
+            raise UnusableFile(f"{path}: the sheet {sheet!r} (the inputs) is missing")
+    return record
+
+
+def inputs_of(wb, record: BuildRecord) -> dict[str, float]:
+    """The parameter values as they stand in the workbook's input cells."""
+    ws = wb[layout.MECH]
+    values = {}
+    for symbol, info in record.inputs.items():
+        raw = ws[info.cell].value
+        try:
+            values[symbol] = check_value(f"input {symbol} (cell {info.cell})", info.kind, raw)
+        except InputError as exc:
+            raise UnusableFile(str(exc)) from None
+    try:
+        check_lengths_together(values, record.kinds(), "input ", written_in(record))
+    except InputError as exc:
+        raise UnusableFile(str(exc)) from None
+    return values
+
+
+def written_in(record: BuildRecord) -> dict[str, float]:
+    """The lengths the recorded description writes as numbers (domain.written_lengths)."""
+    try:
+        return check_written_lengths(record.description or {}, "the book's record: ")
+    except InputError as exc:
+        raise UnusableFile(str(exc)) from None
+
+
+def mechanism_size(record: BuildRecord, params: dict[str, float]) -> float:
+    """S: the sum of the input lengths and offsets and of the lengths the description writes as
+    numbers (every frame fits in a circle that big)."""
+    kinds = record.kinds()
+    size = sum(abs(v) for s, v in params.items() if kinds[s] in ("length", "offset"))
+    return max(size + sum(abs(v) for v in written_in(record).values()), 1e-300)
+
+
+def input_column(ws, column: str, rows, is_angle: bool) -> np.ndarray:
+    """The input values down `column` over `rows` (first, last)."""
+    return np.array([input_at(ws, f"{column}{r}", "input value", is_angle)
+                     for r in range(rows[0], rows[1] + 1)])
+
+
+def input_at(ws, cell: str, what: str, is_angle: bool) -> float:
+    """An input angle (or actuator length): a number within the supported domain."""
+    try:
+        return check_input(f"{ws.title}!{cell}: {what}", number_at(ws, cell, what), is_angle)
+    except InputError as exc:
+        raise UnusableFile(str(exc)) from None
+
+
+def number_at(ws, cell: str, what: str) -> float:
+    v = ws[cell].value
+    if not isinstance(v, (int, float)) or isinstance(v, bool):
+        raise UnusableFile(f"{ws.title}!{cell}: {what} must be a number (got {v!r})")
+    return float(v)
+
+
+def formula_cells(wb) -> set[tuple[str, str]]:
+    return {(ws.title, c.coordinate) for ws in wb.worksheets for c in ws._cells.values()
+            if c.data_type == "f"}
+
+
+def cell_order(key: tuple[str, str]) -> tuple:
+    from ..base.xlsx import coordinate_to_tuple
+    row, col = coordinate_to_tuple(key[1])
+    return key[0], col, row
+
+
+def stored_values(wb, path, cells: set[tuple[str, str]]) -> dict[tuple[str, str], object]:
+    """(sheet, cell) -> the value each of `cells` (formula cells) stores with its formula (the
+    `<v>`): what LibreOffice with default settings, openpyxl's data_only and pandas show. Numbers
+    as float, errors as office.CellError, text as str; a cell that stores none is left out."""
+    from ..base.xlsx import CellError
+    from ..engine.office import read_values
+    from ..base.xlsx import column_letter
+    if not all(hasattr(ws, "stored") for ws in wb.worksheets):   # openpyxl read the book
+        return {k: v for k, v in read_values(path).items() if k in cells}
+    out = {}
+    for ws in wb.worksheets:
+        for (row, col), (kind, text) in ws.stored.items():
+            key = (ws.title, f"{column_letter(col)}{row}")
+            if key not in cells:
+                continue
+            if kind == "e":
+                out[key] = CellError(text)
+            elif kind == "b":
+                if text.strip() not in ("0", "1", "true", "false"):
+                    raise UnusableFile(f"{path}: {key[0]}!{key[1]}: the stored value {text!r} "
+                                       "is not a boolean")
+                out[key] = text.strip() in ("1", "true")
+            elif kind == "n":
+                try:
+                    out[key] = float(text)
+                except ValueError:
+                    raise UnusableFile(f"{path}: {key[0]}!{key[1]}: the stored value {text!r} "
+                                       "is not a number") from None
+            else:
+                out[key] = text
+    return out
+

@@ -1,0 +1,73 @@
+"""The typed build record: it gives back exactly the JSON the writer records, an older book's
+record is read in today's shape, and a key the record does not know fails at build."""
+from __future__ import annotations
+
+import json
+
+import openpyxl
+import pytest
+
+from conftest import built
+
+from linkbook.base import sheets
+from linkbook.base.record import BuildRecord, DamagedRecord, upgrade
+
+
+def _text(data) -> str:
+    return json.dumps(data, ensure_ascii=False, sort_keys=True)
+
+
+@pytest.mark.parametrize("name", ["fourbar", "pump", "boom-cylinder", "jansen"])
+def test_the_record_gives_back_the_json_the_writer_assembled(name):
+    b, _ = built(name)
+    assert _text(BuildRecord.from_json(b.meta).to_json()) == _text(b.meta)
+    assert b.record == BuildRecord.from_json(b.meta)
+
+
+def test_the_record_is_read_typed_from_the_sheet():
+    b, _ = built("pump")
+    record = sheets.read_record(b.workbook)
+    assert record == b.record
+    assert record.sweep.cells("s15")[0] == f"{b.meta['sweep']['columns']['s15']}5"
+    assert record.grid.stroke_step == b.meta["grid"]["stroke_step"]
+    assert record.motion.current_row == b.meta["motion"]["current_row"]
+
+
+def test_a_key_the_record_does_not_know_fails_when_written():
+    b, _ = built("fourbar")
+    wrong = {**b.meta, "sweep": {**b.meta["sweep"], "colums": {}}}
+    ws = openpyxl.Workbook().active
+    with pytest.raises(KeyError, match="colums"):
+        sheets.write_meta(ws, wrong)
+
+
+def test_a_value_of_the_wrong_type_is_refused():
+    b, _ = built("fourbar")
+    with pytest.raises(TypeError):
+        BuildRecord.from_json({**b.meta, "sweep": 7})
+    with pytest.raises(ValueError):
+        BuildRecord.from_json({**b.meta, "sweep": {**b.meta["sweep"], "rows": [5]}})
+
+
+@pytest.mark.parametrize("data", [None, [1, 2], "x", {"format": 2}, {"format": "1"}])
+def test_no_record_of_this_format_is_damaged(data):
+    with pytest.raises(DamagedRecord):
+        BuildRecord.from_json(data)
+
+
+def test_an_older_record_is_read_in_todays_shape():
+    """The entries older books lack: filled as those books were laid out."""
+    b, _ = built("fourbar")
+    old = json.loads(json.dumps(b.meta))
+    for key in ("constants", "summary", "numbers_only", "controls", "length_unit", "frames"):
+        del old[key]
+    del old["sweep"]["sheet"]
+    for link in old["position"]["drawing"]:
+        del link["label"]
+    record = BuildRecord.from_json(old)
+    assert (record.constants, record.summary, record.numbers_only, record.controls) == (
+        {}, {}, (), {})
+    assert record.length_unit == "mm" and record.sweep.sheet == "Sweep"
+    assert record.frames is None
+    assert record.position.drawing[0].label.startswith("link 1: ")
+    assert upgrade(b.meta) == b.meta        # today's shape comes back equal
