@@ -52,16 +52,8 @@ def verify(path: str | Path, engine: str = "vector"):
     "gnumeric".
     A book that cannot be verified at all gives a Report of status 2 with the reason in
     `error` (the line the command prints), so that a status is always there to act on."""
-    from .engine.office import OfficeFailed, OfficeUnavailable
-    from .base.safety import UnsafeFile
-    from .check.verifier import Report, UnusableFile, verify as run
-    try:
-        return run(Path(path), engine)
-    except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:
-        said = " ".join(str(exc).split())
-        if not said.startswith(f"{path}: "):    # among many books, each line names its own
-            said = f"{path}: {said}"
-        return Report(str(path), None, engine, [], error=said)
+    from .check.verifier import report_of
+    return report_of(path, engine)
 
 
 def __dir__() -> list[str]:

@@ -361,10 +361,10 @@ def _error(exc: Exception) -> None:
 
 def _verify(args) -> int:
     import json
-    from .. import verify
+    from ..check.verifier import report_of
     reports = []
     for book in args.books:
-        report = verify(book, args.engine)
+        report = report_of(book, args.engine)
         reports.append(report)
         if report.error is not None:
             _error(report.error)

@@ -24,7 +24,7 @@ from .stored import check_replaced, check_stored, not_formulas
 # what the command, the package's face and the tests take from here
 __all__ = ["ABS_TOL", "PER", "TOLERANCE_RULE", "Check", "Mismatch", "Reference", "Report",
            "UnusableFile", "cell_ranges", "cell_runs", "check_book", "inputs_of", "read_book",
-           "record_mismatch", "verify"]
+           "record_mismatch", "verify", "report_of"]
 
 
 @gc_paused
@@ -73,3 +73,16 @@ def verify(path: Path, engine: str = "vector") -> Report:
         raise UnusableFile(record_mismatch(path, exc)) from None
 
 
+def report_of(path, engine: str = "vector") -> Report:
+    """verify(), with a book that cannot be verified at all given as a Report of status 2 whose
+    `error` is the one line that says why (the command prints it; the API returns it), so
+    that a status is always there to act on."""
+    from ..base.safety import UnsafeFile
+    from ..engine.office import OfficeFailed, OfficeUnavailable
+    try:
+        return verify(Path(path), engine)
+    except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:
+        said = " ".join(str(exc).split())
+        if not said.startswith(f"{path}: "):    # among many books, each line names its own
+            said = f"{path}: {said}"
+        return Report(str(path), None, engine, [], error=said)
