@@ -19,7 +19,8 @@ from openpyxl.utils import column_index_from_string, get_column_letter, quote_sh
 
 from . import frames
 from ..base.palette import PART_COLOURS, PATH_COLOUR, drawing_colours, link_label
-from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, Model, header, unit_text
+from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, Model
+from .style import header, unit_text
 from ..language.templates import Template
 from ..base.sheets import CHARTS, GRID, MECH, MOTION_SHEET, SWEEP
 from .workbook import Built

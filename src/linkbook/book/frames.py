@@ -13,7 +13,8 @@ from openpyxl.styles import Alignment
 from openpyxl.utils import get_column_letter, quote_sheetname
 
 from ..base.sheets import DASH, DRAWING_COLUMNS, MECH, SWEEP
-from ..language.model import LENGTH, Model, unit_text
+from ..language.model import LENGTH, Model
+from .style import unit_text
 from ..language.templates import Template
 from .package import Formula
 from .style import (BOLD, DERIVED_FILL, LINE_HEIGHT, NOTE, TITLE, column_range, label_lines,

@@ -7,7 +7,8 @@ from openpyxl.utils import column_index_from_string, get_column_letter
 
 from ..base.errors import InputError
 from ..base.sheets import GRID
-from ..language.model import LENGTH, Model, Resolver, header
+from ..language.model import LENGTH, Model, Resolver
+from .style import header
 from ..language.templates import Template
 from .package import Formula
 from .style import (BOLD, BOX, INPUT_FILL, LINE_HEIGHT, NOTE, ROW, TITLE, label_lines,

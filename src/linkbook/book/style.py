@@ -18,6 +18,19 @@ from ..base.sheets import DASH
 from ..language.model import ACCEL, ANG_ACCEL, ANG_SPEED, AREA, DEG, LENGTH, RAD, SPEED
 from .package import Formula
 
+
+def unit_text(unit: str, length_unit: str) -> str:
+    """The unit as a reader sees it: the template's length unit put in (mm, mm/s, mm/s²)."""
+    if unit.startswith(LENGTH):
+        return length_unit + unit[len(LENGTH):]
+    return unit
+
+
+def header(symbol: str, unit: str, length_unit: str) -> str:
+    """`θ13 [deg]`: every header is the symbol and its unit in brackets."""
+    return f"{symbol} [{unit_text(unit, length_unit)}]"
+
+
 ROW = "\x00"   # stands for the row number in a table formula rendered once for all rows
 
 TITLE = Font(bold=True, size=14)

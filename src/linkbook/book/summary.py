@@ -8,7 +8,8 @@ from openpyxl.styles import Alignment
 from openpyxl.utils import quote_sheetname
 
 from ..base.sheets import DASH, GAPS_SHOWN, SWEEP, summary_prefix
-from ..language.model import DEG, LENGTH, RAD, Model, Resolver, render, unit_text
+from ..language.model import DEG, LENGTH, RAD, Model, Resolver, render
+from .style import unit_text
 from ..language.excel import outside_domain
 from ..language.templates import Template
 from .style import (BOLD, DERIVED_FILL, column_range, number_format, put_text, set_formula,

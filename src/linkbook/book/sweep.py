@@ -13,7 +13,8 @@ from openpyxl.styles import Alignment
 from openpyxl.utils import column_index_from_string, get_column_letter
 
 from ..base.sheets import DASH, SWEEP
-from ..language.model import COLUMN, DEG, RAD, Model, Resolver, header, unit_text
+from ..language.model import COLUMN, DEG, RAD, Model, Resolver
+from .style import header, unit_text
 from ..language.templates import Template
 from .package import Formula
 from .style import (NOTE, ROW, TITLE, fit_labels, number_format, numbers_only, put, put_head,

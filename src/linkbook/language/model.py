@@ -162,18 +162,6 @@ class Resolver:
         return "=" + render(self._by_key[key].formula, self)
 
 
-def unit_text(unit: str, length_unit: str) -> str:
-    """The unit as a reader sees it: the template's length unit put in (mm, mm/s, mm/s²)."""
-    if unit.startswith(LENGTH):
-        return length_unit + unit[len(LENGTH):]
-    return unit
-
-
-def header(symbol: str, unit: str, length_unit: str) -> str:
-    """`θ13 [deg]`: every header is the symbol and its unit in brackets."""
-    return f"{symbol} [{unit_text(unit, length_unit)}]"
-
-
 class DescriptionError(Exception):
     """A problem with a description: `field` names the step and key, `message` says what."""
 
