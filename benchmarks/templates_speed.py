@@ -35,13 +35,23 @@ def timed(tree: Path, args: list[str]) -> float:
 
 
 WORK = """
-import contextlib, io, sys, time
+import contextlib, importlib, io, sys, time
 from pathlib import Path
 import openpyxl, numpy
-from linkbook.apps import cli
-from linkbook.book import builder, charts, package, workbook
-from linkbook.check import verifier
-from linkbook.engine import evaluator, office
+
+def first(*names):      # the module where this checkout has it (wings, or the older flat layout)
+    for name in names:
+        try:
+            return importlib.import_module(name)
+        except ImportError:
+            pass
+    raise ImportError(names[0])
+
+cli = first("linkbook.apps.cli", "linkbook.cli")
+for wing, flat in (("book.builder", "builder"), ("book.charts", "charts"), ("book.package", "package"),
+                   ("book.workbook", "workbook"), ("check.verifier", "verifier"),
+                   ("engine.evaluator", "engine"), ("engine.office", "office")):
+    first("linkbook." + wing, "linkbook." + flat)
 args = ["build", sys.argv[2], "-o", sys.argv[3]] if sys.argv[1] == "build" else sys.argv[1:]
 with contextlib.redirect_stdout(io.StringIO()):
     start = time.perf_counter()

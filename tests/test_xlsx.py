@@ -10,6 +10,8 @@ from pathlib import Path
 
 import openpyxl
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from openpyxl.workbook.defined_name import DefinedName
 
 from conftest import built
@@ -410,3 +412,34 @@ def test_a_book_openpyxl_reads_is_checked_whole_first(tmp_path):
         xlsx.read(path)
     with pytest.raises(safety.UnsafeFile, match="cell Sheet!A2 holds '3_5'"):
         safety.read_workbook_safely(path)
+
+
+def _matched_height_and_open(text: str) -> tuple[int, int]:
+    """(how deep matched bracket pairs nest, how many '(' never close), by a stack."""
+    stack, partner = [], {}
+    for i, ch in enumerate(text):
+        if ch == "(":
+            stack.append(i)
+        elif ch == ")" and stack:
+            partner[stack.pop()] = i
+    height, open_matched = 0, []
+    for i, ch in enumerate(text):
+        if open_matched and open_matched[-1] == i:
+            open_matched.pop()
+        if ch == "(" and i in partner:
+            open_matched.append(partner[i])
+            height = max(height, len(open_matched))
+    return height, len(stack)
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(st.text(alphabet="()xé+", max_size=80))
+def test_nesting_is_the_height_of_matched_pairs_plus_brackets_never_closed(text):
+    """Outside strings, a formula's nesting is how deep its matched brackets go, and a bracket
+    never closed counts as one level more (characters beyond ASCII included)."""
+    height, never_closed = _matched_height_and_open(text)
+    assert xlsx._nesting(text) == min(height, xlsx.FORMULA_NESTING_LIMIT + 1) + never_closed
+
+
+def test_brackets_inside_strings_and_quoted_sheet_names_do_not_nest():
+    assert xlsx._nesting('IF(A1="((((",(\'(a)\'!B1))') == 2

@@ -356,11 +356,18 @@ def _check_formula(text: str, part: str, title: str, address: str) -> None:
                       f"deep; Excel's limit is {FORMULA_NESTING_LIMIT} levels")
 
 
+_ASCII_BUT_BRACKETS = {i: None for i in range(128) if chr(i) not in "()"}
+
+
 def _nesting(text: str) -> int:
     """How deep a formula's brackets nest (outside its strings and quoted sheet names), up to
     one past the limit: each pass takes away the innermost pairs, so the passes count the
     levels, each a scan at C speed. A bracket never closed counts as one more level."""
-    brackets = _NOT_BRACKET.sub("", _QUOTED.sub("", text))
+    if '"' in text or "'" in text:
+        text = _QUOTED.sub("", text)
+    brackets = text.translate(_ASCII_BUT_BRACKETS)      # a table lookup per character, in C
+    if len(brackets) != brackets.count("(") + brackets.count(")"):
+        brackets = _NOT_BRACKET.sub("", brackets)        # characters beyond ASCII were kept
     passes = 0
     while "()" in brackets and passes <= FORMULA_NESTING_LIMIT:
         brackets = brackets.replace("()", "")
