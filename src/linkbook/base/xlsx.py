@@ -368,6 +368,11 @@ def _nesting(text: str) -> int:
     brackets = text.translate(_ASCII_BUT_BRACKETS)      # a table lookup per character, in C
     if len(brackets) != brackets.count("(") + brackets.count(")"):
         brackets = _NOT_BRACKET.sub("", brackets)        # characters beyond ASCII were kept
+    return _bracket_depth(brackets)
+
+
+@functools.lru_cache(maxsize=512)       # a grid's formulas share their brackets' pattern
+def _bracket_depth(brackets: str) -> int:
     passes = 0
     while "()" in brackets and passes <= FORMULA_NESTING_LIMIT:
         brackets = brackets.replace("()", "")
