@@ -40,3 +40,15 @@ def unit(x, y) -> tuple:
     """The vector (x, y) scaled to length 1."""
     r = np.hypot(x, y)
     return x / r, y / r
+
+
+def turned_direction(a: str, b: str, degrees: float):
+    """The direction of the frame a→b turned by `degrees`, as a function of a solve() result
+    (a line carried by a moving link: a slider along its link, a slot in its frame)."""
+    c, s = cos_sin_deg(degrees)
+
+    def line(solved):
+        points = solved["points"]
+        ex, ey = unit(points[b][0] - points[a][0], points[b][1] - points[a][1])
+        return ex * c - ey * s, ex * s + ey * c
+    return line

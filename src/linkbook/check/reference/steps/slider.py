@@ -15,7 +15,7 @@ from functools import partial
 import numpy as np
 
 from ..expressions import scalar
-from ..geometry import HALF_PI, Point, cos_sin_deg, near, unit
+from ..geometry import HALF_PI, Point, cos_sin_deg, near, turned_direction
 from ..newton import NEAR_DOUBLE, RES_TOL, STARTS, TANGENT, Fun, finite, solved_column, sweep
 from ..positions import Positions
 from ..rates import Rates
@@ -137,14 +137,7 @@ def _slider_line(step: Mapping, params: Mapping[str, float]) -> Callable:
     if "along" not in step:
         d = cos_sin_deg(direction)
         return lambda solved: d
-    u, v = step["along"]
-    c, s = cos_sin_deg(direction)
-
-    def line(solved):
-        points = solved["points"]
-        ex, ey = unit(points[v][0] - points[u][0], points[v][1] - points[u][1])
-        return ex * c - ey * s, ex * s + ey * c
-    return line
+    return turned_direction(*step["along"], direction)
 
 
 def sliding(step: Mapping) -> Sliding:

@@ -14,7 +14,7 @@ from functools import partial
 import numpy as np
 
 from ..expressions import scalar
-from ..geometry import Point, cos_sin_deg, unit
+from ..geometry import Point, cos_sin_deg, turned_direction
 from ..newton import finite, linear_solve
 from ..positions import Positions
 from ..rates import Rates
@@ -102,14 +102,7 @@ def _fixed_line(step: Mapping, params: Mapping[str, float]) -> Callable:
 
 def _slot_line(step: Mapping, params: Mapping[str, float]) -> Callable:
     """A slot's direction: angle(A→B) of its frame plus slot_angle."""
-    a, b = step["slot_frame"]
-    c, s = cos_sin_deg(scalar(step.get("slot_angle", 0.0), params))
-
-    def line(solved):
-        points = solved["points"]
-        fx, fy = unit(points[b][0] - points[a][0], points[b][1] - points[a][1])
-        return fx * c - fy * s, fx * s + fy * c
-    return line
+    return turned_direction(*step["slot_frame"], scalar(step.get("slot_angle", 0.0), params))
 
 
 def sliding(step: Mapping) -> Sliding:
