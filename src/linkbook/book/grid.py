@@ -7,7 +7,8 @@ from openpyxl.utils import column_index_from_string, get_column_letter
 
 from ..base.errors import InputError
 from ..base.sheets import GRID
-from ..language.model import LENGTH, Model, Resolver
+from ..language.model import LENGTH, Model
+from .resolve import Resolver
 from .style import header
 from ..language.templates import Template
 from .package import Formula

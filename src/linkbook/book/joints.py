@@ -7,7 +7,9 @@ from __future__ import annotations
 import re
 
 from ..base.sheets import DRAWING_COLUMNS, SWEEP
-from ..language.model import LENGTH, Model, Resolver, parenthesize, render
+from ..language.excel import parenthesize, render
+from ..language.model import LENGTH, Model
+from .resolve import Resolver
 from ..language.templates import Template
 from .frames import SQUARE_CELL
 from .style import block_head, column_range, number_format, put_text, set_formula, text_width

@@ -14,7 +14,8 @@ from openpyxl.worksheet.datavalidation import DataValidation
 from ..base.sheets import MECH, MOTION_SHEET
 from ..language.domain import INPUT_ANGLE_LIMIT
 from ..language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND
-from ..language.model import CONSTANT, DEG, Model, Resolver
+from ..language.model import CONSTANT, DEG, Model
+from .resolve import Resolver
 from .style import unit_text
 from ..language.templates import Template
 from .controls import control_record

@@ -8,7 +8,8 @@ from openpyxl.utils import column_index_from_string, get_column_letter, quote_sh
 
 from ..base.sheets import MECH, MOTION_SHEET, SWEEP
 from ..language.mechanisms import MOTION_SYMBOLS
-from ..language.model import MOTION, Model, Resolver
+from ..language.model import MOTION, Model
+from .resolve import Resolver
 from .style import header
 from ..language.templates import Template
 from .package import Formula

@@ -8,7 +8,9 @@ from openpyxl.styles import Alignment
 from openpyxl.utils import quote_sheetname
 
 from ..base.sheets import DASH, GAPS_SHOWN, SWEEP, summary_prefix
-from ..language.model import DEG, LENGTH, RAD, Model, Resolver, render
+from ..language.excel import render
+from ..language.model import DEG, LENGTH, RAD, Model
+from .resolve import Resolver
 from .style import unit_text
 from ..language.excel import outside_domain
 from ..language.templates import Template

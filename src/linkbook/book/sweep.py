@@ -13,7 +13,8 @@ from openpyxl.styles import Alignment
 from openpyxl.utils import column_index_from_string, get_column_letter
 
 from ..base.sheets import DASH, SWEEP
-from ..language.model import COLUMN, DEG, RAD, Model, Resolver
+from ..language.model import COLUMN, DEG, RAD, Model
+from .resolve import Resolver
 from .style import header, unit_text
 from ..language.templates import Template
 from .package import Formula

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .excel import parenthesize, render
 
 # Roles a quantity can play.
 COLUMN = "column"      # one cell per row of the sweep, shown with its header
@@ -132,34 +131,6 @@ class Model:
 
     def of_role(self, role: str) -> list[Quantity]:
         return [q for q in self.quantities if q.role == role]
-
-
-class Resolver:
-    """Turns a key into formula text for one place in the workbook.
-
-    `names` maps parameters and constants to defined names; `cells` maps keys that have a cell in
-    this block to its reference. Anything else that is an alias or a column is inlined.
-    """
-
-    def __init__(self, model: Model, names: dict[str, str], cells: dict[str, str]):
-        self.model = model
-        self.names = names
-        self.cells = cells
-        self._by_key = {q.key: q for q in model.quantities}
-
-    def __call__(self, key: str) -> str:
-        if key in self.cells:
-            return self.cells[key]
-        if key in self.names:
-            return self.names[key]
-        q = self._by_key.get(key)
-        if q is None:
-            raise KeyError(f"formula refers to unknown symbol {{{key}}}")
-        return parenthesize(render(q.formula, self))
-
-    def formula(self, key: str) -> str:
-        """The cell formula (with '=') of quantity `key` in this block."""
-        return "=" + render(self._by_key[key].formula, self)
 
 
 class DescriptionError(Exception):
