@@ -14,7 +14,7 @@ and prints a table with ratios against ExcelModel and against the reference.
 Then, side by side in the same run, the whole-process wall time (medians of --runs runs) of
   build      `python -m linkbook build NAME ...` (the case's book, written again)
   verify     `python -m linkbook verify BOOK`
-  office     LibreOffice's headless recalculation (the soffice process linkbook.office runs)
+  office     LibreOffice's headless recalculation (the soffice process linkbook.engine.office runs)
   ironcalc   `python -c "import ironcalc; load_from_xlsx(BOOK).evaluate()"` (if the optional
              `ironcalc` package is installed: pip install ironcalc)
   excelmodel the ExcelModel job's process (one run; where it ran)

@@ -92,7 +92,7 @@ def test_aggregate_is_known_even_when_formulas_made_its_table_first(tmp_path):
 
 
 def test_the_garbage_collector_is_paused_only_during_a_call(tmp_path):
-    """build and verify pause Python's cyclic collector (linkbook.pause) and give it back as
+    """build and verify pause Python's cyclic collector (linkbook.base.pause) and give it back as
     they found it: on after a call that returns or raises, off if it was off."""
     import gc
     seen = []

@@ -1,4 +1,4 @@
-"""One domain for build and verify (linkbook.domain): what build accepts, its own verify accepts
+"""One domain for build and verify (linkbook.language.domain): what build accepts, its own verify accepts
 and agrees with; what verify would refuse, or what would not fit the memory budget, build refuses
 up front with one line naming the limit and the figure, and writes nothing."""
 from __future__ import annotations

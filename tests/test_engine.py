@@ -1,4 +1,4 @@
-"""The vector engine (linkbook.engine) against formulas.ExcelModel, cell by cell.
+"""The vector engine (linkbook.engine.evaluator) against formulas.ExcelModel, cell by cell.
 
 Workbooks are built here with openpyxl: named parameters, a sweep table with loops that cannot
 close (#N/A), a mixed-reference grid, summaries over ranges on a sheet whose name has spaces,

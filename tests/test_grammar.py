@@ -1,6 +1,6 @@
-"""linkbook.grammar against `formulas`' own parser: the same graph, node by node.
+"""linkbook.engine.grammar against `formulas`' own parser: the same graph, node by node.
 
-The engine reads a formula with linkbook.grammar where it can and with `formulas`' parser
+The engine reads a formula with linkbook.engine.grammar where it can and with `formulas`' parser
 otherwise.  These tests hold the fast reader to the slow one: on one formula of every skeleton in
 every bundled book, and on random formulas over the grammar and just outside it (runs of signs, %, spaces,
 R1C1-like names, quoted sheets, unknown functions, empty arguments), grammar either declines or
@@ -54,7 +54,7 @@ def formulas_reading(formula: str):
 
 
 def grammar_reading(formula: str):
-    """The same by linkbook.grammar and the engine's pipe of its graph; None if it declines."""
+    """The same by linkbook.engine.grammar and the engine's pipe of its graph; None if it declines."""
     parsed = grammar.parse(formula, adapter.plain_functions())
     if parsed is None:
         return None

@@ -3,7 +3,7 @@
 A reader that streams a big book (openpyxl in read-only mode, pandas, calamine) trusts each sheet's
 `<dimension>`: a wrong one (A1:A1) hides the table. Without lxml, openpyxl writes its elements as
 `<dimension ref=".." />`, with lxml as `<dimension ref=".."/>`; the last pass over the package
-(linkbook.package) writes the cells and must put the true used range in either form. The books
+(linkbook.book.package) writes the cells and must put the true used range in either form. The books
 are built by the command in a subprocess, once with lxml and once with openpyxl's own writer
 (openpyxl reads OPENPYXL_LXML at import), with cached values so that pandas has numbers to read.
 """

@@ -1,4 +1,4 @@
-"""The fast read-only view (linkbook.xlsx) against openpyxl's own load of the same files, and
+"""The fast read-only view (linkbook.base.xlsx) against openpyxl's own load of the same files, and
 its refusals: a book it does not model is read by openpyxl instead."""
 from __future__ import annotations
 
@@ -438,7 +438,15 @@ def test_nesting_is_the_height_of_matched_pairs_plus_brackets_never_closed(text)
     """Outside strings, a formula's nesting is how deep its matched brackets go, and a bracket
     never closed counts as one level more (characters beyond ASCII included)."""
     height, never_closed = _matched_height_and_open(text)
-    assert xlsx._nesting(text) == min(height, xlsx.FORMULA_NESTING_LIMIT + 1) + never_closed
+    assert xlsx._nesting(text) == height + never_closed
+
+
+def test_nesting_beyond_the_limit_is_beyond_it():
+    """Past one level over the limit the count need not be exact, only over the limit."""
+    limit = xlsx.FORMULA_NESTING_LIMIT
+    assert xlsx._nesting("(" * (limit + 1) + ")" * (limit + 1)) == limit + 1
+    assert xlsx._nesting("(" * 200 + ")" * 200) > limit
+    assert xlsx._nesting("SUM(" * limit + ")" * limit) == limit
 
 
 def test_brackets_inside_strings_and_quoted_sheet_names_do_not_nest():

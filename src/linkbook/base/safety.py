@@ -82,7 +82,7 @@ def load_workbook_safely(path: Path, data_only: bool = False):
 
 
 def read_workbook_safely(path: Path):
-    """The book's cells and names for reading only: the fast view (linkbook.xlsx) where it
+    """The book's cells and names for reading only: the fast view (linkbook.base.xlsx) where it
     models the file, else openpyxl's full load (which also words the error of a damaged
     file)."""
     from . import xlsx

@@ -1,6 +1,6 @@
 """The book's sheet names and its build record: what the writer lays out and verify reads.
 
-No openpyxl here: verify reads a book through the fast view (linkbook.xlsx) and does not pay
+No openpyxl here: verify reads a book through the fast view (linkbook.base.xlsx) and does not pay
 for importing the writer's library."""
 from __future__ import annotations
 

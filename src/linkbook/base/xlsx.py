@@ -360,9 +360,10 @@ _ASCII_BUT_BRACKETS = {i: None for i in range(128) if chr(i) not in "()"}
 
 
 def _nesting(text: str) -> int:
-    """How deep a formula's brackets nest (outside its strings and quoted sheet names), up to
-    one past the limit: each pass takes away the innermost pairs, so the passes count the
-    levels, each a scan at C speed. A bracket never closed counts as one more level."""
+    """How deep a formula's brackets nest (outside its strings and quoted sheet names): exact up
+    to one level past the limit, and past the limit beyond it. Each pass takes away the
+    innermost pairs, so the passes count the levels, each a scan at C speed. A bracket never
+    closed counts as one more level."""
     if '"' in text or "'" in text:
         text = _QUOTED.sub("", text)
     brackets = text.translate(_ASCII_BUT_BRACKETS)      # a table lookup per character, in C
