@@ -14,12 +14,11 @@ from openpyxl.utils import get_column_letter, quote_sheetname
 
 from ..base.sheets import DASH, DRAWING_COLUMNS, MECH, SWEEP
 from ..language.model import LENGTH, Model
-from .style import unit_text
 from ..language.templates import Template
 from .package import Formula
 from .style import (BOLD, DERIVED_FILL, LINE_HEIGHT, NOTE, TITLE, column_range, label_lines,
-                    number_format, numbers_only, put, put_head, put_text, set_formula,
-                    table_style, text_width, wrap_across)
+                    number_format, numbers_only, put, put_head, put_text, set_formula, table_style,
+                    text_width, unit_text, wrap_across)
 
 SHEET = "Drawing data"
 HALF = 5                 # the frame: -HALF … HALF grid squares on both axes

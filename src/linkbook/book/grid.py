@@ -9,10 +9,9 @@ from ..base.errors import InputError
 from ..base.sheets import GRID
 from ..language.model import LENGTH, Model
 from .resolve import Resolver
-from .style import header
 from ..language.templates import Template
 from .package import Formula
-from .style import (BOLD, BOX, INPUT_FILL, LINE_HEIGHT, NOTE, ROW, TITLE, label_lines,
+from .style import (BOLD, BOX, INPUT_FILL, LINE_HEIGHT, NOTE, ROW, TITLE, header, label_lines,
                     number_format, put, put_head, put_text, table_style)
 
 COL = "\x01"   # stands for the column letter in a grid formula rendered once for all cells

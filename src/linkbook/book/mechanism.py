@@ -16,12 +16,11 @@ from ..language.domain import INPUT_ANGLE_LIMIT
 from ..language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND
 from ..language.model import CONSTANT, DEG, Model
 from .resolve import Resolver
-from .style import unit_text
 from ..language.templates import Template
 from .controls import control_record
 from .joints import joints_table
 from .style import (BOLD, BOX, DERIVED_FILL, INPUT_FILL, NOTE, TITLE, block_head, define_name,
-                    number_format, put_text, set_formula, text_width, wrap_in)
+                    number_format, put_text, set_formula, text_width, unit_text, wrap_in)
 from .sweep import degree_formula, sweep_columns
 
 

@@ -10,11 +10,10 @@ from ..base.sheets import MECH, MOTION_SHEET, SWEEP
 from ..language.mechanisms import MOTION_SYMBOLS
 from ..language.model import MOTION, Model
 from .resolve import Resolver
-from .style import header
 from ..language.templates import Template
 from .package import Formula
-from .style import (DERIVED_FILL, NOTE, ROW, TITLE, fit_labels, number_format, put, put_head,
-                    put_text, set_formula, table_style)
+from .style import (DERIVED_FILL, NOTE, ROW, TITLE, fit_labels, header, number_format, put,
+                    put_head, put_text, set_formula, table_style)
 
 
 SWEEP_ROW = "\x02"   # the Sweep sheet's row of a Motion row (MOTION_OFFSET rows up)

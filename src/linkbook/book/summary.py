@@ -11,11 +11,10 @@ from ..base.sheets import DASH, GAPS_SHOWN, SWEEP, summary_prefix
 from ..language.excel import render
 from ..language.model import DEG, LENGTH, RAD, Model
 from .resolve import Resolver
-from .style import unit_text
 from ..language.excel import outside_domain
 from ..language.templates import Template
 from .style import (BOLD, DERIVED_FILL, column_range, number_format, put_text, set_formula,
-                    wrap_across)
+                    unit_text, wrap_across)
 from .sweep import numbers_place
 
 

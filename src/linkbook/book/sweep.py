@@ -15,11 +15,10 @@ from openpyxl.utils import column_index_from_string, get_column_letter
 from ..base.sheets import DASH, SWEEP
 from ..language.model import COLUMN, DEG, RAD, Model
 from .resolve import Resolver
-from .style import header, unit_text
 from ..language.templates import Template
 from .package import Formula
-from .style import (NOTE, ROW, TITLE, fit_labels, number_format, numbers_only, put, put_head,
-                    put_text, table_style)
+from .style import (NOTE, ROW, TITLE, fit_labels, header, number_format, numbers_only, put,
+                    put_head, put_text, table_style, unit_text)
 
 
 def sweep_columns(model: Model, input_column: str) -> list[tuple[str, object]]:
