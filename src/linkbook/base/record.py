@@ -292,6 +292,7 @@ class BuildRecord(Part):
     controls: dict[str, tuple[ControlSpec, ...]] = _entry(_map(_list(_part(ControlSpec))))
     description: dict | None = _entry(_optional(_object), None)   # the mechanism language's
     motion: Motion | None = _entry(_optional(_part(Motion)), None)
+    forces: Motion | None = _entry(_optional(_part(Motion)), None)     # the Forces sheet
     grid: GridTable | None = _entry(_optional(_part(GridTable)), None)
     stroke: GridTable | None = _entry(_optional(_part(GridTable)), None)
     frames: Frames | None = _entry(_optional(_part(Frames)), None)
@@ -310,7 +311,8 @@ class BuildRecord(Part):
 
     def sheets(self) -> set[str]:
         """Every sheet the record names."""
-        parts = [self.position, self.sweep, self.motion, self.grid, self.stroke, self.frames,
+        parts = [self.position, self.sweep, self.motion, self.forces, self.grid, self.stroke,
+                 self.frames,
                  *self.numbers_only]
         named = {p.sheet for p in parts if p is not None}
         if self.frames is not None:

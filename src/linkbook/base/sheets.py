@@ -10,6 +10,7 @@ from .record import FORMAT_VERSION, BuildRecord  # noqa: F401  (the version: the
 
 MECH, SWEEP, MOTION_SHEET, CHARTS, GRID, STROKE, META = (
     "Mechanism", "Sweep", "Motion", "Charts", "Grid", "Stroke sweep", "linkbook")
+FORCES_SHEET = "Forces"
 DRAWING_COLUMNS = ("N", "O")   # x and y of the joints table and of the links the drawing plots
 DASH = "—"     # "no value here" in text cells (SMALL, MIN, MAX and COUNT skip text)
 GAPS_SHOWN = 3       # the assembly gaps the summary lists

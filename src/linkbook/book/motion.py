@@ -24,15 +24,26 @@ def motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
                  position: dict) -> dict:
     """Velocities and accelerations: row 5 at the current position (sheet Mechanism), then one
     row per Sweep row, reading that row's positions."""
+    speed, accel = (model_name(names, s) for s in MOTION_SYMBOLS[t.mechanism.input_kind])
+    note = (f"The input moves at {speed} with acceleration {accel} (sheet Mechanism). Row 5: "
+            f"the current position; from row {5 + MOTION_OFFSET}: each row of sheet {SWEEP}. "
+            "#N/A where the loop cannot close or at a dead centre.")
+    table = row_table(ws, t, model, names, model.of_role(MOTION), sweep, position,
+                      f"{t.title}: velocities and accelerations", note)
+    return {"sheet": MOTION_SHEET, **table}
+
+
+def row_table(ws, t: Template, model: Model, names: dict, qs: list, sweep: dict,
+              position: dict, title: str, note: str, beside: tuple[str, dict] | None = None
+              ) -> dict:
+    """A table of quantities `qs` beside the sweep: row 5 at the current position (sheet
+    Mechanism), then one row per Sweep row (MOTION_OFFSET rows down), each reading that row's
+    positions — and, with `beside` = (sheet, its record), the same row of that sheet (the
+    Forces sheet reads the Motion sheet's)."""
     mech = t.mechanism
-    qs = model.of_role(MOTION)
     letters = {q.key: get_column_letter(i) for i, q in enumerate(qs, start=2)}
-    speed, accel = (model_name(names, s) for s in MOTION_SYMBOLS[mech.input_kind])
-    put_text(ws, "A1", f"{t.title}: velocities and accelerations", TITLE)
-    put_text(ws, "A2", f"The input moves at {speed} with acceleration {accel} (sheet "
-                       f"Mechanism). Row 5: the current position; from row "
-                       f"{5 + MOTION_OFFSET}: each row of sheet {SWEEP}. #N/A where the loop "
-                       "cannot close or at a dead centre.", NOTE)
+    put_text(ws, "A1", title, TITLE)
+    put_text(ws, "A2", note, NOTE)
     head_row, current, first = 4, 5, 5 + MOTION_OFFSET
     put_head(ws, head_row, 1, header(mech.input_symbol, mech.input_unit, t.length_unit))
     ws.column_dimensions["A"].width = 12
@@ -46,10 +57,15 @@ def motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
     own = {k: f"{v}{ROW}" for k, v in letters.items()}
     src = quote_sheetname(SWEEP)
     in_sweep = {k: f"{src}!{v}{SWEEP_ROW}" for k, v in sweep["columns"].items()}
-    at_sweep = Resolver(model, names, {**in_sweep, **own})
     pos = quote_sheetname(MECH)
     in_position = {k: f"{pos}!{v}" for k, v in position["cells"].items()}
     in_position[mech.input_column] = position["input_name"]
+    if beside is not None:
+        other, table = quote_sheetname(beside[0]), beside[1]
+        in_sweep.update({k: f"{other}!{v}{ROW}" for k, v in table["columns"].items()})
+        in_position.update({k: f"{other}!{v}{table['current_row']}"
+                            for k, v in table["columns"].items()})
+    at_sweep = Resolver(model, names, {**in_sweep, **own})
     at_current = Resolver(model, names, {**in_position, **own})
     formats = {q.key: number_format(q.unit, t.length_unit) for q in qs}
     set_formula(ws.cell(current, 1), f"={position['input_name']}").number_format = \
@@ -71,8 +87,8 @@ def motion_table(ws, t: Template, model: Model, names: dict, sweep: dict,
             put(ws, row, columns_at[key],
                 Formula(text.replace(ROW, row_text).replace(SWEEP_ROW, sweep_text)), styles[key])
     ws.freeze_panes = ws.cell(first, 2)
-    return {"sheet": MOTION_SHEET, "rows": [r0 + MOTION_OFFSET, r1 + MOTION_OFFSET],
-            "current_row": current, "columns": letters}
+    return {"rows": [r0 + MOTION_OFFSET, r1 + MOTION_OFFSET], "current_row": current,
+            "columns": letters}
 
 
 def model_name(names: dict, symbol: str) -> str:

@@ -19,10 +19,12 @@ from openpyxl.utils import column_index_from_string
 
 from ..base import __version__
 from ..base.record import BuildRecord
-from ..base.sheets import (CHARTS, FORMAT_VERSION, GRID, MECH, META, MOTION_SHEET, STROKE, SWEEP,
-                           write_meta)
+from ..base.sheets import (CHARTS, FORCES_SHEET, FORMAT_VERSION, GRID, MECH, META, MOTION_SHEET,
+                           STROKE, SWEEP, write_meta)
+from ..language.forces import FORCE
 from ..language.model import COLUMN, MOTION, Model
 from ..language.templates import Template
+from .forces import forces_table
 from .frames import frames_sheet
 from .grid import grid_sheet
 from .mechanism import form_controls, inputs_block, position_block, position_motion
@@ -55,6 +57,7 @@ def build(t: Template) -> Built:
     ws_mech.title = MECH
     ws_sweep = wb.create_sheet(SWEEP)
     ws_motion = wb.create_sheet(MOTION_SHEET) if model.of_role(MOTION) else None
+    ws_forces = wb.create_sheet(FORCES_SHEET) if model.of_role(FORCE) else None
     wb.create_sheet(CHARTS)     # filled by charts.add_charts once values are known
     meta = {"format": FORMAT_VERSION, "linkbook": __version__, "template": t.name,
             "mechanism": t.mechanism.name, "title": t.title, "length_unit": t.length_unit,
@@ -69,6 +72,9 @@ def build(t: Template) -> Built:
         meta["motion"] = motion_table(ws_motion, t, model, names, meta["sweep"],
                                       meta["position"])
         position_motion(ws_mech, t, model, meta["position"], meta["motion"])
+    if ws_forces is not None:
+        meta["forces"] = forces_table(wb, ws_forces, t, model, names, meta["sweep"],
+                                      meta["position"], meta["motion"])
     meta["numbers_only"] = sweep_numbers_only(ws_sweep, t, model, meta["sweep"])
     meta["summary"] = summary_block(ws_mech, t, model, names, meta["sweep"], next_row + 1)
     top_align_tall_rows(ws_mech)

@@ -48,6 +48,8 @@ with "_" between them, "2_13", in a mechanism of ten bodies or more):
 - ``shaking_x``, ``shaking_y``, ``shaking``: the force the moving links exert on the ground
   (through the ground pins, the guides and the actuator's ground end); ``shaking_moment``: its
   moment about the frame's origin, the motor's reaction −T12 included;
+- ``xG{n}``, ``yG{n}``, ``axG{n}``, ``ayG{n}``: a link's centre of mass and its acceleration,
+  in the template's length unit (per s²);
 - ``cond``: each row's condition number (equilibrated). A row is NaN where a position or a rate
   is NaN, or where the system is singular (cond above SINGULAR);
 - ``bodies``: {number: the body's joints}; ``joints``: {reaction key F{i}{j}: its point}.
@@ -567,6 +569,13 @@ def _report(top: _Topology, loads: _Loads, system: _System, x: np.ndarray) -> di
         sx, sy, sm = _shake((sx, sy, sm), effort * ux, effort * uy,
                             rows.position(top.actuator[0]))
     out.update(shaking_x=sx, shaking_y=sy, shaking=np.hypot(sx, sy), shaking_moment=sm)
+    for body in top.bodies:          # each centre of mass: where it is, how it accelerates
+        if body.centre is not None and not body.block:
+            x, y = (np.broadcast_to(np.asarray(c, dtype=float), (rows.n,))
+                    for c in rows.solved["points"][body.centre])
+            ax, ay = (a / rows.m for a in rows.rate("a", body.centre))
+            n = body.number
+            out[f"xG{n}"], out[f"yG{n}"], out[f"axG{n}"], out[f"ayG{n}"] = x, y, ax, ay
     out["bodies"] = {b.number: tuple(b.joints) for b in top.bodies}
     out["joints"] = joints
     return out

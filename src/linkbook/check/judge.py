@@ -48,6 +48,9 @@ def judge_book(wb, record: BuildRecord, values: dict, rules: Rules) -> list[Chec
     _check_constants(j)
     if record.motion is not None:
         _check_motion(j)
+    if record.forces is not None:
+        from .force_cells import check_forces
+        check_forces(j)
     if "closes" in record.sweep.columns:
         j.checks += summary.check_assembly(j)
     if record.grid is not None:

@@ -13,17 +13,19 @@ from .columns import Column, Sym, input_angle
 from .excel import ATOM, SUM, Expr, key, minus, references
 from .expressions import expression
 from .fields import IDENT, POINT_NAME, RESERVED_KEYS, as_table, as_text, check_keys
-from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND,
-                         RATE_KIND, Mechanism)
+from .mechanisms import (ANGLE_KIND, BRANCH_KIND, FORCE_UNITS, LENGTH_KIND, MOTION_SYMBOLS,
+                         OFFSET_KIND, RATE_KIND, Mechanism)
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Block, DescriptionError, Guide, Model,
                     Quantity)
+from .forces import ForceWriter
 from .motion import MotionWriter
 from .presentation import Presentation
 from .schema import keys_of, schema
 from .steps import COMMON_KEYS, STEPS
 
-KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND)
+KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND, *FORCE_UNITS)
 MECHANISM_KEYS = keys_of(schema()["properties"]["mechanism"])
+FORCE_KEYS = ("bodies", "loads", "dynamics")    # any of them: the book has a Forces sheet
 
 
 class Compiler:
@@ -213,7 +215,10 @@ class Compiler:
         for i, step in enumerate(steps):
             self.read_step(i, step)
         Presentation(self).read(d)
-        MotionWriter(self).run()
+        motion = MotionWriter(self)
+        motion.run()
+        if any(k in d for k in FORCE_KEYS):
+            ForceWriter(self, motion).run()
         return self.model
 
     def read_input(self, raw: object) -> None:

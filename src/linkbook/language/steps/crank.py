@@ -34,7 +34,7 @@ def place(c, field: str, s: dict) -> None:
     c.rigid[(pivot, name)] = (length, angle)
     c.crank_of[name] = pivot
     c.cranks.append({"point": name, "pivot": pivot, "length": length, "phase": phase})
-    c.records.append({"type": "crank", "point": name, "pivot": pivot})
+    c.records.append({"type": "crank", "field": field, "point": name, "pivot": pivot})
 
 
 def rates(w, rec: dict) -> None:
@@ -44,4 +44,9 @@ def rates(w, rec: dict) -> None:
     w.rigid(n, pivot, w.speed, w.accel)
 
 
-STEP = StepType(schema_keys("crank"), place, rates, fixed({"length": 1, "phase": 0}))
+def forces(w, rec: dict) -> None:
+    """The crank is solved last: its pivot's reaction and the driving torque."""
+    w.crank(rec["pivot"], rec["point"], rec.get("field", "crank"))
+
+
+STEP = StepType(schema_keys("crank"), place, rates, fixed({"length": 1, "phase": 0}), forces)

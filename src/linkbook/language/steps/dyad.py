@@ -104,4 +104,16 @@ def rates(w, rec: dict) -> None:
     w.links[(p, n)] = (wp, ap)
 
 
-STEP = StepType(schema_keys("dyad"), place, rates, fixed({"p_length": 1, "q_length": 1}))
+def forces(w, rec: dict) -> None:
+    """The two links pinned at the point, or the link the actuator side pushes."""
+    n, p, q = rec["point"], rec["p"], rec["q"]
+    if w.actuator == (p, n):
+        w.actuated(n, p, q, rec["field"])
+    elif w.actuator == (q, n):
+        w.actuated(n, q, p, rec["field"])
+    else:
+        w.two_links(n, p, q, rec["field"])
+
+
+STEP = StepType(schema_keys("dyad"), place, rates, fixed({"p_length": 1, "q_length": 1}),
+                forces)

@@ -89,7 +89,7 @@ def place(c, field: str, s: dict) -> None:
     line_dir = ((f"COS({d})", f"SIN({d})") if along or not direction.zero else ("1", "0"))
     c.slides_on(n, "guide", through, line_dir, cols["s"])
     c.block(n, line_dir)
-    c.records.append({"type": "slider", "point": n, "p": p, "through": through,
+    c.records.append({"type": "slider", "field": field, "point": n, "p": p, "through": through,
                       "along": along, "line": cols.get("line"), "direction": line_dir,
                       "theta": cols["theta"], "s": cols["s"]})
 
@@ -129,4 +129,10 @@ def rates(w, rec: dict) -> None:
     w.links[(n, p)] = (td, tdd)
 
 
-STEP = StepType(schema_keys("slider"), place, rates, fixed({"length": 1, "direction": 0}))
+def forces(w, rec: dict) -> None:
+    """The rod and the block on its fixed line."""
+    w.slider(rec["point"], rec["p"], rec["direction"], rec["field"])
+
+
+STEP = StepType(schema_keys("slider"), place, rates, fixed({"length": 1, "direction": 0}),
+                forces)

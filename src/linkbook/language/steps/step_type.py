@@ -44,6 +44,10 @@ class StepType:
     rates(w, record): writes the velocity and acceleration formulas of a record `place` made,
         through the motion writer `w` (motion.MotionWriter: vel, acc, rel, rate, point,
         link_rates, determinant); None for a step that records nothing.
+    forces(w, record): solves the step's group for its joint reactions, through the force
+        writer `w` (forces.ForceWriter: two_links, slider, crank, actuated), the steps being
+        solved from the last back to the first; None for a step that places no link (a
+        point carried by one, a column of the user's).
     dimensions(step): the power of length of each key that takes an expression (a length 1,
         an angle in degrees 0), for a change of length unit; keys left out are not checked.
     """
@@ -51,3 +55,4 @@ class StepType:
     place: Callable[..., None]
     rates: Callable[..., None] | None = None
     dimensions: Callable[[dict], dict[str, int]] = field(default=_none)
+    forces: Callable[..., None] | None = None
