@@ -10,7 +10,7 @@ from ..language.forces import FORCE, TO_METRES
 from ..language.model import Model
 from ..language.templates import LENGTH_UNITS, Template
 from .motion import MOTION_OFFSET, model_name, row_table
-from .style import NOTE, define_name, put_text
+from .style import NOTE, define_name
 
 METRES_CELL = "A3"
 
