@@ -163,6 +163,19 @@ class Motion(Part):
 
 
 @dataclass(frozen=True)
+class Forces(Part):
+    """The Forces sheet: laid out as the Motion sheet, with the summary of the sweep beside it
+    (its cells; the coefficient of speed fluctuation is an input among them) and, for a crank,
+    the column of the work of the driving torque above its mean."""
+    sheet: str = _entry(_str)
+    rows: tuple[int, int] = _entry(_rows)
+    current_row: int = _entry(_int)
+    columns: dict[str, str] = _entry(_cells)
+    summary: dict[str, SummaryCell] = _entry(_map(_part(SummaryCell)))
+    work: str | None = _entry(_optional(_str), None)
+
+
+@dataclass(frozen=True)
 class DrawnLink(Part):
     """A link of the drawing: its joints' rows of the joints table (x, y in DRAWING_COLUMNS)."""
     joints: tuple[str, ...] = _entry(_list(_str))
@@ -292,7 +305,7 @@ class BuildRecord(Part):
     controls: dict[str, tuple[ControlSpec, ...]] = _entry(_map(_list(_part(ControlSpec))))
     description: dict | None = _entry(_optional(_object), None)   # the mechanism language's
     motion: Motion | None = _entry(_optional(_part(Motion)), None)
-    forces: Motion | None = _entry(_optional(_part(Motion)), None)     # the Forces sheet
+    forces: Forces | None = _entry(_optional(_part(Forces)), None)
     grid: GridTable | None = _entry(_optional(_part(GridTable)), None)
     stroke: GridTable | None = _entry(_optional(_part(GridTable)), None)
     frames: Frames | None = _entry(_optional(_part(Frames)), None)

@@ -22,7 +22,7 @@ from ..base.palette import PART_COLOURS, PATH_COLOUR, drawing_colours, link_labe
 from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, Model
 from .style import header, unit_text
 from ..language.templates import Template
-from ..base.sheets import CHARTS, GRID, MECH, MOTION_SHEET, SWEEP
+from ..base.sheets import CHARTS, FORCES_SHEET, GRID, MECH, MOTION_SHEET, SWEEP
 from .workbook import Built
 
 LINE_EMU = 22000          # 1.7 pt
@@ -123,7 +123,9 @@ def add_charts(built: Built, t: Template, model: Model) -> None:
     _drawing(wb, t, model, meta)
     row = _sweep_charts(wb, t, model, meta)
     if "motion" in meta:
-        _motion_charts(wb, t, model, meta, row)
+        row = _motion_charts(wb, t, model, meta, row)
+    if "forces" in meta:
+        _force_charts(wb, t, model, meta, row)
     if "grid" in meta:
         _family_chart(wb, t, model, meta)
 
@@ -190,7 +192,7 @@ def _framed(wb, chart: ScatterChart, meta: dict, index: int) -> None:
     _frame_axes(chart, SWEEP_CHART_CM / WIDTH_RATIO)   # as wide as the other sweep charts
 
 
-def _motion_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:
+def _motion_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> int:
     """From the Motion sheet: the angular velocities, the angular accelerations, and the main
     output's (else the traced point's) velocity and acceleration, against the input."""
     motion = meta["motion"]
@@ -227,6 +229,56 @@ def _motion_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:
             _angle_axis(chart, t)
         ws.add_chart(chart, f"A{anchor_row}")
         anchor_row += 21
+    return anchor_row
+
+
+def _force_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:
+    """From the Forces sheet: the driving effort with its mean, every pin's load, the shaking
+    force as a polar diagram (its y against its x) and the shaking moment."""
+    from .forces import effort_key, pin_keys
+    table = meta["forces"]
+    ws_data, ws = wb[FORCES_SHEET], wb[CHARTS]
+    rows, letters = tuple(table["rows"]), table["columns"]
+    mech = t.mechanism
+    x_title = header(mech.input_symbol, mech.input_unit, t.length_unit)
+    effort = model.get(effort_key(model))
+    specs = [(f"Driving effort {effort.symbol} (mean: the horizontal line)",
+              [effort.key], effort.unit, True),
+             ("Pin loads", pin_keys(model), "N", False),
+             ("Shaking moment on the frame", ["shaking_moment"], "N·m", False)]
+    for title, keys, unit, with_mean in specs:
+        chart = _chart(title, x_title, f"[{unit}]" if len(keys) > 1 else
+                       header(model.get(keys[0]).symbol, unit, t.length_unit))
+        for k in keys:
+            chart.series.append(_series(ws_data, "A", letters[k], rows, model.get(k).symbol))
+        if with_mean:
+            chart.series.append(_mean_line(ws_data, table["summary"]))
+        chart.width, chart.height = SWEEP_CHART_CM, 10
+        if mech.input_is_angle:
+            _angle_axis(chart, t)
+        ws.add_chart(chart, f"A{anchor_row}")
+        anchor_row += 21
+    polar = _chart("Shaking force on the frame: polar diagram", "Fs_x [N]", "Fs_y [N]")
+    polar.series.append(_series(ws_data, letters["shaking_x"], letters["shaking_y"], rows,
+                                "Fs (tip of the vector over the sweep)"))
+    polar.width = polar.height = 14
+    ws.add_chart(polar, f"A{anchor_row}")
+
+
+def _mean_line(ws, cells: dict) -> Series:
+    """The effort's mean as a horizontal line over the sweep: the summary's two points."""
+    (x0, x1), (y0, y1) = ([cells[f"mean_line_{a}{i}"]["cell"] for i in (0, 1)] for a in "xy")
+
+    def ref(first: str, last: str) -> Reference:
+        col = first.rstrip("0123456789")
+        return Reference(ws, min_col=column_index_from_string(col),
+                         min_row=int(first[len(col):]), max_row=int(last[len(col):]))
+    s = Series(ref(y0, y1), ref(x0, x1), title="mean")
+    s.smooth = False
+    s.marker.symbol = "none"
+    s.graphicalProperties.line.width = LINE_EMU
+    s.graphicalProperties.line.prstDash = "dash"
+    return s
 
 
 EQUAL_REL = 1e-9      # two series within this share of their peak at every row are one curve

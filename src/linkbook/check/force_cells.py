@@ -32,7 +32,8 @@ def force_scale(j, ref: dict, metres: float) -> float:
 
 
 def check_forces(j) -> None:
-    """Every column of the Forces sheet, over the sweep's rows and at the current position."""
+    """Every column of the Forces sheet, over the sweep's rows and at the current position,
+    then its summary and work column."""
     table, mech = j.record.forces, j.mechanism
     metres = LENGTH_UNITS[j.record.length_unit]
     ref = forces(j.solver.description, j.params, j.angles, j.record.length_unit)
@@ -58,3 +59,74 @@ def check_forces(j) -> None:
             j.compare(c, sheet, cells, np.asarray(expected, dtype=float), unit,
                       dead=kin.get("dead_centre"), sine=kin.get("sine"))
             j.checks.append(c)
+    _check_summary(j, ref, scale, metres)
+
+
+def _trapezoid(y: np.ndarray, x: np.ndarray) -> float:
+    return float(np.sum((y[1:] + y[:-1]) / 2 * np.diff(x)))
+
+
+def _check_summary(j, ref: dict, scale: float, metres: float) -> None:
+    """The summary's cells and the work column, from the reference's effort over the sweep."""
+    table, sheet = j.record.forces, j.record.forces.sheet
+    effort = "F_in" if "F_in" in ref else next(k for k in ref if k.startswith("T1"))
+    moment = scale * j.size * metres
+    size = moment if effort != "F_in" else scale
+    x, y = np.asarray(j.angles, dtype=float), np.asarray(ref[effort], dtype=float)
+    length = x[-1] - x[0]
+    mean = _trapezoid(y, x) / length
+    expected = {"effort_mean": (mean, size), "effort_rms": (
+        np.sqrt(_trapezoid(y * y, x) / length), size)}
+    for word, fn in (("largest", np.max), ("smallest", np.min)):
+        expected[f"effort_{word}"] = (fn(y), size)
+    for key in table.summary:
+        if key.startswith("peak_"):
+            expected[key] = (np.max(np.asarray(ref[key[5:]], dtype=float)), scale)
+    if table.work is not None:
+        work = np.concatenate([[0.0], np.cumsum(((y[1:] + y[:-1]) / 2 - mean)
+                                                * np.radians(np.diff(x)))])
+        r0, r1 = table.rows
+        c = Check(sheet, "W", j.size, 1.0, moment * 2 * np.pi)
+        j.compare(c, sheet, [f"{table.work}{r}" for r in range(r0 + 1, r1 + 1)], work[1:], "J")
+        j.checks.append(c)
+        energy = float(np.max(work) - np.min(work))
+        expected["energy_fluctuation"] = (energy, moment * 2 * np.pi)
+        cs = j.values.get((sheet, table.summary["speed_fluctuation"].cell))
+        omega = float(j.params.get("omega_in", 0.0))
+        if isinstance(cs, (int, float)) and cs * omega * omega != 0:
+            expected["flywheel"] = (energy / (cs * omega * omega),
+                                    moment * 2 * np.pi / abs(cs * omega * omega))
+        else:
+            expected["flywheel"] = (np.nan, 1.0)
+    for i in (0, 1):
+        expected[f"mean_line_x{i}"] = (x[-i], 1.0)
+        expected[f"mean_line_y{i}"] = (mean, size)
+    for key, (value, bound) in expected.items():
+        c = Check("forces summary", key, j.size, 1.0, bound)
+        j.compare(c, sheet, [table.summary[key].cell], np.array([value]), "")
+        j.checks.append(c)
+    for word in ("largest", "smallest"):
+        _check_where(j, table.summary[f"effort_{word}_at"].cell, x, y,
+                     float(expected[f"effort_{word}"][0]), size, word)
+
+
+def _check_where(j, cell: str, x: np.ndarray, y: np.ndarray, peak: float, size: float,
+                 word: str) -> None:
+    """Where the effort is largest (smallest): an input of the sweep at which the reference's
+    effort is its peak within the bound (two rows may tie)."""
+    sheet = j.record.forces.sheet
+    c = Check("forces summary", f"effort_{word}_at", j.size, 1.0, size)
+    got = j.values.get((sheet, cell))
+    c.cells += 1
+    c.judged.add((sheet, cell))
+    if np.isnan(peak):
+        c.na_expected += 1
+        ok = j.rules.is_error(got) and j.rules.error_code(got) == "#N/A"
+        c.na_agree += ok
+    else:
+        rows = np.flatnonzero(np.abs(y - peak) <= c.limit(peak))
+        ok = isinstance(got, (int, float)) and any(abs(float(got) - x[r]) <= 1e-9 for r in rows)
+    if not ok:
+        from .checks import Mismatch
+        c.mismatches.append(Mismatch(sheet, cell, f"an input where {word}", got))
+    j.checks.append(c)
