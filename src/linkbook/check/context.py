@@ -116,3 +116,19 @@ class Judging:
 
     def slope(self, inputs, key: str, unit: str, **options):
         return slope_of(self.solver, self.params, inputs, key, unit, scale=self.scale, **options)
+
+
+MIN_RATE = 1e-9
+
+
+def motion_rates(mech, params: dict, size: float) -> tuple[float, float]:
+    """The scale of velocities and accelerations: a crank's |ω| and ω² + |α| (per second, per
+    second²); an actuator's |v|/S and (v/S)² + |a|/S. A velocity's bound is the position's
+    bound times the first, an acceleration's times the second. Neither goes below 1e-9 (a
+    rate of one part in 10⁹ of the size per second is zero for any purpose; `formulas` reads
+    an input of 1e-184 as 0, to 15 decimals)."""
+    from ..language.mechanisms import MOTION_SYMBOLS
+    speed, accel = (float(params.get(k, 0.0)) for k in MOTION_SYMBOLS[mech.input_kind])
+    if not mech.input_is_angle:
+        speed, accel = speed / size, accel / size
+    return max(abs(speed), MIN_RATE), max(speed * speed + abs(accel), MIN_RATE)

@@ -15,7 +15,7 @@ import numpy as np
 from ..base.sheets import FORCES_SHEET
 from .checks import Check, unit_scale
 from .forces import LENGTH_UNITS, forces
-from .judge import motion_rates
+from .context import motion_rates
 
 GRAVITY_SCALE = 10.0     # m/s²: the weight's share of the scale (gravity or not)
 NEWTON, NEWTON_METRE = "N", "N·m"

@@ -16,14 +16,13 @@ from . import reference as generic
 from ..base import sheets as layout
 from ..base.record import BuildRecord
 from .checks import ABS_TOL, Check, Mismatch, Rules, column_unit, expected_of
-from .context import Judging, Reference
+from .context import Judging, Reference, motion_rates
 from .reading import input_at, input_column, inputs_of, mechanism_size
 
 ASSEMBLY_COLUMNS = ("closes", "gap_from", "gap_to")
 DASH = layout.DASH
 RATIO_TOL = 1e-6     # relative: a reversal's angle is located to 1e-6° (generic.time_ratio)
 WINDOW_STARTS = (-180.0, 180.0)   # where a degree view's 360° window may start
-MIN_RATE = 1e-9
 
 
 def check_book(wb, record: BuildRecord, values: dict, is_error, error_code, *,
@@ -180,19 +179,6 @@ def _check_degree_windows(j: Judging) -> None:
         c.mismatches.append(Mismatch(bad[0][0], bad[0][1],
                                      f"one 360° window starting in [{first:g}°, {last:g}°]: "
                                      f"{want}", bad[1]))
-
-
-def motion_rates(mech, params: dict, size: float) -> tuple[float, float]:
-    """The scale of velocities and accelerations: a crank's |ω| and ω² + |α| (per second, per
-    second²); an actuator's |v|/S and (v/S)² + |a|/S. A velocity's bound is the position's
-    bound times the first, an acceleration's times the second. Neither goes below 1e-9 (a
-    rate of one part in 10⁹ of the size per second is zero for any purpose; `formulas` reads
-    an input of 1e-184 as 0, to 15 decimals)."""
-    from ..language.mechanisms import MOTION_SYMBOLS
-    speed, accel = (float(params.get(k, 0.0)) for k in MOTION_SYMBOLS[mech.input_kind])
-    if not mech.input_is_angle:
-        speed, accel = speed / size, accel / size
-    return max(abs(speed), MIN_RATE), max(speed * speed + abs(accel), MIN_RATE)
 
 
 def _check_motion(j: Judging) -> None:

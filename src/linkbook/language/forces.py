@@ -26,35 +26,18 @@ origin); a centre of mass G{j}: xG{j}, yG{j}, axG{j}, ayG{j}.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
-from .excel import PRODUCT, ZERO, Expr, cross, guard, lin, mul, plus, radians, sq
-from .expressions import expression
+from .bodies import GROUND, Body, BodiesAndLoads
+from .excel import cross, guard, lin, mul, sq
 from .fields import as_table
-from .model import ACCEL, ALIAS, LENGTH, DescriptionError, Quantity
+from .model import ALIAS, DescriptionError, Quantity
 
 FORCE = "force"              # the model's role of a force column (sheet Forces)
 NEWTON, NEWTON_METRE = "N", "N·m"
 TO_METRES = "to_metres"      # the named cell: metres per length unit
-GROUND = 1
 _METRES = f"{{{TO_METRES}}}"
 
 
-@dataclass
-class Body:
-    """One moving link: the points it holds, and what is known to act on it so far."""
-    joints: list[str]
-    rank: int
-    block: bool = False
-    number: int = 0
-    forces: list[tuple[str, str, str]] = field(default_factory=list)   # (Fx, Fy, at point)
-    couples: list[str] = field(default_factory=list)                  # N·m
-
-    def holds(self, *points: str) -> bool:
-        return all(p in self.joints for p in points)
-
-
-class ForceWriter:
+class ForceWriter(BodiesAndLoads):
     """Adds the Forces sheet's quantities to a compiled model (the compiler's state and the
     motion writer's rates): the bodies, their loads, then each step type's group (steps
     package, `forces`) from the last step back to the first."""
@@ -88,10 +71,6 @@ class ForceWriter:
     def add(self, key: str, symbol: str, unit: str, formula: str, label: str) -> str:
         self.model.add(Quantity(key, symbol, unit, formula, FORCE, label))
         return f"{{{key}}}"
-
-    def expr(self, where: str, raw: object) -> str:
-        known = self.c.symbols | self.c.swept | {q.key for q in self.model.quantities}
-        return expression(where, raw, known).text
 
     def pos(self, point: str) -> tuple[str, str]:
         if point in self.centres:
@@ -312,243 +291,6 @@ class ForceWriter:
             moments.append((-1, f"{{{self.effort}}}"))
         self.add("shaking_moment", "Ms", NEWTON_METRE, lin(*moments),
                  "shaking moment on the frame about the origin")
-
-    # ------------------------------------------------------------------ bodies and loads
-    def _actuator(self) -> tuple[str, str] | None:
-        """(END, N) of the dyad side that is the linear actuator's length."""
-        if not self.c.swept:
-            return None
-        for rec in self.c.records:
-            if rec["type"] != "dyad":
-                continue
-            for end, side in (("p", "p_length"), ("q", "q_length")):
-                if rec[side].text == f"{{{self.c.input_key}}}":
-                    return rec[end], rec["point"]
-        return None
-
-    def _links(self) -> list[list[str]]:
-        """The rigid sets the description implies, in the textbook's order: its `links`, then
-        the steps' own (a crank and the cranks on its pivot, a dyad's sides, a slider's rod)."""
-        drawn = [list(dict.fromkeys(map(str, link))) for link in self.c.data.get("links") or []]
-        drawn = [j for j in drawn if len(j) >= 2 and set(j) != set(self.actuator or ())]
-        implied, crank = [], None
-        for rec in self.c.records:
-            kind, n = rec["type"], rec.get("point")
-            if kind == "crank" and crank is None:
-                crank = [rec["pivot"], n]
-                implied.append(crank)
-            elif kind == "crank":
-                crank.append(n)
-            elif kind == "dyad":
-                implied += [[rec[e], n] for e in ("p", "q")
-                            if {rec[e], n} != set(self.actuator or ())]
-            elif kind == "slider":
-                implied.append([rec["p"], n])
-        self.crank_joints = crank
-        return drawn + implied
-
-    def _bodies(self) -> list[Body]:
-        groups = [Body(list(j), rank) for rank, j in enumerate(self._links())]
-        groups = _merged(groups)
-        fixed = set(self.c.ground)
-        for rec in self.c.records:
-            if rec["type"] == "point":
-                a, b = rec["frame"]
-                host = [g for g in groups if g.holds(a, b)]
-                if a in fixed and b in fixed:
-                    fixed.add(rec["point"])
-                elif host:
-                    host[0].joints.append(rec["point"])
-                else:
-                    raise DescriptionError(self.field, f"force analysis: the point "
-                                                       f"{rec['point']} is carried by {a}→{b}, "
-                                                       "which is no rigid link (not supported "
-                                                       "yet)")
-            elif rec["type"] in ("slide", "slot") or rec["type"] == "slider" and rec["along"]:
-                what = "a slider on a moving line" if rec["type"] == "slider" else \
-                    f"a {rec['type']} step"
-                raise DescriptionError(self.field, f"force analysis of {what} is not supported "
-                                                   "yet")
-        groups = [g for g in _merged(groups) if not set(g.joints) <= fixed]
-        self.fixed = fixed
-        crank = next((g for g in groups if self.crank_joints and
-                      set(self.crank_joints) <= set(g.joints)), None)
-        bodies = ([crank] if crank else []) + [g for g in groups if g is not crank]
-        bodies += [Body([rec["point"]], 0, block=True) for rec in self.c.records
-                   if rec["type"] == "slider"]
-        for number, b in enumerate(bodies, start=GROUND + 1):
-            b.number = number
-        self.solved: set[int] = set()
-        self.guides: list[tuple[str, str, str]] = []
-        self.guide_couples: list[str] = []
-        return bodies
-
-    def _entry_body(self, k: int, entry: dict) -> Body:
-        where = f"{self.field}.bodies[{k}]"
-        joints = [str(p) for p in entry.get("joints") or []]
-        block = bool(entry.get("block", False))
-        found = [b for b in self.bodies if b.block == block and
-                 (set(joints) == set(b.joints) if block else
-                  len(set(joints)) > 1 and set(joints) <= set(b.joints))]
-        if len(found) != 1:
-            raise DescriptionError(f"{where}.joints", f"{joints} is no moving link of the "
-                                                      "steps and links (a slider's block: "
-                                                      "[point] with block = true)")
-        return found[0]
-
-    def _masses(self) -> None:
-        """Each body's weight and inertia force at its centre G, its inertia torque."""
-        g = self._gravity()
-        for k, entry in enumerate(self.entries):
-            where = f"{self.field}.bodies[{k}]"
-            entry = as_table(where, entry)
-            body = self._entry_body(k, entry)
-            mass = self.expr(f"{where}.mass", entry.get("mass", 0))
-            inertia = self.expr(f"{where}.inertia", entry.get("inertia", 0))
-            if body.block:
-                centre, (ax, ay) = body.joints[0], self.w.acc(body.joints[0])
-            else:
-                centre, (ax, ay) = self._centre(where, body, entry)
-            wx = lin((1, mul(mass, g[0])), (-1, mul(mass, _METRES, ax)))
-            wy = lin((1, mul(mass, g[1])), (-1, mul(mass, _METRES, ay)))
-            if (wx, wy) != (ZERO, ZERO):
-                body.forces.append((wx, wy, centre))
-            if inertia != ZERO and not body.block:
-                alpha = self._alpha(body)
-                body.couples.append(lin((-1, mul(inertia, alpha))))
-
-    def _alpha(self, body: Body) -> str:
-        return self._rates(body)[1]
-
-    def _rates(self, body: Body) -> tuple[str, str]:
-        """The body's ω and α: those of a link it holds (the Motion sheet's)."""
-        for (a, b), rates in self.w.links.items():
-            if body.holds(a, b):
-                return rates
-        return self.w.link_rates(body.joints[0], body.joints[1])
-
-    def _centre(self, where: str, body: Body, entry: dict) -> tuple[str, tuple[str, str]]:
-        """G placed in the frame A→B of its link as a point step places a point: by a distance
-        and an angle from A→B, or by local coordinates; its acceleration by the rigid body's
-        a_G = a_A + α×r − ω²r."""
-        spec = as_table(f"{where}.centre", entry.get("centre"))
-        frame = spec.get("frame")
-        if not isinstance(frame, list) or len(frame) != 2 or not body.holds(*map(str, frame)):
-            raise DescriptionError(f"{where}.centre.frame", f"must be two joints of the link "
-                                                            f"{body.joints}")
-        a, b = map(str, frame)
-        theta = self.c.angle_of(a, b)
-        (axp, ayp) = self.c.points[a]
-        name = f"G{body.number}"
-        if "local" in spec:
-            u, v = (expression(f"{where}.centre.local[{i}]", spec["local"][i],
-                               self.c.symbols).at_least(PRODUCT) for i in (0, 1))
-            t = theta.text
-            x = plus(axp, f"{u}*COS({t})-{v}*SIN({t})")
-            y = plus(ayp, f"{u}*SIN({t})+{v}*COS({t})")
-        else:
-            d = expression(f"{where}.centre.distance", spec.get("distance", 0),
-                           self.c.symbols).at_least(PRODUCT)
-            turn = expression(f"{where}.centre.angle", spec.get("angle", 0), self.c.symbols)
-            t = theta.text if turn.zero else plus(theta, radians(turn).text)
-            x, y = plus(axp, f"{d}*COS({t})"), plus(ayp, f"{d}*SIN({t})")
-        gx = self.add(f"x{name}", f"x{name}", LENGTH, x, f"centre of mass of link {body.number}, x")
-        gy = self.add(f"y{name}", f"y{name}", LENGTH, y, f"centre of mass of link {body.number}, y")
-        self.centres[name] = (gx, gy)
-        omega, alpha = self._rates(body)
-        rx, ry = lin((1, gx), (-1, axp.text)), lin((1, gy), (-1, ayp.text))
-        (aax, aay) = self.w.acc(a)
-        w2 = sq(omega)
-        ax = self.add(f"ax{name}", f"ax{name}", ACCEL,
-                      lin((1, aax), (-1, mul(alpha, ry)), (-1, mul(w2, rx))),
-                      f"acceleration of G{body.number}, x")
-        ay = self.add(f"ay{name}", f"ay{name}", ACCEL,
-                      lin((1, aay), (1, mul(alpha, rx)), (-1, mul(w2, ry))),
-                      f"acceleration of G{body.number}, y")
-        return name, (ax, ay)
-
-    def _gravity(self) -> tuple[str, str]:
-        spec = self.dynamics.get("gravity")
-        if spec is None:
-            return ZERO, ZERO
-        where = f"{self.field}.dynamics.gravity"
-        spec = as_table(where, spec)
-        g = self.expr(f"{where}.g", spec.get("g", 0))
-        angle = expression(f"{where}.angle", spec.get("angle", -90), self.c.symbols)
-        return _turned(g, angle)
-
-    def _vector(self, where: str, raw: object) -> tuple[str, str]:
-        if isinstance(raw, list) and len(raw) == 2:
-            return self.expr(f"{where}[0]", raw[0]), self.expr(f"{where}[1]", raw[1])
-        if isinstance(raw, dict) and "magnitude" in raw:
-            size = self.expr(f"{where}.magnitude", raw["magnitude"])
-            angle = expression(f"{where}.angle", raw.get("angle", 0),
-                               self.c.symbols | {q.key for q in self.model.quantities})
-            return _turned(size, angle)
-        raise DescriptionError(where, "must be [Fx, Fy] or { magnitude, angle }")
-
-    def _loads(self) -> None:
-        for k, load in enumerate(self.loads):
-            where = f"{self.field}.loads[{k}]"
-            load = as_table(where, load)
-            if "at" in load and "force" in load:
-                at = str(load["at"])
-                if at not in self.c.points or at in self.fixed:
-                    raise DescriptionError(f"{where}.at", f"{at!r} is no moving point")
-                body = self._load_body(where, load, at)
-                fx, fy = self._vector(f"{where}.force", load["force"])
-                body.forces.append((fx, fy, at))
-            elif "body" in load and "torque" in load:
-                body = self._load_body(where, load, None)
-                body.couples.append(self.expr(f"{where}.torque", load["torque"]))
-            else:
-                raise DescriptionError(where, "needs at and force, or body and torque")
-
-    def _load_body(self, where: str, load: dict, at: str | None) -> Body:
-        """The body a load names (`body`: its joints), else the block at `at`, else the
-        lowest-numbered link holding it."""
-        if "body" in load:
-            wanted = {str(p) for p in load["body"]}
-            found = [b for b in self.bodies if wanted <= set(b.joints)]
-            found = [b for b in found if set(b.joints) == wanted] if len(found) > 1 else found
-            if len(found) != 1 or (at is not None and at not in found[0].joints):
-                raise DescriptionError(f"{where}.body", f"no single moving link holds "
-                                                        f"{sorted(wanted | {at} - {None})}")
-            return found[0]
-        holding = sorted(self.holders(at), key=lambda b: (not b.block, b.number))
-        return holding[0]
-
-
-def _merged(groups: list[Body]) -> list[Body]:
-    """Sets sharing two points or more are one rigid link, kept under the one named first."""
-    out = sorted(groups, key=lambda g: g.rank)
-    merged = True
-    while merged:
-        merged = False
-        for i, a in enumerate(out):
-            other = next((b for b in out[i + 1:] if len(set(a.joints) & set(b.joints)) >= 2),
-                         None)
-            if other is not None:
-                a.joints += [p for p in other.joints if p not in a.joints]
-                out.remove(other)
-                merged = True
-                break
-    return out
-
-
-def _turned(size: str, angle: Expr) -> tuple[str, str]:
-    """size·(cos, sin) of an angle in degrees: exact at a literal quarter turn."""
-    quarter = {0: ("1", "0"), 90: ("0", "1"), 180: ("-1", "0"), 270: ("0", "-1"),
-               -90: ("0", "-1"), -180: ("-1", "0"), -270: ("0", "1")}
-    try:
-        c, s = quarter[int(float(angle.text))] if float(angle.text) % 90 == 0 else (None, None)
-    except ValueError:
-        c = s = None
-    if c is None:
-        r = radians(angle).text
-        c, s = f"COS({r})", f"SIN({r})"
-    return mul(size, c) if c != "-1" else lin((-1, size)), \
-        mul(size, s) if s != "-1" else lin((-1, size))
 
 
 __all__ = ["FORCE", "NEWTON", "NEWTON_METRE", "TO_METRES", "ForceWriter"]
