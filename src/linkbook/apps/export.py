@@ -22,18 +22,24 @@ FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
 class Table:
     sheet: str
     rows: list[int]     # the header rows as in the book, then the data rows
+    width: int | None = None    # its last column, where a block beside it is no part of it
 
 
 def tables(book: Book) -> list[Table]:
-    """The book's table sheets in its tab order: Sweep, Motion, Grid, Stroke sweep (those it
-    has)."""
-    record, found = book.record, {}
+    """The book's table sheets in its tab order: Sweep, Motion, Forces, Grid, Stroke sweep
+    (those it has)."""
+    from ..base.xlsx import column_index
+    record, found, widths = book.record, {}, {}
     r0, r1 = record.sweep.rows
     found[record.sweep.sheet] = [r0 - 1, *range(r0, r1 + 1)]
     if record.motion:
         m = record.motion
         # the header above the current position's row; the table from the sweep's first row
         found[m.sheet] = [m.current_row - 1, *range(m.rows[0], m.rows[1] + 1)]
+    if record.forces:
+        f = record.forces
+        found[f.sheet] = [f.current_row - 1, *range(f.rows[0], f.rows[1] + 1)]
+        widths[f.sheet] = max(column_index(c) for c in [*f.columns.values(), f.work or "A"])
     if record.grid:
         g = record.grid
         stroke = [g.stroke_row] if g.stroke_row is not None else []
@@ -41,7 +47,8 @@ def tables(book: Book) -> list[Table]:
     if record.stroke:
         s = record.stroke
         found[s.sheet] = [s.param_row, *range(s.rows[0], s.rows[1] + 1)]
-    return [Table(name, found[name]) for name in book.wb.sheetnames if name in found]
+    return [Table(name, found[name], widths.get(name)) for name in book.wb.sheetnames
+            if name in found]
 
 
 def field(value) -> str:
@@ -77,7 +84,8 @@ def _last_column(book: Book, table: Table) -> int:
 
 def table_text(book: Book, table: Table) -> str:
     from ..base.xlsx import column_letter
-    letters = [column_letter(c) for c in range(1, _last_column(book, table) + 1)]
+    width = table.width or _last_column(book, table)
+    letters = [column_letter(c) for c in range(1, width + 1)]
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\r\n")
     for row in table.rows:

@@ -176,26 +176,35 @@ def _gaps(book: Book) -> list[dict]:
     return [{"from": a, "to": b} for a, b in zip(starts, ends)]
 
 
-def _peaks(book: Book) -> list[dict]:
-    """The largest |value| down each Motion column of an angular or linear velocity or
-    acceleration, and the input value where it occurs."""
-    motion = book.record.motion
-    if not motion:
+def _peaks(book: Book, table=None, wanted=lambda key, unit: key.startswith(PEAK_PREFIXES)
+           ) -> list[dict]:
+    """The largest |value| down each column of a row table (the Motion sheet: each angular or
+    linear velocity or acceleration) that `wanted` picks, and the input value where it
+    occurs."""
+    table = table or book.record.motion
+    if not table:
         return []
-    sheet, rows, header_row = motion.sheet, motion.rows, motion.current_row - 1
+    sheet, rows, header_row = table.sheet, table.rows, table.current_row - 1
     inputs = column_values(book, sheet, "A", rows)
     peaks = []
-    for key, letter in sorted(motion.columns.items(),
+    for key, letter in sorted(table.columns.items(),
                               key=lambda kv: coordinate_to_tuple(kv[1] + "1")):
-        if not key.startswith(PEAK_PREFIXES):
+        symbol, unit = split_header(_header(book, sheet, header_row, letter))
+        if not wanted(key, unit):
             continue
         pairs = [(abs(x), number(at)) for x, at in
                  zip(map(number, column_values(book, sheet, letter, rows)), inputs)
                  if x is not None]
-        symbol, unit = split_header(_header(book, sheet, header_row, letter))
         peak, at = max(pairs, default=(None, None), key=lambda p: p[0])
         peaks.append({"what": symbol, "unit": unit, "peak": peak, "at": at})
     return peaks
+
+
+def _force_peaks(book: Book) -> list[dict]:
+    """The Forces sheet's efforts, pin loads (their sizes) and shaking: largest |value|."""
+    def wanted(key: str, unit: str) -> bool:
+        return unit in ("N", "N·m") and not key.endswith(("x", "y")) and key[0] != "N"
+    return _peaks(book, book.record.forces, wanted) if book.record.forces else []
 
 
 def summary(book: Book) -> dict:
@@ -214,7 +223,7 @@ def summary(book: Book) -> dict:
         "output": _ranges_of(book, "output"), "angles": angles,
         "transmission_angles": transmissions,
         "not_closing": number(not_closing[1]) if not_closing else 0,
-        "gaps": _gaps(book), "peaks": _peaks(book)}
+        "gaps": _gaps(book), "peaks": _peaks(book), "force_peaks": _force_peaks(book)}
 
 
 def _g(x) -> str:
@@ -256,6 +265,11 @@ def lines(data: dict) -> list[str]:
     if data["peaks"]:
         out += ["", f"Motion: largest magnitude over the sweep (at {inp['symbol']})"]
         for p in data["peaks"]:
+            out += _fit(f"  {'|' + p['what'] + '|':12} {_g(p['peak']):>12} {p['unit']:9} at "
+                        f"{_g(p['at'])} {inp['unit']}")
+    if data.get("force_peaks"):
+        out += ["", f"Forces: largest magnitude over the sweep (at {inp['symbol']})"]
+        for p in data["force_peaks"]:
             out += _fit(f"  {'|' + p['what'] + '|':12} {_g(p['peak']):>12} {p['unit']:9} at "
                         f"{_g(p['at'])} {inp['unit']}")
     return out

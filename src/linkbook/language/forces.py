@@ -27,7 +27,7 @@ origin); a centre of mass G{j}: xG{j}, yG{j}, axG{j}, ayG{j}.
 from __future__ import annotations
 
 from .bodies import GROUND, Body, BodiesAndLoads
-from .excel import cross, guard, lin, mul, sq
+from .excel import ZERO, cross, guard, lin, mul, sq
 from .fields import as_table
 from .model import ALIAS, DescriptionError, Quantity
 
@@ -51,6 +51,7 @@ class ForceWriter(BodiesAndLoads):
         self.loads = data.get("loads") or []
         self.dynamics = as_table(f"{self.field}.dynamics", data.get("dynamics") or {})
         self.centres: dict[str, tuple[str, str]] = {}     # "G3": (x, y) texts
+        self.rank: dict[str, tuple] = {}                   # a column: its place in the sheet
         self.actuator = self._actuator()
         self.effort = ""
 
@@ -66,10 +67,23 @@ class ForceWriter(BodiesAndLoads):
             if solve is not None:
                 solve(self, rec)
         self._shaking()
+        self._reading_order()
+
+    def _reading_order(self) -> None:
+        """The force columns as a reader looks for them (they are made last group first): the
+        centres of mass, the driving effort, the pins by their links' numbers, the guides, the
+        shaking force."""
+        forces = [q for q in self.model.quantities if q.role == FORCE]
+        others = [q for q in self.model.quantities if q.role != FORCE]
+        order = {q.key: (self.rank.get(q.key, (5,)), i) for i, q in enumerate(forces)}
+        self.model.quantities[:] = others + sorted(forces, key=lambda q: order[q.key])
 
     # ------------------------------------------------------------------ helpers
-    def add(self, key: str, symbol: str, unit: str, formula: str, label: str) -> str:
+    def add(self, key: str, symbol: str, unit: str, formula: str, label: str,
+            rank: tuple = (4,)) -> str:
+        """A force column; `rank` places it in the sheet (see _reading_order)."""
         self.model.add(Quantity(key, symbol, unit, formula, FORCE, label))
+        self.rank[key] = rank
         return f"{{{key}}}"
 
     def pos(self, point: str) -> tuple[str, str]:
@@ -115,10 +129,12 @@ class ForceWriter(BodiesAndLoads):
                                           "(not supported yet)")
         return first
 
-    def force_columns(self, key: str, fx: str, fy: str, what: str) -> tuple[str, str]:
-        x = self.add(f"{key}x", f"{key}x", NEWTON, fx, f"{what}, x")
-        y = self.add(f"{key}y", f"{key}y", NEWTON, fy, f"{what}, y")
-        self.add(key, key, NEWTON, f"SQRT({sq(x)}+{sq(y)})", f"{what}, size")
+    def force_columns(self, key: str, fx: str, fy: str, what: str,
+                      pair: tuple[int, int]) -> tuple[str, str]:
+        """A pin's force of link i on link j (`pair`): x, y and size."""
+        x = self.add(f"{key}x", f"{key}x", NEWTON, fx, f"{what}, x", (2, pair))
+        y = self.add(f"{key}y", f"{key}y", NEWTON, fy, f"{what}, y", (2, pair))
+        self.add(key, key, NEWTON, f"SQRT({sq(x)}+{sq(y)})", f"{what}, size", (2, pair))
         return x, y
 
     def neg(self, text: str) -> str:
@@ -130,7 +146,7 @@ class ForceWriter(BodiesAndLoads):
         ground at a ground point): a pin force column, and its reaction on the other link."""
         if point in self.c.ground:
             self.force_columns(f"F{self.pair(GROUND, body.number)}", fx, fy,
-                               f"ground on link {body.number} at {point}")
+                               f"ground on link {body.number} at {point}", (GROUND, body.number))
             return
         holders = self.holders(point)
         k = min(holders, key=lambda b: b.number)
@@ -143,7 +159,8 @@ class ForceWriter(BodiesAndLoads):
             e = others[0]
             x, y = self.force_columns(f"F{self.pair(body.number, e.number)}", self.neg(fx),
                                       self.neg(fy),
-                                      f"link {body.number} on link {e.number} at {point}")
+                                      f"link {body.number} on link {e.number} at {point}",
+                                      (body.number, e.number))
             e.forces.append((x, y, point))
             return
         if k.number in self.solved:
@@ -152,17 +169,20 @@ class ForceWriter(BodiesAndLoads):
                                           "the links that place it first in `links` (not "
                                           "supported yet)")
         x, y = self.force_columns(f"F{self.pair(k.number, body.number)}", fx, fy,
-                                  f"link {k.number} on link {body.number} at {point}")
+                                  f"link {k.number} on link {body.number} at {point}",
+                                  (k.number, body.number))
         k.forces.append((self.neg(x), self.neg(y), point))
 
     def inner(self, first: Body, second: Body, point: str, fx: str, fy: str) -> tuple[str, str]:
         """The pin force of `first` on `second` at `point`, as columns named for the pair."""
         if first.number < second.number:
             return self.force_columns(f"F{self.pair(first.number, second.number)}", fx, fy,
-                                      f"link {first.number} on link {second.number} at {point}")
+                                      f"link {first.number} on link {second.number} at {point}",
+                                      (first.number, second.number))
         x, y = self.force_columns(f"F{self.pair(second.number, first.number)}", self.neg(fx),
                                   self.neg(fy),
-                                  f"link {second.number} on link {first.number} at {point}")
+                                  f"link {second.number} on link {first.number} at {point}",
+                                  (second.number, first.number))
         return self.neg(x), self.neg(y)
 
     # ------------------------------------------------------------------ the groups
@@ -203,7 +223,7 @@ class ForceWriter(BodiesAndLoads):
         det = self.alias(f"_Dforce_{n}", cross(self.arm(n, q), e))
         self.effort = "F_in"
         force = self.add("F_in", "F_in", NEWTON, guard(det, self.neg(self.moment(s, q))),
-                         "actuator force, pushing its ends apart")
+                         "actuator force, pushing its ends apart", (1,))
         fx, fy = mul(force, e[0]), mul(force, e[1])
         s.forces.append((fx, fy, n))
         if end not in self.c.ground:
@@ -234,18 +254,18 @@ class ForceWriter(BodiesAndLoads):
         normal = self.add(f"N{tail}", f"N{tail}", NEWTON,
                           lin((1, mul(lin((1, x), (1, kb[0])), ey)),
                               (-1, mul(lin((1, y), (1, kb[1])), ex))),
-                          f"guide on block {blk.number}, across its line")
-        gx = self.add(f"F{tail}x", f"F{tail}x", NEWTON, self.neg(mul(ey, normal)),
-                      f"guide on block {blk.number}, x")
-        gy = self.add(f"F{tail}y", f"F{tail}y", NEWTON, mul(ex, normal),
-                      f"guide on block {blk.number}, y")
+                          f"guide on block {blk.number}, across its line", (3, blk.number))
+        gx = self.add(f"F{tail}x", f"F{tail}x", NEWTON, _or_na(self.neg(mul(ey, normal)), normal),
+                      f"guide on block {blk.number}, x", (3, blk.number))
+        gy = self.add(f"F{tail}y", f"F{tail}y", NEWTON, _or_na(mul(ex, normal), normal),
+                      f"guide on block {blk.number}, y", (3, blk.number))
         self.add(f"F{tail}", f"F{tail}", NEWTON, f"ABS({normal})",
-                 f"guide on block {blk.number}, size")
+                 f"guide on block {blk.number}, size", (3, blk.number))
         self.guides.append((gx, gy, n))
         if blk.couples:
             self.guide_couples.append(self.add(f"M{tail}", f"M{tail}", NEWTON_METRE,
                                                self.neg(lin(*((1, c) for c in blk.couples))),
-                                               f"guide's couple on block {blk.number}"))
+                                               f"guide's couple on block {blk.number}", (3, blk.number)))
         self.solved.update({u.number, blk.number})
         ux, uy = self.resultant(u)
         self.outer(u, p, lin((1, x), (-1, ux)), lin((1, y), (-1, uy)), where)
@@ -259,7 +279,7 @@ class ForceWriter(BodiesAndLoads):
         key = f"T{self.pair(GROUND, body.number)}"
         self.effort = key
         self.add(key, key, NEWTON_METRE, self.neg(self.moment(body, pivot)),
-                 "driving torque on the crank, counter-clockwise")
+                 "driving torque on the crank, counter-clockwise", (1,))
         self.solved.add(body.number)
         fx, fy = self.resultant(body)
         self.outer(body, pivot, self.neg(fx), self.neg(fy), where)
@@ -291,6 +311,11 @@ class ForceWriter(BodiesAndLoads):
             moments.append((-1, f"{{{self.effort}}}"))
         self.add("shaking_moment", "Ms", NEWTON_METRE, lin(*moments),
                  "shaking moment on the frame about the origin")
+
+
+def _or_na(text: str, witness: str) -> str:
+    """A component zero by construction (a horizontal guide's x) is #N/A where `witness` is."""
+    return f"IF(ISNUMBER({witness}),0,NA())" if text == ZERO else text
 
 
 __all__ = ["FORCE", "NEWTON", "NEWTON_METRE", "TO_METRES", "ForceWriter"]
