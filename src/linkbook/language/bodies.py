@@ -176,8 +176,10 @@ class BodiesAndLoads:
             turn = expression(f"{where}.centre.angle", spec.get("angle", 0), self.c.symbols)
             t = theta.text if turn.zero else plus(theta, radians(turn).text)
             x, y = plus(axp, f"{d}*COS({t})"), plus(ayp, f"{d}*SIN({t})")
-        gx = self.add(f"x{name}", f"x{name}", LENGTH, x, f"centre of mass of link {body.number}, x", (0, body.number))
-        gy = self.add(f"y{name}", f"y{name}", LENGTH, y, f"centre of mass of link {body.number}, y", (0, body.number))
+        gx = self.add(f"x{name}", f"x{name}", LENGTH, x,
+                      f"centre of mass of link {body.number}, x", (0, body.number))
+        gy = self.add(f"y{name}", f"y{name}", LENGTH, y,
+                      f"centre of mass of link {body.number}, y", (0, body.number))
         self.centres[name] = (gx, gy)
         omega, alpha = self._rates(body)
         rx, ry = lin((1, gx), (-1, axp.text)), lin((1, gy), (-1, ayp.text))

@@ -255,7 +255,8 @@ class ForceWriter(BodiesAndLoads):
                           lin((1, mul(lin((1, x), (1, kb[0])), ey)),
                               (-1, mul(lin((1, y), (1, kb[1])), ex))),
                           f"guide on block {blk.number}, across its line", (3, blk.number))
-        gx = self.add(f"F{tail}x", f"F{tail}x", NEWTON, _or_na(self.neg(mul(ey, normal)), normal),
+        gx = self.add(f"F{tail}x", f"F{tail}x", NEWTON,
+                      _or_na(self.neg(mul(ey, normal)), normal),
                       f"guide on block {blk.number}, x", (3, blk.number))
         gy = self.add(f"F{tail}y", f"F{tail}y", NEWTON, _or_na(mul(ex, normal), normal),
                       f"guide on block {blk.number}, y", (3, blk.number))
@@ -265,7 +266,8 @@ class ForceWriter(BodiesAndLoads):
         if blk.couples:
             self.guide_couples.append(self.add(f"M{tail}", f"M{tail}", NEWTON_METRE,
                                                self.neg(lin(*((1, c) for c in blk.couples))),
-                                               f"guide's couple on block {blk.number}", (3, blk.number)))
+                                               f"guide's couple on block {blk.number}",
+                                               (3, blk.number)))
         self.solved.update({u.number, blk.number})
         ux, uy = self.resultant(u)
         self.outer(u, p, lin((1, x), (-1, ux)), lin((1, y), (-1, uy)), where)
@@ -292,7 +294,8 @@ class ForceWriter(BodiesAndLoads):
     def _shaking(self) -> None:
         """What the links do to the frame: minus the ground's forces on them (its pins, the
         guides, the actuator's base) and their moments about the origin, with the motor's."""
-        ground = [(f"{{F{self.pair(GROUND, b.number)}x}}", f"{{F{self.pair(GROUND, b.number)}y}}", p)
+        keys = {b.number: f"F{self.pair(GROUND, b.number)}" for b in self.bodies}
+        ground = [(f"{{{keys[b.number]}x}}", f"{{{keys[b.number]}y}}", p)
                   for b in self.bodies if not b.block for p in b.joints if p in self.c.ground]
         ground += self.guides
         if self.actuator is not None and getattr(self, "actuator_force", None):
