@@ -36,8 +36,10 @@ def check_forces(j) -> None:
     then its summary and work column."""
     table, mech = j.record.forces, j.mechanism
     metres = LENGTH_UNITS[j.record.length_unit]
-    ref = forces(j.solver.description, j.params, j.angles, j.record.length_unit)
-    one = forces(j.solver.description, j.params, [j.angle], j.record.length_unit)
+    # a load's expression may convert a length with the book's `to_metres`
+    params = {**j.params, "to_metres": metres}
+    ref = forces(j.solver.description, params, j.angles, j.record.length_unit)
+    one = forces(j.solver.description, params, [j.angle], j.record.length_unit)
     scale = force_scale(j, ref, metres)
     _, rate2 = motion_rates(mech, j.params, j.size)
     (r0, r1), now = table.rows, table.current_row

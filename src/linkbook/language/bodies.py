@@ -13,7 +13,8 @@ from .fields import as_table
 from .model import ACCEL, LENGTH, DescriptionError
 
 GROUND = 1
-_METRES = "{to_metres}"
+METRES = "to_metres"          # the named cell of metres per length unit (forces.TO_METRES)
+_METRES = f"{{{METRES}}}"
 
 
 @dataclass
@@ -35,7 +36,8 @@ class BodiesAndLoads:
     the compiler `c`, the motion writer `w`, `entries`, `loads`, `dynamics`, `centres`)."""
 
     def expr(self, where: str, raw: object) -> str:
-        known = self.c.symbols | self.c.swept | {q.key for q in self.model.quantities}
+        known = self.c.symbols | self.c.swept | {q.key for q in self.model.quantities} | \
+            {METRES}
         return expression(where, raw, known).text
 
     def _actuator(self) -> tuple[str, str] | None:

@@ -26,14 +26,14 @@ origin); a centre of mass G{j}: xG{j}, yG{j}, axG{j}, ayG{j}.
 """
 from __future__ import annotations
 
-from .bodies import GROUND, Body, BodiesAndLoads
+from .bodies import GROUND, METRES, Body, BodiesAndLoads
 from .excel import ZERO, cross, guard, lin, mul, sq
 from .fields import as_table
 from .model import ALIAS, DescriptionError, Quantity
 
 FORCE = "force"              # the model's role of a force column (sheet Forces)
 NEWTON, NEWTON_METRE = "N", "N·m"
-TO_METRES = "to_metres"      # the named cell: metres per length unit
+TO_METRES = METRES           # the named cell: metres per length unit
 _METRES = f"{{{TO_METRES}}}"
 
 
