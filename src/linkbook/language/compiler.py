@@ -10,11 +10,12 @@ import keyword
 
 from ..base.xlsx import excel_name_problem
 from .columns import Column, Sym, input_angle
+from .dynamics import check_dynamics
 from .excel import ATOM, SUM, Expr, key, minus, references
 from .expressions import expression
 from .fields import IDENT, POINT_NAME, RESERVED_KEYS, as_table, as_text, check_keys
-from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND,
-                         RATE_KIND, Mechanism)
+from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS,
+                         OFFSET_KIND, RATE_KIND, Mechanism)
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Block, DescriptionError, Guide, Model,
                     Quantity)
 from .motion import MotionWriter
@@ -22,7 +23,7 @@ from .presentation import Presentation
 from .schema import keys_of, schema
 from .steps import COMMON_KEYS, STEPS
 
-KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND)
+KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND, *LOAD_UNITS)
 MECHANISM_KEYS = keys_of(schema()["properties"]["mechanism"])
 
 
@@ -212,6 +213,7 @@ class Compiler:
             raise DescriptionError(f"{self.field}.steps", "must be a non-empty list of steps")
         for i, step in enumerate(steps):
             self.read_step(i, step)
+        check_dynamics(self, d)
         Presentation(self).read(d)
         MotionWriter(self).run()
         return self.model

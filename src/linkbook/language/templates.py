@@ -19,8 +19,8 @@ from .domain import (BRANCH_WORDS, InputError, check_input, check_lengths_togeth
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
 from .dimensions import unconvertible
 from .expressions import value_of
-from .mechanisms import (ANGLE_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND, RATE_KIND,
-                         Mechanism)
+from .mechanisms import (ANGLE_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS, OFFSET_KIND,
+                         RATE_KIND, Mechanism)
 
 def _template_dir() -> Path:
     """Installed: templates/ is packaged inside linkbook; from a checkout: the repo's templates/."""
@@ -224,7 +224,7 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         unit = _need(entry, "unit", field)
         want = parameter_unit(mech, symbol, kind, length_unit)
         if unit != want:
-            raise InputError(f"{field}.unit", f"must be {want} for a{'n' if kind[0] in 'ao' else ''} "
+            raise InputError(f"{field}.unit", f"must be {want} for a{'n' if kind[0] in 'aio' else ''} "
                                               f"{kind} parameter in a book of {length_unit} "
                                               f"(got {unit!r})")
         excel_name = entry.get("name", default_name(symbol))
@@ -294,7 +294,7 @@ def parameter_unit(mech: Mechanism, symbol: str, kind: str, length_unit: str) ->
         return "deg"
     if kind == RATE_KIND:
         return motion_default(mech, symbol, length_unit)["unit"]
-    return "-"
+    return LOAD_UNITS.get(kind, "-")
 
 
 def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template":
