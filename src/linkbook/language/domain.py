@@ -79,7 +79,7 @@ def check_value(field: str, kind: str, raw: object) -> float:
     if kind == RATE_KIND and abs(value) > RATE_LIMIT:
         raise InputError(field, f"must be from {-RATE_LIMIT:g} to {RATE_LIMIT:g} (got {raw!r})")
     if kind in NOT_NEGATIVE_KINDS and value < 0:
-        raise InputError(field, f"must be a {kind}, zero or more (got {raw!r})")
+        raise InputError(field, f"must be zero or more (got {raw!r})")
     if kind == ANGLE_KIND and not -360 <= value <= 360:
         raise InputError(field, f"must be an angle from -360 to 360 degrees (got {raw!r})")
     return value

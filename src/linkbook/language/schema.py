@@ -63,7 +63,7 @@ def mechanism_key_problem(key: str, value: object) -> tuple[str, str] | None:
         return None
     field, message = _describe(min(errors, key=lambda e: e.validator == "required"), value)
     where = f"mechanism.{key}"
-    return (f"{where}{field}" if field.startswith("[") else _join(where, field)), message
+    return (f"{where}{field}" if field.startswith("[") or not field else f"{where}.{field}"), message
 
 
 def _describe(error, data: dict) -> tuple[str, str]:
