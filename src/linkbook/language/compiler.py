@@ -213,9 +213,10 @@ class Compiler:
             raise DescriptionError(f"{self.field}.steps", "must be a non-empty list of steps")
         for i, step in enumerate(steps):
             self.read_step(i, step)
-        check_dynamics(self, d)
+        steps_keys = {q.key for q in self.model.quantities}   # what an expression step may name
         Presentation(self).read(d)
         MotionWriter(self).run()
+        check_dynamics(self, d, steps_keys)       # last: a problem of the steps explains more
         return self.model
 
     def read_input(self, raw: object) -> None:

@@ -20,16 +20,16 @@ KEYS = ("dynamics", "bodies", "loads")
 _CENTRE_FORMS = {"local": set(), "distances": {"side"}, "distance": {"angle"}}
 
 
-def check_dynamics(c, data: dict) -> None:
+def check_dynamics(c, data: dict, steps_keys: set[str]) -> None:
     """Check the description's dynamics, bodies and loads against the compiled steps of `c`
-    (a Compiler that has placed every step)."""
+    (a Compiler that has placed every step); `steps_keys`: the keys of the quantities the steps
+    placed, which their expressions may name as an `expression` step's formula does."""
     for key in KEYS:
         found = mechanism_key_problem(key, data[key]) if key in data else None
         if found:
             raise DescriptionError(f"{c.origin}: {found[0]}", found[1])
     # what an expression step may name, less the compiler's own aliases (their keys start with _)
-    known = {k for k in c.symbols | c.swept | {q.key for q in c.model.quantities}
-             if not k.startswith("_")}
+    known = {k for k in c.symbols | c.swept | steps_keys if not k.startswith("_")}
     field = c.field
     gravity = (data.get("dynamics") or {}).get("gravity")
     if gravity is not None:

@@ -63,7 +63,8 @@ def mechanism_key_problem(key: str, value: object) -> tuple[str, str] | None:
         return None
     field, message = _describe(min(errors, key=lambda e: e.validator == "required"), value)
     where = f"mechanism.{key}"
-    return (f"{where}{field}" if field.startswith("[") or not field else f"{where}.{field}"), message
+    joined = f"{where}{field}" if field.startswith("[") or not field else f"{where}.{field}"
+    return joined, message
 
 
 def _describe(error, data: dict) -> tuple[str, str]:
