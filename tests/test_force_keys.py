@@ -233,3 +233,28 @@ def test_load_parameters_keep_their_units_in_a_book_of_inches():
         assert inches.parameter(symbol).value == t.parameter(symbol).value
         assert inches.parameter(symbol).unit == t.parameter(symbol).unit
     assert inches.parameter("a2").value == pytest.approx(t.parameter("a2").value / 25.4)
+
+
+@pytest.mark.parametrize("keys,message", [
+    (dict(bodies=[{**BAR, "centre": {"frame": ["B0", "B"], "distance": 28}}]),
+     "--unit: mechanism.bodies[0].centre.distance: the number 28 is a length here"),
+    (dict(bodies=[{**BAR, "centre": {"frame": ["B0", "B"], "local": ["a4/2", 5]}}]),
+     "--unit: mechanism.bodies[0].centre.local[1]: the number 5 is a length here"),
+    (dict(loads=[{"at": "C", "force": ["xC", 0]}]),
+     "--unit: mechanism.loads[0].force[0]: xC is a length, where a number (no length in it) "
+     "belongs"),
+])
+def test_a_length_written_as_a_number_in_a_centre_is_refused_by_a_change_of_unit(keys, message):
+    """A centre's place is in the book's length unit: --unit converts it where it is made of
+    parameters, and refuses a number it cannot convert, as it does in a step. A force that is a
+    length would change its meaning with the unit."""
+    t = templates.from_data("mine", _fourbar_with(**copy.deepcopy(keys)), origin="mine.toml")
+    with pytest.raises(InputError) as caught:
+        templates.with_unit(t, "in")
+    assert message in str(caught.value)
+
+
+@pytest.mark.parametrize("name", WITH_BODIES)
+def test_every_template_with_masses_converts_to_inches(name):
+    t = templates.load(name)
+    assert templates.with_unit(t, "in").length_unit == "in"

@@ -145,4 +145,50 @@ def unconvertible(mechanism: Mechanism, model: Model) -> tuple[str, str] | None:
                 found = _Dimensions(dims).check(item, want)
                 if found:
                     return f"{field}.{k}" + (f"[{j}]" if isinstance(raw, list) else ""), found
+    return _unconvertible_force_key(description, dims)
+
+
+# The dimension of each value of the force analysis' keys: a centre's place is a length, every
+# other value a number (a mass, a force, an angle: SI units, which a change of length unit leaves)
+_CENTRE_DIMENSIONS = {"local": 1, "distances": 1, "distance": 1, "angle": 0}
+
+
+def _force_key_values(description: dict):
+    """(field, value, its dimension) of every value of dynamics, bodies and loads."""
+    gravity = (description.get("dynamics") or {}).get("gravity") or {}
+    for k, raw in gravity.items():
+        yield f"mechanism.dynamics.gravity.{k}", raw, 0
+    for i, body in enumerate(description.get("bodies") or []):
+        field = f"mechanism.bodies[{i}]"
+        for k in ("mass", "inertia"):
+            if k in body:
+                yield f"{field}.{k}", body[k], 0
+        for k, raw in (body.get("centre") or {}).items():
+            if k in _CENTRE_DIMENSIONS:
+                yield from _items(f"{field}.centre.{k}", raw, _CENTRE_DIMENSIONS[k])
+    for i, load in enumerate(description.get("loads") or []):
+        field = f"mechanism.loads[{i}]"
+        force = load.get("force")
+        if isinstance(force, dict):
+            for k, raw in force.items():
+                yield f"{field}.force.{k}", raw, 0
+        elif force is not None:
+            yield from _items(f"{field}.force", force, 0)
+        if "torque" in load:
+            yield f"{field}.torque", load["torque"], 0
+
+
+def _items(field: str, raw: object, want: int):
+    if isinstance(raw, list):
+        for j, item in enumerate(raw):
+            yield f"{field}[{j}]", item, want
+    else:
+        yield field, raw, want
+
+
+def _unconvertible_force_key(description: dict, dims: dict[str, int]) -> tuple[str, str] | None:
+    for field, raw, want in _force_key_values(description):
+        found = _Dimensions(dims).check(raw, want)
+        if found:
+            return field, found
     return None
