@@ -258,3 +258,21 @@ def test_a_length_written_as_a_number_in_a_centre_is_refused_by_a_change_of_unit
 def test_every_template_with_masses_converts_to_inches(name):
     t = templates.load(name)
     assert templates.with_unit(t, "in").length_unit == "in"
+
+
+def test_the_docs_example_is_a_slider_crank_the_language_and_the_reference_accept():
+    """docs/language.md's example of the keys, on the bundled slider-crank (its points A, B, C,
+    its parameters, and a force F at angle beta and a torque T3 added)."""
+    text = (ROOT / "docs" / "language.md").read_text(encoding="utf-8")
+    section = text[text.index("## Mass, gravity and loads"):]
+    example = section[section.index("```toml") + len("```toml"):]
+    example = tomllib.loads("[mechanism]\n" + example[:example.index("```")])["mechanism"]
+    data = _without_force_keys(_data("slider-crank"))
+    data["mechanism"].update(example)
+    data["parameters"]["F"] = {"label": "F", "unit": "N", "value": 50.0, "kind": "force"}
+    data["parameters"]["beta"] = {"label": "β", "unit": "deg", "value": 30.0, "kind": "angle"}
+    data["parameters"]["T3"] = {"label": "T3", "unit": "N·m", "value": -1.0, "kind": "torque"}
+    t = templates.from_data("mine", data, origin="mine.toml")
+    got = forces(t.mechanism.description, t.values(), np.asarray(t.sweep.angles()),
+                 t.length_unit)
+    assert np.isfinite(got["T12"]).all()
