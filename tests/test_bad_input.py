@@ -107,6 +107,27 @@ TOML_CASES = [
     ("an actuator's length swept through zero", (ROOT / "templates" / "boom-cylinder.toml")
      .read_text(encoding="utf-8").replace("start = 600", "start = -10"),
      "mine.toml: sweep.start: a linear actuator's length must be positive (got -10 mm)"),
+    # the force analysis' keys (docs/language.md, "Mass, gravity and loads")
+    ("a misspelt key of a body", FOURBAR_TOML.replace('inertia = "I4"', 'inertai = "I4"'),
+     "mine.toml: mechanism.bodies[2]: unknown key 'inertai' (did you mean 'inertia'?)"),
+    ("a body's joint that is no point", FOURBAR_TOML.replace('joints = ["B0", "B"]',
+                                                             'joints = ["B0", "D"]'),
+     "mine.toml: mechanism.bodies[2].joints[1]: 'D' is no point of the mechanism"),
+    ("a centre's frame outside its link", FOURBAR_TOML.replace(
+        'centre = { frame = ["B0", "B"]', 'centre = { frame = ["B0", "C"]'),
+     "mine.toml: mechanism.bodies[2].centre.frame: must be two different joints of the link"),
+    ("a torque beside a point", FOURBAR_TOML.replace('torque = "T4"', 'torque = "T4"\nat = "C"'),
+     "mine.toml: mechanism.loads[0]: must be a table of at and force (body optional), or of "
+     "body and torque"),
+    ("a load of an unknown symbol", FOURBAR_TOML.replace('torque = "T4"', 'torque = "T5"'),
+     "mine.toml: mechanism.loads[0].torque: unknown symbol 'T5'"),
+    ("a mass in grams", FOURBAR_TOML.replace('unit = "kg", value = 0.02198',
+                                             'unit = "g", value = 21.98'),
+     "mine.toml: parameters.m4.unit: must be kg for a mass parameter in a book of mm (got 'g')"),
+    ("a negative mass", FOURBAR_TOML.replace('value = 0.02198', 'value = -0.02198'),
+     "mine.toml: parameters.m4.value: must be zero or more (got -0.02198)"),
+    ("gravity misspelt", FOURBAR_TOML.replace('gravity = { g = "g" }', 'gravity = { G = "g" }'),
+     "mine.toml: mechanism.dynamics.gravity: unknown key 'G'; known: angle, g"),
     ("parameter not a table", FOURBAR_TOML.replace(
         'a1 = { label = "ground link |A0B0|", unit = "mm", value = 70.0 }', "a1 = 70"), "a1"),
 ]

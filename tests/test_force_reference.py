@@ -23,8 +23,9 @@ MM = 1e-3
 
 
 def _with(description: dict, **dynamics) -> dict:
-    """A template's description with bodies, loads and gravity added."""
-    return {**description, **dynamics}
+    """A template's description with these bodies, loads and gravity in place of its own."""
+    bare = {k: v for k, v in description.items() if k not in ("dynamics", "bodies", "loads")}
+    return {**bare, **dynamics}
 
 
 def test_static_fourbar_by_virtual_work():

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .excel import PRODUCT, ZERO, Expr, lin, mul, plus, radians, sq
+from .excel import (PRODUCT, SUM, ZERO, Expr, angle_of_triangle_or_na, lin, mul, plus, radians,
+                    sq)
 from .expressions import expression
 from .fields import as_table
 from .model import ACCEL, LENGTH, DescriptionError
@@ -172,6 +173,8 @@ class BodiesAndLoads:
             t = theta.text
             x = plus(axp, f"{u}*COS({t})-{v}*SIN({t})")
             y = plus(ayp, f"{u}*SIN({t})+{v}*COS({t})")
+        elif "distances" in spec:
+            x, y = self._by_distances(where, spec, name, a, b, theta)
         else:
             d = expression(f"{where}.centre.distance", spec.get("distance", 0),
                            self.c.symbols).at_least(PRODUCT)
@@ -194,6 +197,22 @@ class BodiesAndLoads:
                       lin((1, aay), (1, mul(alpha, rx)), (-1, mul(w2, ry))),
                       f"acceleration of G{body.number}, y", (0, body.number))
         return name, (ax, ay)
+
+    def _by_distances(self, where: str, spec: dict, name: str, a: str, b: str, theta: Expr
+                      ) -> tuple[str, str]:
+        """G at given distances from A and B, on the side `side` of A→B: the angle at A by the
+        cosine rule (#N/A where the three make no triangle)."""
+        sides = spec["distances"]
+        keys = [self.alias(f"_{name}_{k}", e.text) for k, e in (
+            ("frame", self.c.length_of(a, b)),
+            *((k, expression(f"{where}.centre.distances[{i}]", sides[i], self.c.symbols))
+              for i, k in enumerate(("from_a", "from_b"))))]
+        ab, da, db = (k[1:-1] for k in keys)
+        gamma = self.alias(f"_{name}_gamma", angle_of_triangle_or_na(ab, da, db, once=ab))
+        side = self.c.branch(f"{where}.centre.side", spec.get("side", 1))
+        t = f"{theta.at_least(SUM)}+{{{side}}}*{gamma}"
+        (ax, ay), d = self.c.points[a], f"{{{da}}}"
+        return plus(ax, f"{d}*COS({t})"), plus(ay, f"{d}*SIN({t})")
 
     def _gravity(self) -> tuple[str, str]:
         spec = self.dynamics.get("gravity")

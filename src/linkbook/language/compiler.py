@@ -10,10 +10,11 @@ import keyword
 
 from ..base.xlsx import excel_name_problem
 from .columns import Column, Sym, input_angle
+from .dynamics import check_dynamics
 from .excel import ATOM, SUM, Expr, key, minus, references
 from .expressions import expression
 from .fields import IDENT, POINT_NAME, RESERVED_KEYS, as_table, as_text, check_keys
-from .mechanisms import (ANGLE_KIND, BRANCH_KIND, FORCE_UNITS, LENGTH_KIND, MOTION_SYMBOLS,
+from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS,
                          OFFSET_KIND, RATE_KIND, Mechanism)
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Block, DescriptionError, Guide, Model,
                     Quantity)
@@ -23,7 +24,7 @@ from .presentation import Presentation
 from .schema import keys_of, schema
 from .steps import COMMON_KEYS, STEPS
 
-KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND, *FORCE_UNITS)
+KINDS = (LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND, *LOAD_UNITS)
 MECHANISM_KEYS = keys_of(schema()["properties"]["mechanism"])
 FORCE_KEYS = ("bodies", "loads", "dynamics")    # any of them: the book has a Forces sheet
 
@@ -214,9 +215,11 @@ class Compiler:
             raise DescriptionError(f"{self.field}.steps", "must be a non-empty list of steps")
         for i, step in enumerate(steps):
             self.read_step(i, step)
+        steps_keys = {q.key for q in self.model.quantities}   # what an expression step may name
         Presentation(self).read(d)
         motion = MotionWriter(self)
         motion.run()
+        check_dynamics(self, d, steps_keys)       # last: a problem of the steps explains more
         if any(k in d for k in FORCE_KEYS):
             ForceWriter(self, motion).run()
         return self.model

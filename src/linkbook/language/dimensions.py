@@ -8,7 +8,7 @@ from fractions import Fraction
 
 from .expressions import value_of
 from .mechanisms import LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND, Mechanism
-from .forces import TO_METRES
+from .bodies import METRES
 from .model import LENGTH, Model
 from .steps import STEPS
 
@@ -146,42 +146,50 @@ def unconvertible(mechanism: Mechanism, model: Model) -> tuple[str, str] | None:
                 found = _Dimensions(dims).check(item, want)
                 if found:
                     return f"{field}.{k}" + (f"[{j}]" if isinstance(raw, list) else ""), found
-    for field, raw, want in _force_values(description):
-        found = _Dimensions({**dims, TO_METRES: -1}).check(raw, want)
-        if found:
-            return field, found
-    return None
+    return _unconvertible_force_key(description, {**dims, METRES: -1})
 
 
-# The power of length of the force keys' values (docs/language.md, "Mass, gravity and
-# loads"): a centre's distances are lengths; masses, inertias, forces, torques, gravity and
-# angles are not (they are in kg, kg·m², N, N·m, m/s², degrees whatever the length unit).
-_CENTRE_DIMENSIONS = {"distance": 1, "local": 1, "distances": 1, "angle": 0}
+# The dimension of each value of the force analysis' keys: a centre's place is a length, every
+# other value a number (a mass, a force, an angle: SI units, which a change of length unit leaves)
+_CENTRE_DIMENSIONS = {"local": 1, "distances": 1, "distance": 1, "angle": 0}
 
 
-def _force_values(description: dict):
-    """(field, value, its power of length) of every value of the force keys."""
-    def items(field, raw, want):
-        if isinstance(raw, list):
-            for j, item in enumerate(raw):
-                yield f"{field}[{j}]", item, want
-        elif raw is not None and not isinstance(raw, dict):
-            yield field, raw, want
+def _force_key_values(description: dict):
+    """(field, value, its dimension) of every value of dynamics, bodies and loads."""
     gravity = (description.get("dynamics") or {}).get("gravity") or {}
-    for k in ("g", "angle"):
-        yield from items(f"mechanism.dynamics.gravity.{k}", gravity.get(k), 0)
-    for i, entry in enumerate(description.get("bodies") or []):
+    for k, raw in gravity.items():
+        yield f"mechanism.dynamics.gravity.{k}", raw, 0
+    for i, body in enumerate(description.get("bodies") or []):
         field = f"mechanism.bodies[{i}]"
         for k in ("mass", "inertia"):
-            yield from items(f"{field}.{k}", entry.get(k), 0)
-        for k, want in _CENTRE_DIMENSIONS.items():
-            yield from items(f"{field}.centre.{k}", (entry.get("centre") or {}).get(k), want)
+            if k in body:
+                yield f"{field}.{k}", body[k], 0
+        for k, raw in (body.get("centre") or {}).items():
+            if k in _CENTRE_DIMENSIONS:
+                yield from _items(f"{field}.centre.{k}", raw, _CENTRE_DIMENSIONS[k])
     for i, load in enumerate(description.get("loads") or []):
         field = f"mechanism.loads[{i}]"
         force = load.get("force")
-        for k in ("magnitude", "angle"):
-            yield from items(f"{field}.force.{k}", (force if isinstance(force, dict) else {})
-                             .get(k), 0)
-        if isinstance(force, list):
-            yield from items(f"{field}.force", force, 0)
-        yield from items(f"{field}.torque", load.get("torque"), 0)
+        if isinstance(force, dict):
+            for k, raw in force.items():
+                yield f"{field}.force.{k}", raw, 0
+        elif force is not None:
+            yield from _items(f"{field}.force", force, 0)
+        if "torque" in load:
+            yield f"{field}.torque", load["torque"], 0
+
+
+def _items(field: str, raw: object, want: int):
+    if isinstance(raw, list):
+        for j, item in enumerate(raw):
+            yield f"{field}[{j}]", item, want
+    else:
+        yield field, raw, want
+
+
+def _unconvertible_force_key(description: dict, dims: dict[str, int]) -> tuple[str, str] | None:
+    for field, raw, want in _force_key_values(description):
+        found = _Dimensions(dims).check(raw, want)
+        if found:
+            return field, found
+    return None

@@ -25,7 +25,7 @@ import ast
 import math
 
 from ..base.errors import InputError
-from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, NON_NEGATIVE_KINDS, OFFSET_KIND,
+from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, NOT_NEGATIVE_KINDS, OFFSET_KIND,
                          RATE_KIND)
 from ..base.safety import MAX_UNCOMPRESSED
 
@@ -78,8 +78,8 @@ def check_value(field: str, kind: str, raw: object) -> float:
         raise InputError(field, f"must be from {-hi:g} to {hi:g} (got {raw!r})")
     if kind == RATE_KIND and abs(value) > RATE_LIMIT:
         raise InputError(field, f"must be from {-RATE_LIMIT:g} to {RATE_LIMIT:g} (got {raw!r})")
-    if kind in NON_NEGATIVE_KINDS and value < 0:
-        raise InputError(field, f"must be a {kind}: zero or more (got {raw!r})")
+    if kind in NOT_NEGATIVE_KINDS and value < 0:
+        raise InputError(field, f"must be zero or more (got {raw!r})")
     if kind == ANGLE_KIND and not -360 <= value <= 360:
         raise InputError(field, f"must be an angle from -360 to 360 degrees (got {raw!r})")
     return value

@@ -13,11 +13,11 @@ from .model import Model
 # Kinds of parameter, each with its own check (domain.check_value) and input validation.
 LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND = "length", "offset", "angle", "branch"
 RATE_KIND = "rate"     # the input's speed or acceleration: any number
-# Kinds of the force analysis's inputs, each in the one SI unit it is written in (never
-# converted with the length unit): a mass or an inertia is never negative, a load any number.
-FORCE_UNITS = {"mass": "kg", "inertia": "kg·m²", "force": "N", "torque": "N·m",
-               "gravity": "m/s²"}
-NON_NEGATIVE_KINDS = ("mass", "inertia")
+# Kinds of the loads' parameters (docs/language.md, "Mass, gravity and loads"), each in the one
+# SI unit the force analysis reads it in, whatever the book's length unit.
+LOAD_UNITS = {"mass": "kg", "inertia": "kg·m²", "force": "N", "torque": "N·m",
+              "acceleration": "m/s²"}
+NOT_NEGATIVE_KINDS = ("mass", "inertia")
 
 # The input's speed and acceleration, parameters every mechanism has (the data format's names,
 # which the reference reads too): a crank's ω and α, a linear actuator's velocity and

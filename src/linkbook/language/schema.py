@@ -49,6 +49,24 @@ def problem(data: dict) -> tuple[str, str] | None:
     return _describe(min(errors, key=lambda e: e.validator == "required"), data)
 
 
+@cache
+def _mechanism_key_validator(key: str):
+    import jsonschema
+    return jsonschema.Draft7Validator(schema()["properties"]["mechanism"]["properties"][key])
+
+
+def mechanism_key_problem(key: str, value: object) -> tuple[str, str] | None:
+    """The first problem of one key of a [mechanism] table (one a workbook's record gave back,
+    which no template's schema check has seen) as (field, message), or None when it fits."""
+    errors = list(_mechanism_key_validator(key).iter_errors(value))
+    if not errors:
+        return None
+    field, message = _describe(min(errors, key=lambda e: e.validator == "required"), value)
+    where = f"mechanism.{key}"
+    joined = f"{where}{field}" if field.startswith("[") or not field else f"{where}.{field}"
+    return joined, message
+
+
 def _describe(error, data: dict) -> tuple[str, str]:
     path = list(error.absolute_path)
     field = field_name(path, data)

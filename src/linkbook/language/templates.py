@@ -19,7 +19,7 @@ from .domain import (BRANCH_WORDS, InputError, check_input, check_lengths_togeth
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
 from .dimensions import unconvertible
 from .expressions import value_of
-from .mechanisms import (ANGLE_KIND, FORCE_UNITS, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND,
+from .mechanisms import (ANGLE_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism)
 
 def _template_dir() -> Path:
@@ -294,7 +294,7 @@ def parameter_unit(mech: Mechanism, symbol: str, kind: str, length_unit: str) ->
         return "deg"
     if kind == RATE_KIND:
         return motion_default(mech, symbol, length_unit)["unit"]
-    return FORCE_UNITS.get(kind, "-")
+    return LOAD_UNITS.get(kind, "-")
 
 
 def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template":
