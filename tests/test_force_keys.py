@@ -13,10 +13,10 @@ import jsonschema
 import numpy as np
 import pytest
 
-from conftest import ROOT, built
+from conftest import ROOT, built, checks_of, formula_cells
 from linkbook.base.errors import InputError
 from linkbook.base.record import BuildRecord
-from linkbook.base.sheets import META
+from linkbook.base.sheets import FORCES_SHEET, META
 from linkbook.book import builder
 from linkbook.check.forces import forces, topology
 from linkbook.language import templates
@@ -79,18 +79,26 @@ def test_every_form_of_the_keys_is_accepted_by_the_schema_the_language_and_the_r
     assert np.isfinite(got["T12"]).all()
 
 
-def test_the_keys_change_nothing_in_the_book_but_its_record_of_the_description():
-    """The writer ignores the keys for now: the books with and without them lay out the same
-    cells with the same formulas, and record the same, but for the description itself."""
-    books = [builder.make(templates.from_data("fourbar", data), values_needed=False)[0]
+def test_the_keys_add_the_forces_sheet_and_change_no_other_cell():
+    """Mass, gravity and loads add the Forces sheet (and its charts); every other sheet lays
+    out the same cells with the same formulas, and the book with every form of the keys
+    verifies: each formula cell judged, none differing from the references."""
+    books = [builder.make(templates.from_data("fourbar", data))
              for data in (_without_force_keys(_data("fourbar")),
                           _fourbar_with(**copy.deepcopy(EVERY_FORM)))]
-    cells = [{(ws.title, c.coordinate): c.value for ws in b.workbook.worksheets if ws.title != META
-              for row in ws.iter_rows() for c in row if c.value is not None} for b in books]
+    cells = [{(ws.title, c.coordinate): c.value for ws in b.workbook.worksheets
+              if ws.title not in (META, FORCES_SHEET)
+              for row in ws.iter_rows() for c in row if c.value is not None} for b, _ in books]
     assert cells[0] == cells[1]
-    records = [json.loads(json.dumps(b.meta)) for b in books]
+    assert FORCES_SHEET not in books[0][0].workbook.sheetnames
+    assert FORCES_SHEET in books[1][0].workbook.sheetnames
+    records = [json.loads(json.dumps(b.meta)) for b, _ in books]
     assert records[1]["description"] == {**records[0]["description"], **EVERY_FORM}
-    assert {**records[0], "description": None} == {**records[1], "description": None}
+    assert "forces" not in records[0] and "forces" in records[1]
+    built_book, values = books[1]
+    checks = checks_of(built_book, values)
+    assert not [m for c in checks for m in c.mismatches]
+    assert sum(c.cells for c in checks) == len(formula_cells(built_book.workbook))
 
 
 @pytest.mark.parametrize("name", WITH_BODIES)

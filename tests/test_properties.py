@@ -16,8 +16,9 @@ from conftest import checks_of, formula_cells
 from linkbook.book import builder
 from linkbook.language import templates
 from linkbook.language.steps import STEP_KEYS
-from linkbook.language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
-                                 OFFSET_KIND, RATE_KIND)
+from linkbook.language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, LOAD_UNITS,
+                                          MOTION_SYMBOLS, NOT_NEGATIVE_KINDS, OFFSET_KIND,
+                                          RATE_KIND)
 
 EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
 TALLY: Counter = Counter()
@@ -25,7 +26,8 @@ FAMILIES = sorted(p.stem for p in templates.bundled())
 
 
 def dimensions(t: templates.Template):
-    """Lengths from 0.2 to 3 times the template's, offsets around it, any angle and branch."""
+    """Lengths from 0.2 to 3 times the template's, offsets around it, any angle and branch;
+    masses and inertias 0 to 3 times the template's, loads and gravity −3 to 3 times."""
     scale = max(abs(p.value) for p in t.parameters if p.kind == LENGTH_KIND)
     draws = {}
     for p in t.parameters:
@@ -43,6 +45,10 @@ def dimensions(t: templates.Template):
                 st.just(0.0),
                 st.tuples(st.floats(0.05, 30.0), st.sampled_from([1.0, -1.0])).map(
                     lambda fs, v=p.value: fs[0] * fs[1] * max(abs(v), 5.0)))
+        elif p.kind in NOT_NEGATIVE_KINDS:          # a mass, an inertia: 0 to 3 times
+            draws[p.symbol] = st.floats(0.0, 3.0).map(lambda f, v=p.value: f * v)
+        elif p.kind in LOAD_UNITS:                  # a force, a torque, gravity: ±3 times
+            draws[p.symbol] = st.floats(-3.0, 3.0).map(lambda f, v=p.value: f * v)
         else:
             draws[p.symbol] = st.floats(-1.0, 1.0).map(lambda f, v=p.value: v + f * scale)
     return st.fixed_dictionaries(draws)
