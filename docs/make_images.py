@@ -4,7 +4,7 @@
 
 Each picture is cut from a printed page: a book's drawing (found by its blue grid), the whole
 Mechanism page of the four-bar, the four-bar's first Charts page with a drawing, the page of
-the pump's family chart.
+the pump's family chart, the slider-crank's page with its driving torque.
 """
 from __future__ import annotations
 
@@ -68,6 +68,10 @@ def main() -> int:
         Image.open(chart_pages[0]).save(IMAGES / "fourbar-charts.png")
         grid = [Image.open(p).convert("RGB") for p in pages("pump", tmp, ("Grid",))]
         max(grid, key=colourful).save(IMAGES / "pump-family.png")      # the family chart
+        # the Charts sheet ends with the force charts: the driving torque on the third page
+        # from the end (beside the slider's acceleration), pin loads, the shaking force's polar
+        forces = pages("slider-crank", tmp, ("Charts",))
+        Image.open(forces[-3]).save(IMAGES / "slider-crank-forces.png")
         for name in DRAWINGS:
             page = Image.open(pages(name, tmp)[0])
             page.crop(drawing_box(page)).save(IMAGES / f"{name}-mechanism.png")
