@@ -7,14 +7,18 @@ force the reference finds anywhere in the sweep (the loads the description puts 
 force may differ by 1e-12·F, a moment by 1e-12·F·S. Where a group of links nears a position in
 which it cannot carry a load, the forces grow like 1/D and their rounding like 1/D²: the same
 allowance as a rate's near a dead centre (checks.compare's sine), and the growth allowance of
-a value beyond its scale."""
+a value beyond its scale. At a row where the reference finds the equations singular (a group in
+the position where it cannot carry a load: a rod square to its guide, a dyad stretched
+straight), the forces are not determined by the data: the book's #N/A or any number there is
+its honest answer (as a rate's at a dead centre), but not #DIV/0! or another error; and the
+summary's sums over the sweep, which such a row enters, are judged the same way."""
 from __future__ import annotations
 
 import numpy as np
 
 from ..base.sheets import FORCES_SHEET
 from .checks import Check, unit_scale
-from .forces import LENGTH_UNITS, forces
+from .forces import LENGTH_UNITS, SINGULAR, forces
 from .context import motion_rates
 
 GRAVITY_SCALE = 10.0     # m/s²: the weight's share of the scale (gravity or not)
@@ -47,6 +51,8 @@ def check_forces(j) -> None:
     j.run(sheet, mech.input_column, sheet, [f"A{r}" for r in range(r0, r1 + 1)], j.angles,
           mech.input_unit)
     j.run(sheet, mech.input_column, sheet, [f"A{now}"], np.array([j.angle]), mech.input_unit)
+    dead = _singular(ref, j.ref.get("dead_centre"))
+    dead_now = _singular(one, j.one.get("dead_centre"))
     for key, letter in table.columns.items():
         unit = j.model.get(key).unit
         if unit in (NEWTON, NEWTON_METRE):
@@ -54,22 +60,34 @@ def check_forces(j) -> None:
             rate = 1.0
         else:                           # a centre of mass: a length, an acceleration
             size, rate = unit_scale(unit, j.size), (rate2 if unit != "length" else 1.0)
-        for block, cells, expected, kin in (
-                (FORCES_SHEET, [f"{letter}{r}" for r in range(r0, r1 + 1)], ref[key], j.ref),
-                ("forces now", [f"{letter}{now}"], one[key], j.one)):
+        for block, cells, expected, kin, singular in (
+                (FORCES_SHEET, [f"{letter}{r}" for r in range(r0, r1 + 1)], ref[key], j.ref,
+                 dead),
+                ("forces now", [f"{letter}{now}"], one[key], j.one, dead_now)):
             c = Check(block, key, j.size, rate, size)
             j.compare(c, sheet, cells, np.asarray(expected, dtype=float), unit,
-                      dead=kin.get("dead_centre"), sine=kin.get("sine"))
+                      dead=singular, sine=kin.get("sine"))
             j.checks.append(c)
-    _check_summary(j, ref, scale, metres)
+    _check_summary(j, ref, scale, metres, dead)
+
+
+def _singular(ref: dict, dead_centre) -> np.ndarray:
+    """Rows where the forces are not determined: the reference's equations are singular (its
+    condition number beyond SINGULAR), or the kinematics is at a dead centre."""
+    cond = np.asarray(ref["cond"], dtype=float)
+    singular = np.isfinite(cond) & (cond >= SINGULAR)
+    if dead_centre is not None:
+        singular |= np.asarray(dead_centre, dtype=bool)
+    return singular
 
 
 def _trapezoid(y: np.ndarray, x: np.ndarray) -> float:
     return float(np.sum((y[1:] + y[:-1]) / 2 * np.diff(x)))
 
 
-def _check_summary(j, ref: dict, scale: float, metres: float) -> None:
-    """The summary's cells and the work column, from the reference's effort over the sweep."""
+def _check_summary(j, ref: dict, scale: float, metres: float, dead: np.ndarray) -> None:
+    """The summary's cells and the work column, from the reference's effort over the sweep (a
+    sum over a row where the forces are not determined is not determined either)."""
     table, sheet = j.record.forces, j.record.forces.sheet
     effort = "F_in" if "F_in" in ref else next(k for k in ref if k.startswith("T1"))
     moment = scale * j.size * metres
@@ -89,7 +107,8 @@ def _check_summary(j, ref: dict, scale: float, metres: float) -> None:
                                                 * np.radians(np.diff(x)))])
         r0, r1 = table.rows
         c = Check(sheet, "W", j.size, 1.0, moment * 2 * np.pi)
-        j.compare(c, sheet, [f"{table.work}{r}" for r in range(r0 + 1, r1 + 1)], work[1:], "J")
+        j.compare(c, sheet, [f"{table.work}{r}" for r in range(r0 + 1, r1 + 1)], work[1:], "J",
+                  dead=np.full(len(work) - 1, bool(dead.any())))   # each W reads the mean
         j.checks.append(c)
         energy = float(np.max(work) - np.min(work))
         expected["energy_fluctuation"] = (energy, moment * 2 * np.pi)
@@ -103,17 +122,19 @@ def _check_summary(j, ref: dict, scale: float, metres: float) -> None:
     for i in (0, 1):
         expected[f"mean_line_x{i}"] = (x[-i], 1.0)
         expected[f"mean_line_y{i}"] = (mean, size)
+    undetermined = np.array([bool(dead.any())])
     for key, (value, bound) in expected.items():
         c = Check("forces summary", key, j.size, 1.0, bound)
-        j.compare(c, sheet, [table.summary[key].cell], np.array([value]), "")
+        j.compare(c, sheet, [table.summary[key].cell], np.array([value]), "",
+                  dead=None if key.startswith("mean_line_x") else undetermined)
         j.checks.append(c)
     for word in ("largest", "smallest"):
         _check_where(j, table.summary[f"effort_{word}_at"].cell, x, y,
-                     float(expected[f"effort_{word}"][0]), size, word)
+                     float(expected[f"effort_{word}"][0]), size, word, bool(dead.any()))
 
 
 def _check_where(j, cell: str, x: np.ndarray, y: np.ndarray, peak: float, size: float,
-                 word: str) -> None:
+                 word: str, undetermined: bool) -> None:
     """Where the effort is largest (smallest): an input of the sweep at which the reference's
     effort is its peak within the bound (two rows may tie)."""
     sheet = j.record.forces.sheet
@@ -121,7 +142,10 @@ def _check_where(j, cell: str, x: np.ndarray, y: np.ndarray, peak: float, size: 
     got = j.values.get((sheet, cell))
     c.cells += 1
     c.judged.add((sheet, cell))
-    if np.isnan(peak):
+    if undetermined:        # a row where the forces are not determined: #N/A or any input
+        ok = not j.rules.is_error(got) or j.rules.error_code(got) == "#N/A"
+        c.dead_centre += 1
+    elif np.isnan(peak):
         c.na_expected += 1
         ok = j.rules.is_error(got) and j.rules.error_code(got) == "#N/A"
         c.na_agree += ok
