@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+FORCES = "tests/data/forces"      # the templates with masses and loads the force mutants aim at
 BUNDLED = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
 FAST_TESTS = ["tests/test_verdict.py", "tests/test_published.py", "tests/test_motion.py",
               "tests/test_language.py"]
@@ -98,6 +99,26 @@ MUTANTS = [
     Mutant("frame: the grid square's legend one decimal short", "src/linkbook/book/frames.py",
            'decimals = f"MAX(0,-INT(ROUND(LOG10({text}),6)))"',
            'decimals = f"MAX(0,-INT(ROUND(LOG10({text}),6))-1)"'),
+    Mutant("force sign: a reaction's x component with the link's resultant's sign flipped",
+           "src/linkbook/language/forces.py",
+           "self.outer(f, of, lin((1, x), (-1, ffx)), lin((1, y), (-1, ffy)), where)",
+           "self.outer(f, of, lin((1, x), (1, ffx)), lin((1, y), (-1, ffy)), where)",
+           [(f"{FORCES}/fourbar.toml", []), (f"{FORCES}/toggle-press.toml", [])]),
+    Mutant("force centre: a centre of mass placed by distance on the wrong side",
+           "src/linkbook/language/forces.py",
+           'x, y = plus(axp, f"{d}*COS({t})"), plus(ayp, f"{d}*SIN({t})")',
+           'x, y = plus(axp, f"-{d}*COS({t})"), plus(ayp, f"-{d}*SIN({t})")',
+           [(f"{FORCES}/marghitu.toml", []), (f"{FORCES}/slider-crank.toml", [])]),
+    Mutant("force inertia: a link's inertia torque −I·α left out",
+           "src/linkbook/language/forces.py",
+           "                body.couples.append(lin((-1, mul(inertia, alpha))))\n",
+           "                pass\n",
+           [(f"{FORCES}/fourbar.toml", ["--set", "alpha_in=50"]),
+            (f"{FORCES}/watt-sixbar.toml", [])]),
+    Mutant("force gravity: the default direction up (+90°), not down",
+           "src/linkbook/language/forces.py",
+           'spec.get("angle", -90)', 'spec.get("angle", 90)',
+           [(f"{FORCES}/marghitu.toml", [])]),
 ]
 
 

@@ -26,7 +26,7 @@ from test_properties import dimensions
 
 EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
 DATA = Path(__file__).resolve().parent / "data" / "forces"
-FAMILIES = ["fourbar", "slider-crank", "toggle-press", "boom-cylinder"]
+FAMILIES = ["fourbar", "slider-crank", "toggle-press", "boom-cylinder", "watt-sixbar"]
 METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}
 SHEET = "Forces"
 
