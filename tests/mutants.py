@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 FORCES = "tests/data/forces"      # the templates with masses and loads the force mutants aim at
 BUNDLED = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
 FAST_TESTS = ["tests/test_verdict.py", "tests/test_published.py", "tests/test_motion.py",
-              "tests/test_language.py"]
+              "tests/test_language.py", "tests/test_forces_book.py"]
 NON_GRASHOF = ["--set", "a1=100", "--set", "a2=60", "--set", "a3=50", "--set", "a4=40"]
 DEAD_CENTRE = ["--set", "a1=10", "--set", "a2=20", "--set", "a3=4", "--set", "a4=6",
                "--set", "b3=3", "--set", "c3=2", "--step", "10"]
@@ -149,7 +149,7 @@ def run(repo: Path, args: list[str], timeout: int = 900) -> int:
 def caught_by_verify(repo: Path, m: Mutant, work: Path) -> str:
     books = [(name, []) for name in BUNDLED] + m.books
     for i, (name, extra) in enumerate(books):
-        book = work / f"{i}-{name}.xlsx"
+        book = work / f"{i}-{Path(name).stem}.xlsx"     # a name may be a path
         if run(repo, [sys.executable, "-m", "linkbook", "build", name, *extra, "-o",
                       str(book)]) != 0:
             return f"build of {name} {' '.join(extra)} failed"
