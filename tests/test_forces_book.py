@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ from linkbook.book import builder
 from linkbook.check.reference import solve
 from linkbook.engine import evaluator as engine
 from linkbook.language import templates
+from linkbook.language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, OFFSET_KIND
 from test_properties import dimensions
 
 EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
@@ -62,8 +64,7 @@ def assert_verified(built, values, constant_zero_guide=False) -> None:
     """Every formula cell judged, none out of verify's bounds (#N/A exactly where the reference
     has no value). `constant_zero_guide`: let pass the known writer bug of
     test_guide_force_component_where_the_loop_cannot_close (a guide force's component across a
-    horizontal or vertical guide written as the constant 0, a number where the loop cannot
-    close) so that the random tests judge everything else; that test fails when it is fixed."""
+    guide along +x written as the constant 0, a number where the loop cannot close) so that the random tests judge everything else; that test fails when it is fixed."""
     checks = checks_of(built, values)
     bad = [(c.block, c.name, m) for c in checks for m in c.mismatches
            if not (constant_zero_guide and m.expected == "#N/A"
@@ -141,9 +142,9 @@ def test_marghitu_book_at_the_rod_square_to_the_guide():
 
 
 @pytest.mark.xfail(strict=True, raises=AssertionError, reason=(
-    "writer: the guide's force on the slider across a horizontal guide, F14x, is written as "
-    "the constant =0, a number where the loop cannot close (the reference: #N/A); so is F16y "
-    "of the toggle press's vertical guide"))
+    "writer: the guide's force on the slider across a guide along +x (the default "
+    "direction), F14x, is written as the constant =0, a number where the loop cannot close "
+    "(the reference: #N/A)"))
 def test_guide_force_component_where_the_loop_cannot_close():
     """The slider-crank with its guide 270 mm off the crank's pivot, out of reach of the rod
     (250 mm) near θ = 0° and 180°: no position there, so no force either (every cell #N/A)."""
@@ -158,17 +159,46 @@ def test_guide_force_component_where_the_loop_cannot_close():
 # 2 and 3. Random mechanisms, masses and loads: verify, and the power balance on the book
 # --------------------------------------------------------------------------------------------
 
+def placement_symbols(t: templates.Template) -> set[str]:
+    """The parameters the masses, loads and gravity name (not the steps')."""
+    d = t.mechanism.description
+    return set(re.findall(r"[A-Za-z_]\w*", repr([d.get(k) for k in ("dynamics", "bodies",
+                                                                       "loads")])))
+
+
+def near(t: templates.Template):
+    """Lengths 0.9 to 1.1 times the template's, offsets within a twentieth of its size of their
+    own, the steps' angles within 10° and the branches as written: mechanisms that mostly
+    assemble, so that most rows have forces to judge (with the dimensions of test_properties,
+    0.2 to 3 times and any angle, few six-bars close on more than a row or two)."""
+    scale = max(abs(p.value) for p in t.parameters if p.kind == LENGTH_KIND)
+    placing = placement_symbols(t)
+    draws = {}
+    for p in t.parameters:
+        if p.kind == LENGTH_KIND:
+            draws[p.symbol] = st.floats(0.9, 1.1).map(lambda f, v=p.value: f * v)
+        elif p.kind == OFFSET_KIND:
+            draws[p.symbol] = st.floats(-0.05, 0.05).map(lambda f, v=p.value: v + f * scale)
+        elif p.kind == ANGLE_KIND and p.symbol not in placing:
+            draws[p.symbol] = st.floats(-10.0, 10.0).map(lambda f, v=p.value: v + f)
+        elif p.kind == BRANCH_KIND:
+            draws[p.symbol] = st.just(p.value)
+    return st.fixed_dictionaries(draws)
+
+
 def dynamics(t: templates.Template):
-    """Masses 0..10 kg, inertias 0..0.1 kg·m², forces ±1e3 N, torques ±100 N·m, gravity off
-    or 0..20 m/s² (its direction is an angle parameter, drawn with the dimensions)."""
+    """Dimensions as test_properties draws them (any angle, branch and rate) or, every other
+    example, near the template's (`near`); masses 0..10 kg, inertias 0..0.1 kg·m², forces
+    ±1e3 N, torques ±100 N·m, gravity off or 0..20 m/s² (its direction an angle parameter)."""
     kinds = {"mass": st.floats(0.0, 10.0), "inertia": st.floats(0.0, 0.1),
              "force": st.floats(-1e3, 1e3), "torque": st.floats(-100.0, 100.0),
              "gravity": st.one_of(st.just(0.0), st.floats(0.0, 20.0))}
     kinematic = dataclasses.replace(t, parameters=tuple(p for p in t.parameters
                                                         if p.kind not in kinds))
     draws = {p.symbol: kinds[p.kind] for p in t.parameters if p.kind in kinds}
-    return st.tuples(dimensions(kinematic), st.fixed_dictionaries(draws)).map(
-        lambda pair: {**pair[0], **pair[1]})
+    return st.tuples(dimensions(kinematic), st.booleans(), near(kinematic),
+                     st.fixed_dictionaries(draws)).map(
+        lambda d: {**d[0], **(d[2] if d[1] else {}), **d[3]})
 
 
 class Motion:
@@ -258,7 +288,8 @@ def power_terms(t: templates.Template, params: dict, motion: Motion, effort) -> 
 def assert_power_balance(t: templates.Template, built, values) -> int:
     """The power balance on every row of the Forces sheet (the current position and the
     sweep) where the book has a driving effort, to 1e-9 of the sum of the terms' sizes; the
-    number of rows it held on."""
+    number of rows it held on. The velocities come from the kinematic reference, the effort
+    from the book."""
     table = built.meta["forces"]
     first, last = table["rows"]
     rows = [table["current_row"], *range(first, last + 1)]
@@ -276,8 +307,12 @@ def assert_power_balance(t: templates.Template, built, values) -> int:
                         np.array([e for e, ok in zip(efforts, solved) if ok], dtype=float))
     residual = sum(terms)
     size = sum(np.abs(term) for term in terms)
-    worst = np.argmax(np.abs(residual) - 1e-9 * size)
-    assert np.all(np.abs(residual) <= 1e-9 * size), (rows[worst], residual[worst], size[worst])
+    # 1e-9 of the row's terms; and where every term is near zero (a link's ω passing through
+    # 0: its rounding, ~1e-16 of the sweep's powers, is all that is left), 1e-12 of the
+    # largest row's
+    bound = 1e-9 * size + 1e-12 * size.max()
+    worst = np.argmax(np.abs(residual) - bound)
+    assert np.all(np.abs(residual) <= bound), (rows[worst], residual[worst], size[worst])
     return len(rows)
 
 
