@@ -22,9 +22,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+FORCES = "tests/data/forces"      # the templates with masses and loads the force mutants aim at
 BUNDLED = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
 FAST_TESTS = ["tests/test_verdict.py", "tests/test_published.py", "tests/test_motion.py",
-              "tests/test_language.py"]
+              "tests/test_language.py", "tests/test_forces_book.py"]
 NON_GRASHOF = ["--set", "a1=100", "--set", "a2=60", "--set", "a3=50", "--set", "a4=40"]
 DEAD_CENTRE = ["--set", "a1=10", "--set", "a2=20", "--set", "a3=4", "--set", "a4=6",
                "--set", "b3=3", "--set", "c3=2", "--step", "10"]
@@ -98,6 +99,26 @@ MUTANTS = [
     Mutant("frame: the grid square's legend one decimal short", "src/linkbook/book/frames.py",
            'decimals = f"MAX(0,-INT(ROUND(LOG10({text}),6)))"',
            'decimals = f"MAX(0,-INT(ROUND(LOG10({text}),6))-1)"'),
+    Mutant("force sign: a reaction's x component with the link's resultant's sign flipped",
+           "src/linkbook/language/forces.py",
+           "self.outer(f, of, lin((1, x), (-1, ffx)), lin((1, y), (-1, ffy)), where)",
+           "self.outer(f, of, lin((1, x), (1, ffx)), lin((1, y), (-1, ffy)), where)",
+           [(f"{FORCES}/fourbar.toml", []), (f"{FORCES}/toggle-press.toml", [])]),
+    Mutant("force centre: a centre of mass placed by distance on the wrong side",
+           "src/linkbook/language/bodies.py",
+           'x, y = plus(axp, f"{d}*COS({t})"), plus(ayp, f"{d}*SIN({t})")',
+           'x, y = plus(axp, f"-{d}*COS({t})"), plus(ayp, f"-{d}*SIN({t})")',
+           [(f"{FORCES}/marghitu.toml", []), (f"{FORCES}/slider-crank.toml", [])]),
+    Mutant("force inertia: a link's inertia torque −I·α left out",
+           "src/linkbook/language/bodies.py",
+           "                body.couples.append(lin((-1, mul(inertia, alpha))))\n",
+           "                pass\n",
+           [(f"{FORCES}/fourbar.toml", ["--set", "alpha_in=50"]),
+            (f"{FORCES}/watt-sixbar.toml", [])]),
+    Mutant("force gravity: the default direction up (+90°), not down",
+           "src/linkbook/language/bodies.py",
+           'spec.get("angle", -90)', 'spec.get("angle", 90)',
+           [(f"{FORCES}/marghitu.toml", [])]),
 ]
 
 
@@ -128,7 +149,7 @@ def run(repo: Path, args: list[str], timeout: int = 900) -> int:
 def caught_by_verify(repo: Path, m: Mutant, work: Path) -> str:
     books = [(name, []) for name in BUNDLED] + m.books
     for i, (name, extra) in enumerate(books):
-        book = work / f"{i}-{name}.xlsx"
+        book = work / f"{i}-{Path(name).stem}.xlsx"     # a name may be a path
         if run(repo, [sys.executable, "-m", "linkbook", "build", name, *extra, "-o",
                       str(book)]) != 0:
             return f"build of {name} {' '.join(extra)} failed"

@@ -1,0 +1,398 @@
+"""The Forces sheet of built books (issue 31), read as a user reads it: the cells the force
+writer's formulas compute, evaluated by the vector engine. Every expected value comes from outside
+the writer: the numbers Marghitu printed (and those derived by hand from his data), the
+independent Newton–Euler reference through verify, the power balance with the velocities of the
+independent kinematic reference, and two cases solved by hand. The templates are in
+tests/data/forces/: one mechanism of each family the writer supports, every mass, inertia,
+centre, load and the gravity a parameter, so that the random tests can draw them."""
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from conftest import checks_of, formula_cells, published
+from linkbook.book import builder
+from linkbook.check.reference import solve
+from linkbook.engine import evaluator as engine
+from linkbook.language import templates
+from linkbook.language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, OFFSET_KIND
+from test_properties import dimensions
+
+EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
+DATA = Path(__file__).resolve().parent / "data" / "forces"
+FAMILIES = ["fourbar", "slider-crank", "toggle-press", "boom-cylinder", "watt-sixbar"]
+METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}
+SHEET = "Forces"
+
+
+def load(name: str) -> templates.Template:
+    return templates.load(str(DATA / f"{name}.toml"))
+
+
+def with_values(t: templates.Template, **values) -> templates.Template:
+    """The template with some parameters' values replaced."""
+    unknown = set(values) - {p.symbol for p in t.parameters}
+    assert not unknown, unknown
+    return dataclasses.replace(t, parameters=tuple(
+        dataclasses.replace(p, value=values.get(p.symbol, p.value)) for p in t.parameters))
+
+
+def forces_row(built, values, row: int) -> dict:
+    """{quantity: the computed cell} of one row of the Forces sheet."""
+    columns = built.meta["forces"]["columns"]
+    return {key: values[(SHEET, f"{letter}{row}")] for key, letter in columns.items()}
+
+
+def row_of(built, values, value: float) -> int:
+    """The Forces row of the sweep whose input is `value`."""
+    first, last = built.meta["forces"]["rows"]
+    for r in range(first, last + 1):
+        if abs(values[(SHEET, f"A{r}")] - value) < 1e-9:
+            return r
+    raise KeyError(value)
+
+
+def assert_verified(built, values) -> None:
+    """Every formula cell judged, none out of verify's bounds (#N/A exactly where the reference
+    has no value)."""
+    checks = checks_of(built, values)
+    bad = [(c.block, c.name, m) for c in checks for m in c.mismatches]
+    assert not bad, bad[:6]
+    assert sum(c.cells for c in checks) == len(formula_cells(built.workbook))
+    assert any(c.block == SHEET for c in checks)
+
+
+# --------------------------------------------------------------------------------------------
+# 1. Marghitu's published slider-crank
+# --------------------------------------------------------------------------------------------
+
+def marghitu_template() -> templates.Template:
+    """tests/data/forces/marghitu.toml with the book's inputs (published.toml)."""
+    i = published()["marghitu_slider_crank_forces"]["inputs"]
+    t = with_values(load("marghitu"), AB=i["AB"], BC=i["BC"], m1=i["m1"], m2=i["m2"],
+                    m3=i["m3"], I1=i["I1"], I2=i["I2"], I3=i["I3"], g=i["g"],
+                    F_ext=i["F_ext"], omega_in=i["omega"], alpha_in=i["alpha"])
+    assert t.position == i["phi"]
+    return t
+
+
+def marghitu_book():
+    return published()["marghitu_slider_crank_forces"], builder.make(marghitu_template())
+
+
+def test_marghitu_published_at_the_current_position_and_on_the_sweep():
+    """Marghitu (2009), p. 144: F12, the crank's force on the rod at B, printed as closed forms.
+    The book numbers the links from 0 (the ground); ours from 1, so his F12 is our F23."""
+    case, (built, values) = marghitu_book()
+    phi = case["inputs"]["phi"]
+    for row in (built.meta["forces"]["current_row"], row_of(built, values, phi)):
+        got = forces_row(built, values, row)
+        for book, ours in (("F12x", "F23x"), ("F12y", "F23y")):
+            assert got[ours] == pytest.approx(case["published"][book],
+                                              rel=case["rel_tolerance"]), (row, ours)
+
+
+def test_marghitu_derived_unknowns():
+    """The example's other unknowns, solved by hand from the book's data link by link (each
+    link's ΣF and ΣM: derived, not printed; see test_force_reference.py), in the book's
+    numbering F01 → our F12, F23 → F34, F03 → F14, M → T12. The shaking force is what the links
+    push the ground with, −(F01 + F03); its moment about A, −M − r_C × F03."""
+    case, (built, values) = marghitu_book()
+    r2 = math.sqrt(2.0)
+    derived = {"T12": 3 + 105 * r2, "F12x": -100 - 2 * r2, "F12y": 115 + r2,
+               "F34x": -100 - r2, "F34y": 95 + 1.5 * r2, "F14x": 0.0, "F14y": -85 - 1.5 * r2,
+               "N14": -85 - 1.5 * r2, "shaking_x": 100 + 2 * r2,
+               "shaking_y": -30 + r2 / 2, "shaking_moment": -20 * r2}
+    for row in (built.meta["forces"]["current_row"],
+                row_of(built, values, case["inputs"]["phi"])):
+        got = forces_row(built, values, row)
+        for key, want in derived.items():
+            assert got[key] == pytest.approx(want, rel=1e-9, abs=1e-9), (row, key)
+
+
+def test_marghitu_book_verifies_and_balances_power():
+    _, (built, values) = marghitu_book()
+    assert_verified(built, values)
+    assert assert_power_balance(marghitu_template(), built, values) > 0
+
+
+def test_marghitu_book_at_the_rod_square_to_the_guide():
+    """The same book swept in steps of 15°, through 90° and 270°, where the slider meets the
+    crank's pivot and the rod is perpendicular to the guide: the group of rod and slider cannot
+    carry the slider's load there. The reference finds its equations singular; the book's
+    determinant is cos 90° ≈ 6e-17 in rounding, not 0, so it shows a huge number: verify takes
+    #N/A or a number there (not determined by the data, as a rate at a dead centre), and judges
+    every other row as usual."""
+    t = dataclasses.replace(marghitu_template(), sweep=templates.Sweep(0.0, 360.0, 15.0))
+    assert_verified(*builder.make(t))
+
+
+def test_guide_force_component_where_the_loop_cannot_close():
+    """The slider-crank with its guide 270 mm off the crank's pivot, out of reach of the rod
+    (250 mm) near θ = 0° and 180°: no position there, so no force either (every force and
+    moment #N/A; the crank's centre of mass is where the crank is, whatever the rest does)."""
+    built, values = builder.make(with_values(load("slider-crank"), a1=270.0))
+    row = row_of(built, values, 0.0)
+    got = {k: v for k, v in forces_row(built, values, row).items()
+           if not k.startswith(("xG2", "yG2", "axG2", "ayG2"))}
+    assert got and all(engine.is_error(v) for v in got.values()), \
+        {k: v for k, v in got.items() if not engine.is_error(v)}
+
+
+# --------------------------------------------------------------------------------------------
+# 2 and 3. Random mechanisms, masses and loads: verify, and the power balance on the book
+# --------------------------------------------------------------------------------------------
+
+def placement_symbols(t: templates.Template) -> set[str]:
+    """The parameters the masses, loads and gravity name (not the steps')."""
+    d = t.mechanism.description
+    return set(re.findall(r"[A-Za-z_]\w*", repr([d.get(k) for k in ("dynamics", "bodies",
+                                                                       "loads")])))
+
+
+def near(t: templates.Template):
+    """Lengths 0.9 to 1.1 times the template's, offsets within a twentieth of its size of their
+    own, the steps' angles within 10° and the branches as written: mechanisms that mostly
+    assemble, so that most rows have forces to judge (with the dimensions of test_properties,
+    0.2 to 3 times and any angle, few six-bars close on more than a row or two)."""
+    scale = max(abs(p.value) for p in t.parameters if p.kind == LENGTH_KIND)
+    placing = placement_symbols(t)
+    draws = {}
+    for p in t.parameters:
+        if p.kind == LENGTH_KIND:
+            draws[p.symbol] = st.floats(0.9, 1.1).map(lambda f, v=p.value: f * v)
+        elif p.kind == OFFSET_KIND:
+            draws[p.symbol] = st.floats(-0.05, 0.05).map(lambda f, v=p.value: v + f * scale)
+        elif p.kind == ANGLE_KIND and p.symbol not in placing:
+            draws[p.symbol] = st.floats(-10.0, 10.0).map(lambda f, v=p.value: v + f)
+        elif p.kind == BRANCH_KIND:
+            draws[p.symbol] = st.just(p.value)
+    return st.fixed_dictionaries(draws)
+
+
+def dynamics(t: templates.Template):
+    """Dimensions as test_properties draws them (any angle, branch and rate) or, every other
+    example, near the template's (`near`); masses 0..10 kg, inertias 0..0.1 kg·m², forces
+    ±1e3 N, torques ±100 N·m, gravity off or 0..20 m/s² (its direction an angle parameter)."""
+    kinds = {"mass": st.floats(0.0, 10.0), "inertia": st.floats(0.0, 0.1),
+             "force": st.floats(-1e3, 1e3), "torque": st.floats(-100.0, 100.0),
+             "gravity": st.one_of(st.just(0.0), st.floats(0.0, 20.0))}
+    kinematic = dataclasses.replace(t, parameters=tuple(p for p in t.parameters
+                                                        if p.kind not in kinds))
+    draws = {p.symbol: kinds[p.kind] for p in t.parameters if p.kind in kinds}
+    return st.tuples(dimensions(kinematic), st.booleans(), near(kinematic),
+                     st.fixed_dictionaries(draws)).map(
+        lambda d: {**d[0], **(d[2] if d[1] else {}), **d[3]})
+
+
+class Motion:
+    """Positions, velocities and accelerations in SI units, from the independent kinematic
+    reference (linkbook.check.reference.solve), at the given inputs."""
+
+    def __init__(self, t: templates.Template, params: dict, inputs):
+        self.s = solve(t.mechanism.description, params, np.asarray(inputs, dtype=float))
+        self.unit, self.n = METRES[t.length_unit], len(inputs)
+
+    def point(self, name: str):
+        x, y = (np.broadcast_to(np.asarray(c, dtype=float), (self.n,)) * self.unit
+                for c in self.s["points"][name])
+        if f"vx_{name}" not in self.s:          # a ground point
+            zero = np.zeros(self.n)
+            return (x, y), (zero, zero), (zero, zero)
+        return ((x, y), tuple(self.s[f"{k}_{name}"] * self.unit for k in ("vx", "vy")),
+                tuple(self.s[f"{k}_{name}"] * self.unit for k in ("ax", "ay")))
+
+    def spin(self, a: str, b: str):
+        """ω and α of the rigid link through a and b: Δv = ω k × r, Δa = α k × r − ω² r, so
+        r × Δv = ω r² and r × Δa = α r²."""
+        (p, v, acc), (q, w, bcc) = self.point(a), self.point(b)
+        rx, ry = q[0] - p[0], q[1] - p[1]
+        r2 = rx * rx + ry * ry
+        return ((rx * (w[1] - v[1]) - ry * (w[0] - v[0])) / r2,
+                (rx * (bcc[1] - acc[1]) - ry * (bcc[0] - acc[0])) / r2)
+
+    def centre(self, entry: dict, number):
+        """The centre of mass's velocity and acceleration and its link's ω and α: G placed in
+        the frame A→B (by local coordinates, or by a distance and an angle from A→B), moving
+        with the link: v_G = v_A + ω k × AG, a_G = a_A + α k × AG − ω² AG."""
+        if entry.get("block"):
+            _, v, a = self.point(entry["joints"][0])
+            return v, a, np.zeros(self.n), np.zeros(self.n)
+        spec = entry["centre"]
+        a_name, b_name = spec["frame"]
+        (pa, va, aa), (pb, _, _) = self.point(a_name), self.point(b_name)
+        theta = np.arctan2(pb[1] - pa[1], pb[0] - pa[0])
+        if "local" in spec:
+            u, v = (number(c) * self.unit for c in spec["local"])
+            rx = u * np.cos(theta) - v * np.sin(theta)
+            ry = u * np.sin(theta) + v * np.cos(theta)
+        else:
+            d = number(spec["distance"]) * self.unit
+            turned = theta + math.radians(number(spec.get("angle", 0.0)))
+            rx, ry = d * np.cos(turned), d * np.sin(turned)
+        w, al = self.spin(a_name, b_name)
+        return ((va[0] - w * ry, va[1] + w * rx),
+                (aa[0] - al * ry - w * w * rx, aa[1] + al * rx - w * w * ry), w, al)
+
+
+def power_terms(t: templates.Template, params: dict, motion: Motion, effort) -> list:
+    """The terms of T12·ω12 (or F_in·v_in) + Σ F·v_P + Σ T·ω + Σ m g·v_G − Σ (m a_G·v_G + I α ω),
+    which sum to zero on every row: the links are rigid, the pins and guides frictionless, so
+    the power of every effort goes into the kinetic energy. `effort`: the book's T12 or F_in."""
+    d = t.mechanism.description
+
+    def number(raw) -> float:
+        """A value of the description: a number, a parameter or arithmetic of parameters."""
+        if not isinstance(raw, str):
+            return float(raw)
+        return float(eval(raw.replace("^", "**"), {"__builtins__": {}}, dict(params)))
+
+    speed = params["omega_in"] if t.mechanism.input_is_angle else \
+        params["v_in"] * METRES[t.length_unit]
+    terms = [effort * speed]
+    gravity = d.get("dynamics", {}).get("gravity")
+    g = (0.0, 0.0)
+    if gravity:
+        size, angle = number(gravity["g"]), math.radians(number(gravity.get("angle", -90.0)))
+        g = (size * math.cos(angle), size * math.sin(angle))
+    for load in d.get("loads", []):
+        if "torque" in load:
+            terms.append(number(load["torque"]) * motion.spin(*load["body"])[0])
+        else:
+            fx, fy = (number(c) for c in load["force"])
+            _, (vx, vy), _ = motion.point(load["at"])
+            terms.append(fx * vx + fy * vy)
+    for entry in d.get("bodies", []):
+        m, inertia = number(entry["mass"]), number(entry.get("inertia", 0.0))
+        (vx, vy), (ax, ay), w, al = motion.centre(entry, number)
+        terms += [m * (g[0] * vx + g[1] * vy), -m * (ax * vx + ay * vy), -inertia * al * w]
+    return terms
+
+
+def assert_power_balance(t: templates.Template, built, values) -> int:
+    """The power balance on every row of the Forces sheet (the current position and the
+    sweep) where the book has a driving effort, to 1e-9 of the sum of the terms' sizes; the
+    number of rows it held on. The velocities come from the kinematic reference, the effort
+    from the book."""
+    table = built.meta["forces"]
+    first, last = table["rows"]
+    rows = [table["current_row"], *range(first, last + 1)]
+    effort_key = "T12" if t.mechanism.input_is_angle else "F_in"
+    effort_col = table["columns"][effort_key]
+    efforts = [values[(SHEET, f"{effort_col}{r}")] for r in rows]
+    solved = [not engine.is_error(e) for e in efforts]
+    rows = [r for r, ok in zip(rows, solved) if ok]
+    if not rows:
+        return 0
+    inputs = [values[(SHEET, f"A{r}")] for r in rows]
+    params = t.values()
+    motion = Motion(t, params, inputs)
+    terms = power_terms(t, params, motion,
+                        np.array([e for e, ok in zip(efforts, solved) if ok], dtype=float))
+    residual = sum(terms)
+    size = sum(np.abs(term) for term in terms)
+    # 1e-9 of the row's terms; and where every term is near zero (a link's ω passing through
+    # 0: its rounding, ~1e-16 of the sweep's powers, is all that is left), 1e-12 of the
+    # largest row's
+    bound = 1e-9 * size + 1e-12 * size.max()
+    worst = np.argmax(np.abs(residual) - bound)
+    assert np.all(np.abs(residual) <= bound), (rows[worst], residual[worst], size[worst])
+    return len(rows)
+
+
+def coarse(t: templates.Template, values: dict) -> templates.Template:
+    """The drawn values, on a coarse sweep (every 30°, or a dozen actuator lengths)."""
+    t = with_values(t, **values)
+    step = 30.0 if t.mechanism.input_is_angle else (t.sweep.stop - t.sweep.start) / 12
+    return dataclasses.replace(t, sweep=dataclasses.replace(t.sweep, step=step))
+
+
+def test_the_templates_verify_and_balance_as_written():
+    for family in FAMILIES:
+        t = load(family)
+        built, values = builder.make(t)
+        assert_verified(built, values)
+        assert assert_power_balance(t, built, values) > 0, family
+
+
+@pytest.mark.parametrize("family", FAMILIES)
+def test_random_masses_and_loads_match_the_reference_and_balance_power(family):
+    """For random dimensions, masses, inertias, centres, loads, gravity and input rates: every
+    formula cell of the book agrees with the references (verify), and the book's driving
+    effort balances the power of the loads, the weights and the inertia on every row."""
+    base = load(family)
+
+    @settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.too_slow])
+    @given(dynamics(base))
+    def check(values):
+        t = coarse(base, values)
+        built, computed = builder.make(t)
+        assert_verified(built, computed)
+        assert_power_balance(t, built, computed)
+
+    check()
+
+
+# --------------------------------------------------------------------------------------------
+# 4. Two cases by hand
+# --------------------------------------------------------------------------------------------
+
+def weightless(t: templates.Template, **values) -> templates.Template:
+    """Every mass, inertia, load and the gravity zero, but the given values."""
+    zero = {p.symbol: 0.0 for p in t.parameters
+            if p.kind in ("mass", "inertia", "force", "torque", "acceleration")}
+    return with_values(t, **{**zero, **values})
+
+
+def test_static_fourbar_with_an_output_torque_by_virtual_work():
+    """No masses, no gravity, only a torque T on the rocker B0-B (link 4). The links are rigid
+    and the pins frictionless, so the powers of the efforts sum to zero (virtual work):
+    T12·ω12 + T·ω14 = 0, hence T12 = −T·ω14/ω12, with ω14 from the kinematic reference."""
+    torque, w12 = 7.5, 3.0
+    t = weightless(load("fourbar"), T4=torque, omega_in=w12, alpha_in=4.0)
+    built, values = builder.make(t)
+    table = built.meta["forces"]
+    first, last = table["rows"]
+    rows = [table["current_row"], *range(first, last + 1)]
+    inputs = [values[(SHEET, f"A{r}")] for r in rows]
+    got = np.array([values[(SHEET, f"{table['columns']['T12']}{r}")] for r in rows])
+    w14 = solve(t.mechanism.description, t.values(), np.asarray(inputs))["omega_theta14"]
+    np.testing.assert_allclose(got, -torque * w14 / w12, rtol=1e-10)
+
+
+def test_inline_slider_crank_piston_inertia_by_hand():
+    """In-line slider-crank, crank r = 50 mm, rod l = 200 mm, at a constant ω; only the piston
+    has mass m, no gravity, no load. The piston's position x_B = r cos θ + D with
+    D = √(l² − r² sin² θ):
+        x′  = −r sin θ − r² sin θ cos θ / D
+        x″  = −r cos θ − r² cos 2θ / D − r⁴ sin² θ cos² θ / D³
+    and v_B = ω·x′, a_B = ω²·x″ (α = 0). The crank and rod are massless and the pins and the
+    guide frictionless (the guide's force is normal to the motion), so the motor's power feeds
+    only the piston's kinetic energy: T12·ω = d(½ m v_B²)/dt = m·a_B·v_B, T12 = m·a_B·v_B/ω.
+    The piston's x equation has the rod's push alone: F34x = m·a_B."""
+    r, l, w, m = 50.0, 200.0, 30.0, 2.0
+    t = weightless(load("slider-crank"), a1=0.0, a2=r, a3=l, m4=m, omega_in=w, alpha_in=0.0)
+    built, values = builder.make(t)
+    table = built.meta["forces"]
+    first, last = table["rows"]
+    rows = [table["current_row"], *range(first, last + 1)]
+    th = np.radians([values[(SHEET, f"A{r_}")] for r_ in rows])
+    got = {key: np.array([values[(SHEET, f"{table['columns'][key]}{r_}")] for r_ in rows])
+           for key in ("T12", "F34x")}
+    rm, lm = r * 1e-3, l * 1e-3
+    d = np.sqrt(lm ** 2 - rm ** 2 * np.sin(th) ** 2)
+    v = w * (-rm * np.sin(th) - rm ** 2 * np.sin(th) * np.cos(th) / d)
+    a = w ** 2 * (-rm * np.cos(th) - rm ** 2 * np.cos(2 * th) / d
+                  - rm ** 4 * np.sin(th) ** 2 * np.cos(th) ** 2 / d ** 3)
+    scale = m * np.max(np.abs(a)) * np.max(np.abs(v)) / w
+    np.testing.assert_allclose(got["T12"], m * a * v / w, rtol=0, atol=1e-10 * scale)
+    np.testing.assert_allclose(got["F34x"], m * a, rtol=0, atol=1e-10 * m * np.max(np.abs(a)))
