@@ -255,6 +255,7 @@ class Frame(Part):
 
 @dataclass(frozen=True)
 class Frames(Part):
+    """The equal-scale frames of the drawing and of the sweep charts, on their sheet."""
     sheet: str = _entry(_str)
     frames: tuple[Frame, ...] = _entry(_list(_part(Frame)))
 

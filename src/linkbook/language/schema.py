@@ -10,7 +10,6 @@ schema uses: when it is sure the template fits, jsonschema is not needed; whenev
 """
 from __future__ import annotations
 
-import difflib
 import json
 import re
 from functools import cache
@@ -198,6 +197,7 @@ def _describe(error, data: dict) -> tuple[str, str]:
         missing = [k for k in part.get("required", ()) if k not in got]
         return field, f"unknown key {extra[0]!r}{_suggest(extra[0], known, missing)}"
     if kind == "required":
+        import difflib
         missing = next(k for k in want if k not in got)
         near = difflib.get_close_matches(missing, [k for k in got if isinstance(k, str)], n=1)
         hint = f" ({near[0]!r} is not a key: did you mean {missing!r}?)" if near else ""
@@ -226,6 +226,7 @@ def _describe(error, data: dict) -> tuple[str, str]:
 def _suggest(word: str, known: set[str], missing: list[str]) -> str:
     """The key `word` was likely meant to be: a missing one first (a misspelt required key),
     else any known one."""
+    import difflib
     near = difflib.get_close_matches(word, missing, n=1) or \
         difflib.get_close_matches(word, sorted(known), n=1)
     return f" (did you mean {near[0]!r}?)" if near else f"; known: {', '.join(sorted(known))}"

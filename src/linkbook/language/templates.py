@@ -5,10 +5,8 @@ bad one raises InputError naming the field, before any file is touched.
 """
 from __future__ import annotations
 
-import difflib
 import math
 import re
-import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -17,7 +15,6 @@ from ..base.xlsx import excel_name_problem
 from .domain import (BRANCH_WORDS, InputError, check_input, check_lengths_together,
                      check_value, check_written_lengths, parse_number)
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
-from .dimensions import unconvertible
 from .expressions import value_of
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND, RATE_KIND,
                          Mechanism)
@@ -121,6 +118,7 @@ def find(name_or_path: str) -> Path:
     candidate = TEMPLATE_DIR / f"{name_or_path}.toml"
     if candidate.is_file():
         return candidate
+    import difflib
     names = [p.stem for p in bundled()]
     hint = difflib.get_close_matches(name_or_path, names, n=1)
     more = f"; did you mean {hint[0]!r}?" if hint else f"; known: {', '.join(names)}"
@@ -156,6 +154,7 @@ def copy_bundled(name: str, out: Path) -> Path:
 
 
 def load(name_or_path: str) -> Template:
+    import tomllib
     path = find(name_or_path)
     try:
         # utf-8-sig: Windows editors start a UTF-8 file with a byte-order mark
@@ -301,6 +300,7 @@ def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template"
     """The same mechanism with lengths in `unit`: every length and offset parameter, a linear
     actuator's sweep, position and rates, and length grid values converted. `flag`: what the
     messages call the unit's setting."""
+    from .dimensions import unconvertible
     check_length_unit(flag, unit)
     if unit == t.length_unit:
         return t
@@ -376,6 +376,7 @@ def _mechanism(name: str, data: dict, origin: str) -> Mechanism:
 
 def bundled_template_data(name: str) -> dict | None:
     """The TOML data of the bundled template `name`, if it describes a mechanism."""
+    import tomllib
     path = TEMPLATE_DIR / f"{name}.toml"
     if not path.is_file():
         return None
@@ -475,6 +476,7 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
     for text in assignments:
         key, raw = parse_assignment(text, names["set"])
         if key not in values:
+            import difflib
             hint = difflib.get_close_matches(key, list(values), n=1)
             more = f"; did you mean {hint[0]}?" if hint else f"; known: {', '.join(values)}"
             raise InputError(f"{names['set']} {key}", f"unknown parameter{more}")
