@@ -127,3 +127,20 @@ def test_a_part_behaves_as_the_frozen_dataclass_of_its_fields(cls):
         for make in (cls, twin):
             with pytest.raises(TypeError):
                 make(*bad_args, **bad_kwargs)
+
+
+def test_an_older_record_names_a_bundled_mechanism_and_verify_compiles_its_description():
+    """A book written before the mechanism language records no description: verify takes the
+    bundled template's (language/bundled.py), read from the template file itself here."""
+    import tomllib
+
+    from linkbook.language.bundled import TEMPLATE_DIR, from_record
+    from linkbook.language.model import DescriptionError
+    b, _ = built("fourbar")
+    meta = {k: v for k, v in b.meta.items() if k != "description"}
+    mechanism = from_record(BuildRecord.from_json(meta))
+    toml = tomllib.loads((TEMPLATE_DIR / "fourbar.toml").read_text(encoding="utf-8"))
+    assert mechanism.description == toml["mechanism"]
+    assert mechanism.parameters == b.record.kinds()
+    with pytest.raises(DescriptionError, match="unknown mechanism 'fivebar'"):
+        from_record(BuildRecord.from_json({**meta, "mechanism": "fivebar"}))
