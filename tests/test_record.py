@@ -3,12 +3,14 @@ record is read in today's shape, and a key the record does not know fails at bui
 from __future__ import annotations
 
 import json
+from dataclasses import MISSING, FrozenInstanceError, field, fields, make_dataclass, replace
 
 import openpyxl
 import pytest
 
 from conftest import built
 
+from linkbook.base import record as record_module
 from linkbook.base import sheets
 from linkbook.base.record import BuildRecord, DamagedRecord, upgrade
 
@@ -71,3 +73,74 @@ def test_an_older_record_is_read_in_todays_shape():
     assert record.frames is None
     assert record.position.drawing[0].label.startswith("link 1: ")
     assert upgrade(b.meta) == b.meta        # today's shape comes back equal
+
+
+# ---------------------------------------------------------------- a part is a frozen dataclass
+def _parts() -> list[type]:
+    return [cls for cls in vars(record_module).values()
+            if isinstance(cls, type) and issubclass(cls, record_module.Part)
+            and cls is not record_module.Part]
+
+
+def _twin(cls: type) -> type:
+    """The standard library's frozen dataclass of the same name and fields."""
+    specs = [(f.name, f.type) if f.default is MISSING else
+             (f.name, f.type, field(default=f.default)) for f in fields(cls)]
+    return make_dataclass(cls.__name__, specs, frozen=True)
+
+
+def _arguments(cls: type, seed: int) -> list:
+    """A value for each field (hashable, so that the hash can be compared too)."""
+    return [f"{f.name}{seed}" if seed % 2 else seed + i for i, f in enumerate(fields(cls))]
+
+
+@pytest.mark.parametrize("cls", _parts(), ids=lambda cls: cls.__name__)
+def test_a_part_behaves_as_the_frozen_dataclass_of_its_fields(cls):
+    twin = _twin(cls)
+    required = [f for f in fields(cls) if f.default is MISSING]
+    for seed in (1, 2):
+        args = _arguments(cls, seed)
+        named = dict(zip([f.name for f in fields(cls)], args))
+        ours, theirs = cls(*args), twin(*args)
+        assert repr(ours) == repr(theirs)
+        assert hash(ours) == hash(theirs)
+        assert ours == cls(**named) and not ours != cls(**named)
+        assert ours != cls(*_arguments(cls, seed + 2))
+        assert (ours == theirs) is False            # another class, as between dataclasses
+        assert (ours == type("Sub", (cls,), {})(*args)) is False
+        assert (theirs == type("Sub", (twin,), {})(*args)) is False
+        assert replace(ours, **{fields(cls)[0].name: "changed"}) == \
+            cls(*(["changed"] + args[1:]))
+        short = cls(*args[:len(required)])           # the defaulted fields left out
+        assert short == cls(**{k: named[k] for k in list(named)[:len(required)]})
+        assert repr(short) == repr(twin(*args[:len(required)]))
+        with pytest.raises(FrozenInstanceError):
+            setattr(ours, fields(cls)[0].name, 0)
+        with pytest.raises(FrozenInstanceError):
+            delattr(ours, fields(cls)[0].name)
+        with pytest.raises(FrozenInstanceError):
+            ours.new_attribute = 0
+    for bad_args, bad_kwargs in (((), {}) if required else ((0,) * 99, {}),
+                                 ((0,) * (len(fields(cls)) + 1), {}),
+                                 ((), {"no_such_field": 0}),
+                                 ((0,), {fields(cls)[0].name: 0})):
+        for make in (cls, twin):
+            with pytest.raises(TypeError):
+                make(*bad_args, **bad_kwargs)
+
+
+def test_an_older_record_names_a_bundled_mechanism_and_verify_compiles_its_description():
+    """A book written before the mechanism language records no description: verify takes the
+    bundled template's (language/bundled.py), read from the template file itself here."""
+    import tomllib
+
+    from linkbook.language.bundled import TEMPLATE_DIR, from_record
+    from linkbook.language.model import DescriptionError
+    b, _ = built("fourbar")
+    meta = {k: v for k, v in b.meta.items() if k != "description"}
+    mechanism = from_record(BuildRecord.from_json(meta))
+    toml = tomllib.loads((TEMPLATE_DIR / "fourbar.toml").read_text(encoding="utf-8"))
+    assert mechanism.description == toml["mechanism"]
+    assert mechanism.parameters == b.record.kinds()
+    with pytest.raises(DescriptionError, match="unknown mechanism 'fivebar'"):
+        from_record(BuildRecord.from_json({**meta, "mechanism": "fivebar"}))

@@ -14,8 +14,7 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 from ..base import __version__
-from ..language import templates  # noqa: E402 (after the setting above)
-from ..language.templates import InputError
+from ..language.domain import LENGTH_UNITS, InputError  # noqa: E402 (after the setting above)
 
 EPILOG = """examples:
   linkbook list
@@ -108,7 +107,7 @@ def _parser() -> argparse.ArgumentParser:
                         "on the range's end, so a full turn always closes")
     b.add_argument("--branch", choices=("open", "crossed"),
                    help="assembly branch of the main loop")
-    b.add_argument("--unit", choices=tuple(templates.LENGTH_UNITS),
+    b.add_argument("--unit", choices=tuple(LENGTH_UNITS),
                    help="the book's length unit: the template's lengths are converted to it "
                         "(--set and --step values are then in this unit); every header, label, "
                         "axis title and validation message follows it")
@@ -632,6 +631,7 @@ def _chosen_sheets(book: Path, asked: list[str] | None, visible: list[str]) -> l
 
 
 def _list(verbose: bool) -> int:
+    from ..language import templates
     for path in templates.bundled():
         t = templates.load(str(path))
         steps = ", ".join(dict.fromkeys(s["type"] for s in t.mechanism.description["steps"]))
@@ -643,6 +643,7 @@ def _list(verbose: bool) -> int:
 
 
 def _new(args) -> int:
+    from ..language import templates
     out = templates.copy_bundled(args.template, Path(args.output))
     print(f"wrote {out}: the bundled {args.template}; edit it, then `linkbook check {out}` "
           f"and `linkbook build {out}`")
@@ -651,6 +652,7 @@ def _new(args) -> int:
 
 def _check(args) -> int:
     from ..book.builder import make
+    from ..language import templates
     t = templates.load(args.template)
     built, _ = make(t, values_needed=False)
     _warn(built)
@@ -667,6 +669,8 @@ def _warn(built) -> None:
 
 
 def _build(args) -> int:
+    # imported by the commands that read a template, not by the module: verify reads none
+    from ..language import templates
     if args.all:
         if args.template or args.output or args.assignments or args.step or args.branch \
                 or args.unit:

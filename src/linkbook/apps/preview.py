@@ -2,7 +2,6 @@
 LibreOffice and poppler's pdftoppm."""
 from __future__ import annotations
 
-import html
 import re
 import shutil
 import tempfile
@@ -68,10 +67,16 @@ def visible_sheets(path) -> list[str]:
 def _sheet_tags(xml: str) -> list[tuple[str, str]]:
     out = []
     for tag in _SHEET_TAG.findall(xml):
-        name = html.unescape(re.search(r'\bname="([^"]*)"', tag).group(1))
+        name = _sheet_name(tag)
         state = re.search(r'\bstate="([^"]*)"', tag)
         out.append((name, state.group(1) if state else "visible"))
     return out
+
+
+def _sheet_name(tag: str) -> str:
+    # html only here: every command imports this module for PREVIEW_DPI (its help text)
+    from html import unescape
+    return unescape(re.search(r'\bname="([^"]*)"', tag).group(1))
 
 
 def _only_sheets(path: Path, sheets: list[str], folder: Path) -> Path:
@@ -94,7 +99,7 @@ def _show_only(xml: str, sheets: list[str]) -> str:
 
     def state(match: re.Match) -> str:
         tag = re.sub(r'\s*\bstate="[^"]*"', "", match.group(0))
-        name = html.unescape(re.search(r'\bname="([^"]*)"', tag).group(1))
+        name = _sheet_name(tag)
         return tag if name in sheets else tag.replace("<sheet ", '<sheet state="hidden" ', 1)
     xml = _SHEET_TAG.sub(state, xml)
     # LibreOffice prints a hidden sheet that has a print area: the hidden sheets' go

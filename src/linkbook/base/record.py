@@ -11,7 +11,7 @@ the same whether it is written from the writer's dict or from the record.
 """
 from __future__ import annotations
 
-from dataclasses import MISSING, dataclass, field, fields, is_dataclass
+from dataclasses import MISSING, FrozenInstanceError, dataclass, field, fields, is_dataclass
 
 from .palette import link_label
 
@@ -79,7 +79,54 @@ def _entry(convert, default=MISSING, written_when_none=False):
 
 
 class Part:
-    """One object of the record: its dataclass fields are its JSON keys."""
+    """One object of the record: its dataclass fields are its JSON keys.
+
+    A part is a value, as a frozen dataclass is: made from its fields as arguments (in order or
+    by name, the defaulted ones optional), equal to a part of its class with equal fields,
+    hashed and shown by them (`Sweep(sheet='Sweep', ...)`), never changed (FrozenInstanceError).
+    A frozen dataclass writes and compiles these six methods for each of its classes whenever
+    the module is imported, which every command does; written once here, they cost nothing per
+    part, and each part is a dataclass only for its fields (`_frozen`)."""
+
+    def __init__(self, *args, **kwargs):
+        known = fields(self)
+        if len(args) > len(known):
+            raise TypeError(f"{type(self).__name__}() takes {len(known)} arguments "
+                            f"({len(args)} given)")
+        given = dict(zip((f.name for f in known), args))
+        for name, value in kwargs.items():
+            if name in given or name not in {f.name for f in known}:
+                raise TypeError(f"{type(self).__name__}() got "
+                                f"{'more than one' if name in given else 'an unexpected'} "
+                                f"argument {name!r}")
+            given[name] = value
+        for f in known:
+            if f.name not in given:
+                if f.default is MISSING:
+                    raise TypeError(f"{type(self).__name__}() missing argument {f.name!r}")
+                given[f.name] = f.default
+            object.__setattr__(self, f.name, given[f.name])
+
+    def _values(self) -> tuple:
+        return tuple(getattr(self, f.name) for f in fields(self))
+
+    def __eq__(self, other):
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        return self._values() == other._values()
+
+    def __hash__(self):
+        return hash(self._values())
+
+    def __repr__(self):
+        shown = ", ".join(f"{f.name}={getattr(self, f.name)!r}" for f in fields(self))
+        return f"{type(self).__qualname__}({shown})"
+
+    def __setattr__(self, name, value):
+        raise FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    def __delattr__(self, name):
+        raise FrozenInstanceError(f"cannot delete field {name!r}")
 
     @classmethod
     def from_json(cls, data):
@@ -105,6 +152,11 @@ class Part:
         return out
 
 
+def _frozen(cls):
+    """A part's class: a dataclass for its fields (fields(), replace()); its methods are Part's."""
+    return dataclass(init=False, repr=False, eq=False)(cls)
+
+
 def _json(value):
     if is_dataclass(value):
         return value.to_json()
@@ -116,7 +168,7 @@ def _json(value):
 
 
 # ---------------------------------------------------------------- the parts
-@dataclass(frozen=True)
+@_frozen
 class Input(Part):
     """A named input cell on the Mechanism sheet: a length, an angle, a branch, a rate."""
     cell: str = _entry(_str)
@@ -124,7 +176,7 @@ class Input(Part):
     name: str = _entry(_str)
 
 
-@dataclass(frozen=True)
+@_frozen
 class Constant(Part):
     """A derived constant's cell (a time ratio, an angle the description computes once)."""
     cell: str = _entry(_str)
@@ -132,7 +184,7 @@ class Constant(Part):
     unit: str = _entry(_str)
 
 
-@dataclass(frozen=True)
+@_frozen
 class SummaryCell(Part):
     """A cell of the geometry summary: a number, a number or a dash, or a text."""
     cell: str = _entry(_str)
@@ -140,7 +192,7 @@ class SummaryCell(Part):
     unit: str = _entry(_str, "")
 
 
-@dataclass(frozen=True)
+@_frozen
 class Sweep(Part):
     """The sweep table: one row per input value, one column letter per quantity key."""
     sheet: str = _entry(_str)
@@ -153,7 +205,7 @@ class Sweep(Part):
         return [f"{letter}{r}" for r in range(self.rows[0], self.rows[1] + 1)]
 
 
-@dataclass(frozen=True)
+@_frozen
 class Motion(Part):
     """The Motion sheet: the current position's row, then one row per sweep row."""
     sheet: str = _entry(_str)
@@ -162,7 +214,7 @@ class Motion(Part):
     columns: dict[str, str] = _entry(_cells)
 
 
-@dataclass(frozen=True)
+@_frozen
 class Forces(Part):
     """The Forces sheet: laid out as the Motion sheet, with the summary of the sweep beside it
     (its cells; the coefficient of speed fluctuation is an input among them) and, for a crank,
@@ -175,7 +227,7 @@ class Forces(Part):
     work: str | None = _entry(_optional(_str), None)
 
 
-@dataclass(frozen=True)
+@_frozen
 class DrawnLink(Part):
     """A link of the drawing: its joints' rows of the joints table (x, y in DRAWING_COLUMNS)."""
     joints: tuple[str, ...] = _entry(_list(_str))
@@ -185,7 +237,7 @@ class DrawnLink(Part):
     kind: str | None = _entry(_optional(_str), None)    # a slider's guide, slot or block
 
 
-@dataclass(frozen=True)
+@_frozen
 class Position(Part):
     """The current position block: the input cell, a cell per quantity, the joints table, the
     drawing's links and, with motion, the velocity cells of the traced point."""
@@ -200,7 +252,7 @@ class Position(Part):
     motion_cells: dict[str, str] | None = _entry(_optional(_cells), None)
 
 
-@dataclass(frozen=True)
+@_frozen
 class NumbersOnly(Part):
     """A numbers-only copy (what MIN and MAX read): of a sweep column, or of one axis of the
     joints table (None where a row holds no joint)."""
@@ -212,7 +264,7 @@ class NumbersOnly(Part):
     axis: int | None = _entry(_optional(_int), None)
 
 
-@dataclass(frozen=True)
+@_frozen
 class GridTable(Part):
     """The Grid sheet (one column per value of the adjustment `param`, the quantity `key` in
     its cells, the stroke in `stroke_row`) or the Stroke sweep (the same columns sampled more
@@ -227,7 +279,7 @@ class GridTable(Part):
     stroke_step: float | None = _entry(_optional(_number), None)   # the template's, in degrees
 
 
-@dataclass(frozen=True)
+@_frozen
 class Extent(Part):
     """What a frame must hold: sweep columns on each axis, and the joints if `position`."""
     x: tuple[str, ...] = _entry(_list(_str))
@@ -235,7 +287,7 @@ class Extent(Part):
     position: bool = _entry(_bool)
 
 
-@dataclass(frozen=True)
+@_frozen
 class Series(Part):
     """A mapped column pair of a frame: the drawing's links, or a sweep path (x, y keys)."""
     kind: str = _entry(_str)
@@ -249,14 +301,14 @@ class Series(Part):
     y: str | None = _entry(_optional(_str), None)
 
 
-@dataclass(frozen=True)
+@_frozen
 class Bar(Part):
     """The scale bar's cells."""
     columns: tuple[str, ...] = _entry(_list(_str))
     rows: tuple[int, ...] = _entry(_list(_int))
 
 
-@dataclass(frozen=True)
+@_frozen
 class Frame(Part):
     """An equal-scale frame: the drawing's (no `chart`) or that of sweep chart `chart`."""
     cells: dict[str, str] = _entry(_cells)     # xmin … ymax, cx, cy, need, decade, square, label
@@ -266,13 +318,14 @@ class Frame(Part):
     chart: int | None = _entry(_optional(_int), None)
 
 
-@dataclass(frozen=True)
+@_frozen
 class Frames(Part):
+    """The equal-scale frames of the drawing and of the sweep charts, on their sheet."""
     sheet: str = _entry(_str)
     frames: tuple[Frame, ...] = _entry(_list(_part(Frame)))
 
 
-@dataclass(frozen=True)
+@_frozen
 class ControlSpec(Part):
     """A form control (scroll bar, spin button) linked to `cell`, counting in whole numbers."""
     kind: str = _entry(_str)
@@ -285,7 +338,7 @@ class ControlSpec(Part):
     anchor: tuple[int, ...] = _entry(_list(_int))
 
 
-@dataclass(frozen=True)
+@_frozen
 class BuildRecord(Part):
     """What was built (template, mechanism and its description) and where each quantity
     lives in the book."""

@@ -16,7 +16,8 @@ from openpyxl.utils import column_index_from_string, get_column_letter
 from ..base.sheets import FORCES_SHEET, MOTION_SHEET, SWEEP
 from ..language.forces import FORCE, NEWTON, TO_METRES
 from ..language.model import Model
-from ..language.templates import LENGTH_UNITS, Template
+from ..language.domain import LENGTH_UNITS
+from ..language.templates import Template
 from .motion import MOTION_OFFSET, model_name, row_table
 from .style import (BOLD, DERIVED_FILL, INPUT_FILL, NOTE, define_name, header, number_format,
                     put_head, put_text, set_formula)

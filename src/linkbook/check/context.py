@@ -21,7 +21,7 @@ class Reference:
 
     def __init__(self, record: BuildRecord):
         from ..language.model import DescriptionError
-        from ..language.templates import from_record
+        from ..language.bundled import from_record
         try:
             self.mechanism = from_record(record)
         except (DescriptionError, KeyError, TypeError, AttributeError) as exc:

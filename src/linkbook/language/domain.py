@@ -34,6 +34,8 @@ RATE_LIMIT = 1e9                 # |ω|, |α|, |v|, |a| of the input
 LENGTH_SPAN = 1e3                # the mechanism's extent over its smallest length (see above)
 INPUT_ANGLE_LIMIT = 3600.0       # degrees either way: the sweep and the current position
 BRANCH_WORDS = {"open": 1.0, "crossed": -1.0}
+# The length units a book may have, in metres: one per mechanism (the template's length_unit).
+LENGTH_UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
 
 # Memory, measured with the 0.05° four-bar (324,178 formula cells, 27 MB of XML) and the pump
 # with 100 adjustments (39,283 cells, 70 MB): verify needs about 1 kB per formula cell and 1.2

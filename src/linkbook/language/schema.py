@@ -2,11 +2,16 @@
 (mechanism.schema.json; docs/ holds a copy for editors). A template is checked against it first,
 each problem reported as one line naming the file and the field; the semantic checks of
 templates.py and compiler.py follow.
+
+jsonschema judges and words every problem. Importing it costs more than the rest of a small
+build's checks, so a template is first read by `fits`, a plain reading of the few keywords the
+schema uses: when it is sure the template fits, jsonschema is not needed; whenever it is not sure
+(a keyword or a value it does not know), or the template does not fit, jsonschema decides.
 """
 from __future__ import annotations
 
-import difflib
 import json
+import re
 from functools import cache
 from pathlib import Path
 
@@ -42,6 +47,8 @@ def keys_of(part: dict) -> tuple[set[str], set[str]]:
 
 def problem(data: dict) -> tuple[str, str] | None:
     """The first problem of a template's data as (field, message), or None when it fits."""
+    if fits(data) is True:
+        return None
     errors = list(_validator().iter_errors(data))
     if not errors:
         return None
@@ -49,6 +56,136 @@ def problem(data: dict) -> tuple[str, str] | None:
     return _describe(min(errors, key=lambda e: e.validator == "required"), data)
 
 
+# ---------------------------------------------------------------- the quick reading
+class _Unsure(Exception):
+    """The quick reading cannot tell as jsonschema would: jsonschema decides."""
+
+
+def fits(data) -> bool | None:
+    """Whether `data` fits the schema, as jsonschema's Draft 7 validator judges it; None where
+    this reading is not sure (then only jsonschema can tell)."""
+    try:
+        return _fits(data, schema())
+    except _Unsure:
+        return None
+
+
+# Keywords that validate nothing by themselves ("then" and "else" are read with their "if")
+_INERT = {"$schema", "$id", "$comment", "title", "description", "default", "examples", "then",
+          "else"}
+# The Python types a TOML (or JSON) reader gives; any other value leaves the reading unsure
+_PLAIN = (dict, list, str, bool, int, float, type(None))
+
+
+def _fits(value, part) -> bool:
+    if part is True or part is False:
+        return part
+    for keyword, want in part.items():
+        if keyword in _INERT:
+            continue
+        check = _KEYWORDS.get(keyword)
+        if check is None:
+            raise _Unsure(keyword)
+        if not check(value, want, part):
+            return False
+    return True
+
+
+def _is_type(value, name: str) -> bool:
+    if type(value) not in _PLAIN:
+        raise _Unsure(type(value).__name__)
+    if name in ("number", "integer"):
+        if isinstance(value, bool):                  # bool is an int in Python, not in JSON
+            return False
+        if isinstance(value, float) and name == "integer":
+            raise _Unsure("a float where a whole number is wanted")   # 3.0 is one in Draft 7
+        return isinstance(value, (int, float))
+    kinds = {"object": dict, "array": list, "string": str, "boolean": bool, "null": type(None)}
+    if name not in kinds:
+        raise _Unsure(name)
+    return isinstance(value, kinds[name])
+
+
+def _equal(one, two) -> bool:
+    """jsonschema's equality of two values: True and 1 differ, 1 and 1.0 do not."""
+    if one is two:
+        return True
+    if isinstance(one, str) or isinstance(two, str):
+        return one == two
+    if type(one) not in _PLAIN or type(two) not in _PLAIN:
+        raise _Unsure(f"{type(one).__name__} compared with {type(two).__name__}")
+    if isinstance(one, list) and isinstance(two, list):
+        return len(one) == len(two) and all(map(_equal, one, two))
+    if isinstance(one, dict) and isinstance(two, dict):
+        return len(one) == len(two) and all(key in two and _equal(value, two[key])
+                                            for key, value in one.items())
+    return isinstance(one, bool) == isinstance(two, bool) and one == two
+
+
+def _type(value, want, part) -> bool:
+    return any(_is_type(value, name) for name in ([want] if isinstance(want, str) else want))
+
+
+def _properties(value, want, part) -> bool:
+    return not isinstance(value, dict) or all(
+        _fits(value[key], sub) for key, sub in want.items() if key in value)
+
+
+def _additional_properties(value, want, part) -> bool:
+    if not isinstance(value, dict):
+        return True
+    if "patternProperties" in part:
+        raise _Unsure("patternProperties")
+    known = part.get("properties", {})
+    return all(_fits(value[key], want) for key in value if key not in known)
+
+
+def _items(value, want, part) -> bool:
+    if not isinstance(want, dict | bool):
+        raise _Unsure("items as a list of schemas")
+    return not isinstance(value, list) or all(_fits(item, want) for item in value)
+
+
+def _if(value, want, part) -> bool:
+    branch = part.get("then", True) if _fits(value, want) else part.get("else", True)
+    return _fits(value, branch)
+
+
+def _number_check(test):
+    return lambda value, want, part: not _is_type(value, "number") or test(value, want)
+
+
+def _object_check(test):
+    return lambda value, want, part: not isinstance(value, dict) or test(value, want)
+
+
+def _array_check(test):
+    return lambda value, want, part: not isinstance(value, list) or test(value, want)
+
+
+_KEYWORDS = {
+    "type": _type,
+    "properties": _properties,
+    "additionalProperties": _additional_properties,
+    "required": _object_check(lambda value, want: all(key in value for key in want)),
+    "minProperties": _object_check(lambda value, want: len(value) >= want),
+    "propertyNames": _object_check(lambda value, want: all(_fits(key, want) for key in value)),
+    "items": _items,
+    "minItems": _array_check(lambda value, want: len(value) >= want),
+    "maxItems": _array_check(lambda value, want: len(value) <= want),
+    "pattern": lambda value, want, part: not isinstance(value, str) or
+    re.search(want, value) is not None,
+    "exclusiveMinimum": _number_check(lambda value, want: value > want),
+    "const": lambda value, want, part: _equal(value, want),
+    "enum": lambda value, want, part: any(_equal(value, option) for option in want),
+    "anyOf": lambda value, want, part: any(_fits(value, sub) for sub in want),
+    "allOf": lambda value, want, part: all(_fits(value, sub) for sub in want),
+    "oneOf": lambda value, want, part: sum(_fits(value, sub) for sub in want) == 1,
+    "if": _if,
+}
+
+
+# ---------------------------------------------------------------- wording a problem
 @cache
 def _mechanism_key_validator(key: str):
     import jsonschema
@@ -58,6 +195,12 @@ def _mechanism_key_validator(key: str):
 def mechanism_key_problem(key: str, value: object) -> tuple[str, str] | None:
     """The first problem of one key of a [mechanism] table (one a workbook's record gave back,
     which no template's schema check has seen) as (field, message), or None when it fits."""
+    part = schema()["properties"]["mechanism"]["properties"][key]
+    try:
+        if _fits(value, part):        # the quick reading: jsonschema only for a problem
+            return None
+    except _Unsure:
+        pass
     errors = list(_mechanism_key_validator(key).iter_errors(value))
     if not errors:
         return None
@@ -78,6 +221,7 @@ def _describe(error, data: dict) -> tuple[str, str]:
         missing = [k for k in part.get("required", ()) if k not in got]
         return field, f"unknown key {extra[0]!r}{_suggest(extra[0], known, missing)}"
     if kind == "required":
+        import difflib
         missing = next(k for k in want if k not in got)
         near = difflib.get_close_matches(missing, [k for k in got if isinstance(k, str)], n=1)
         hint = f" ({near[0]!r} is not a key: did you mean {missing!r}?)" if near else ""
@@ -106,6 +250,7 @@ def _describe(error, data: dict) -> tuple[str, str]:
 def _suggest(word: str, known: set[str], missing: list[str]) -> str:
     """The key `word` was likely meant to be: a missing one first (a misspelt required key),
     else any known one."""
+    import difflib
     near = difflib.get_close_matches(word, missing, n=1) or \
         difflib.get_close_matches(word, sorted(known), n=1)
     return f" (did you mean {near[0]!r}?)" if near else f"; known: {', '.join(sorted(known))}"

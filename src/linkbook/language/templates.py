@@ -5,31 +5,20 @@ bad one raises InputError naming the field, before any file is touched.
 """
 from __future__ import annotations
 
-import difflib
 import math
 import re
-import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ..base.record import BuildRecord
 from ..base.xlsx import excel_name_problem
-from .domain import (BRANCH_WORDS, InputError, check_input, check_lengths_together,
-                     check_value, check_written_lengths, parse_number)
+from .domain import (BRANCH_WORDS, LENGTH_UNITS, InputError, check_input,
+                     check_lengths_together, check_value, check_written_lengths, parse_number)
+from .bundled import TEMPLATE_DIR, bundled, bundled_template_data
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
-from .dimensions import unconvertible
 from .expressions import value_of
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism)
 
-def _template_dir() -> Path:
-    """Installed: templates/ is packaged inside linkbook; from a checkout: the repo's templates/."""
-    package = Path(__file__).resolve().parents[1]
-    packaged = package / "templates"
-    return packaged if packaged.is_dir() else package.parents[1] / "templates"
-
-
-TEMPLATE_DIR = _template_dir()
 EXCEL_MAX_ROWS = 1_048_576
 EXCEL_MAX_COLUMNS = 16_384
 
@@ -108,10 +97,6 @@ def parse_list(field: str, kind: str, text: object) -> tuple[float, ...]:
 
 
 # ---------------------------------------------------------------- loading
-def bundled() -> list[Path]:
-    return sorted(TEMPLATE_DIR.glob("*.toml"))
-
-
 def find(name_or_path: str) -> Path:
     path = Path(name_or_path)
     if path.suffix == ".toml" or path.exists():
@@ -121,6 +106,7 @@ def find(name_or_path: str) -> Path:
     candidate = TEMPLATE_DIR / f"{name_or_path}.toml"
     if candidate.is_file():
         return candidate
+    import difflib
     names = [p.stem for p in bundled()]
     hint = difflib.get_close_matches(name_or_path, names, n=1)
     more = f"; did you mean {hint[0]!r}?" if hint else f"; known: {', '.join(names)}"
@@ -156,6 +142,7 @@ def copy_bundled(name: str, out: Path) -> Path:
 
 
 def load(name_or_path: str) -> Template:
+    import tomllib
     path = find(name_or_path)
     try:
         # utf-8-sig: Windows editors start a UTF-8 file with a byte-order mark
@@ -276,10 +263,6 @@ def check_schema(data: dict, origin: str) -> None:
         raise InputError(f"{origin}: {field}" if field else origin, message)
 
 
-# The length units a book may have, in metres: one per mechanism (the template's length_unit).
-LENGTH_UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
-
-
 def check_length_unit(field: str, unit: object) -> str:
     if unit not in LENGTH_UNITS:
         raise InputError(field, f"must be one of {', '.join(LENGTH_UNITS)} (got {unit!r})")
@@ -301,6 +284,7 @@ def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template"
     """The same mechanism with lengths in `unit`: every length and offset parameter, a linear
     actuator's sweep, position and rates, and length grid values converted. `flag`: what the
     messages call the unit's setting."""
+    from .dimensions import unconvertible
     check_length_unit(flag, unit)
     if unit == t.length_unit:
         return t
@@ -372,15 +356,6 @@ def _mechanism(name: str, data: dict, origin: str) -> Mechanism:
                                  grid_keys)
     except DescriptionError as exc:
         raise InputError(exc.field, exc.message) from None
-
-
-def bundled_template_data(name: str) -> dict | None:
-    """The TOML data of the bundled template `name`, if it describes a mechanism."""
-    path = TEMPLATE_DIR / f"{name}.toml"
-    if not path.is_file():
-        return None
-    data = tomllib.loads(path.read_text(encoding="utf-8"))
-    return data if isinstance(data.get("mechanism"), dict) else None
 
 
 def _check_unique_names(params: list[Parameter], origin: str) -> None:
@@ -475,6 +450,7 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
     for text in assignments:
         key, raw = parse_assignment(text, names["set"])
         if key not in values:
+            import difflib
             hint = difflib.get_close_matches(key, list(values), n=1)
             more = f"; did you mean {hint[0]}?" if hint else f"; known: {', '.join(values)}"
             raise InputError(f"{names['set']} {key}", f"unknown parameter{more}")
@@ -498,18 +474,3 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
                   grid_values=grid_values)
     check_sweep(out, step_field=names["step"] if step is not None else "sweep.step")
     return out
-
-
-def from_record(record: BuildRecord) -> Mechanism:
-    """The mechanism a workbook's build record describes (verify reads an edited book back). A
-    book written before the mechanism language records only a bundled mechanism's name: its
-    description is that template's (the one older record the record's upgrade cannot fill in
-    from the record alone)."""
-    grid = (record.grid.param, record.grid.key) if record.grid is not None else None
-    description = record.description
-    if description is None:
-        data = bundled_template_data(record.mechanism)
-        if data is None:
-            raise DescriptionError("workbook", f"unknown mechanism {record.mechanism!r}")
-        description = data["mechanism"]
-    return compile_mechanism(record.mechanism, description, record.kinds(), "workbook", grid)
