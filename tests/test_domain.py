@@ -100,7 +100,7 @@ PUMP_1000 = ",".join(f"{20 + i * 0.05:g}" for i in range(1000))
 @pytest.mark.parametrize("args,limit", [
     (["fourbar", "--step", "0.001"], "verify reads at most 512 MiB"),
     (["fourbar", "--step", "0.000344"], "verify reads at most 512 MiB"),
-    (["fourbar", "--step", "0.005"], "the budget is 4 GiB"),
+    (["tk-fourbar", "--step", "0.005"], "the budget is 4 GiB"),
     (["pump", "--set", f"s1={PUMP_1000}"], "verify reads at most 512 MiB"),
 ], ids=["step 0.001", "step 0.000344", "step 0.005", "pump, 1000 adjustments"])
 def test_a_book_too_big_for_verify_or_memory_is_refused_up_front(tmp_path, capsys, args, limit):

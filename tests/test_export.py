@@ -38,7 +38,7 @@ def gappy_book(tmp_path_factory):
 
 
 def _sheet_of(path) -> str:
-    return {"Sweep": "Sweep", "Motion": "Motion"}[path.stem.split("-", 1)[1]]
+    return {"Sweep": "Sweep", "Motion": "Motion", "Forces": "Forces"}[path.stem.split("-", 1)[1]]
 
 
 def _compare(rows, cells, sheet, expected_of):
@@ -59,12 +59,14 @@ def _compare(rows, cells, sheet, expected_of):
 
 def test_round_trip_against_the_engine_and_the_stored_values(gappy_book, tmp_path):
     files = _export(gappy_book, tmp_path / "csv")
-    assert [f.name for f in files] == ["fourbar-Motion.csv", "fourbar-Sweep.csv"]
+    assert [f.name for f in files] == ["fourbar-Forces.csv", "fourbar-Motion.csv",
+                                       "fourbar-Sweep.csv"]
     computed = engine.evaluate_file(gappy_book)
     stored = openpyxl.load_workbook(gappy_book, data_only=True)
     meta = read_meta(stored)
     meta_rows = {"Sweep": (meta["sweep"]["rows"][0] - 1, *meta["sweep"]["rows"]),
-                 "Motion": (meta["motion"]["current_row"] - 1, *meta["motion"]["rows"])}
+                 "Motion": (meta["motion"]["current_row"] - 1, *meta["motion"]["rows"]),
+                 "Forces": (meta["forces"]["current_row"] - 1, *meta["forces"]["rows"])}
     not_closing = 0
     for path in files:
         sheet = _sheet_of(path)

@@ -20,6 +20,7 @@ from linkbook.base.sheets import FORCES_SHEET, META
 from linkbook.book import builder
 from linkbook.check.forces import forces, topology
 from linkbook.language import templates
+from linkbook.language.bundled import from_record
 from linkbook.language.model import DescriptionError
 
 SCHEMA = json.loads((ROOT / "src" / "linkbook" / "language" / "mechanism.schema.json")
@@ -107,7 +108,7 @@ def test_the_record_gives_the_keys_back(name):
     is the template's, force keys and all."""
     b, _ = built(name)
     record = BuildRecord.from_json(json.loads(json.dumps(b.meta)))
-    description = templates.from_record(record).description
+    description = from_record(record).description
     mechanism = _data(name)["mechanism"]
     for k in FORCE_KEYS:
         assert description.get(k) == mechanism.get(k), k
@@ -211,7 +212,7 @@ def test_a_book_record_with_such_a_key_is_refused_too(what, keys, message):
     meta["description"] = {k: v for k, v in meta["description"].items() if k not in FORCE_KEYS}
     meta["description"].update(copy.deepcopy(keys))
     with pytest.raises(DescriptionError) as caught:
-        templates.from_record(BuildRecord.from_json(meta))
+        from_record(BuildRecord.from_json(meta))
     assert message.replace("mine.toml: ", "workbook: ") in str(caught.value)
 
 

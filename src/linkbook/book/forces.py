@@ -14,6 +14,7 @@ from __future__ import annotations
 from openpyxl.utils import column_index_from_string, get_column_letter
 
 from ..base.sheets import FORCES_SHEET, MOTION_SHEET, SWEEP
+from ..language.excel import in_domain_or_na
 from ..language.forces import FORCE, NEWTON, TO_METRES
 from ..language.model import Model
 from ..language.domain import LENGTH_UNITS
@@ -78,7 +79,7 @@ def summary(wb, ws, t: Template, model: Model, names: dict, table: dict) -> dict
     effort = effort_key(model)
     q = model.get(effort)
     col = letters[effort]
-    rng, inputs = f"${col}${r0}:${col}${r1}", f"$A${r0}:$A${r1}"
+    rng = f"${col}${r0}:${col}${r1}"
     lo, hi = f"${col}${r0}:${col}${r1 - 1}", f"${col}${r0 + 1}:${col}${r1}"
     span = f"($A${r0 + 1}:$A${r1}-$A${r0}:$A${r1 - 1})"
     length = f"($A${r1}-$A${r0})"
@@ -106,12 +107,15 @@ def summary(wb, ws, t: Template, model: Model, names: dict, table: dict) -> dict
 
     mean = add("effort_mean", f"{q.symbol}: mean (trapezoid rule over the sweep)",
                f"=SUMPRODUCT(({lo}+{hi})/2*{span})/{length}", q.unit)
-    add("effort_rms", f"{q.symbol}: RMS", f"=SQRT(SUMPRODUCT(({lo}^2+{hi}^2)/2*{span})/{length})",
-        q.unit)
+    square = f"SUMPRODUCT(({lo}^2+{hi}^2)/2*{span})/{length}"
+    add("effort_rms", f"{q.symbol}: RMS", "=" + in_domain_or_na("SQRT", square), q.unit)
     for word, fn in (("largest", "MAX"), ("smallest", "MIN")):
         peak = add(f"effort_{word}", f"{q.symbol}: {word}", f"={fn}({rng})", q.unit)
+        # the input of the first row holding it: the sweep's steps are equal but the last
+        # (INDEX would do, but the vector engine reads MATCH and arithmetic natively)
+        k = f"MATCH({peak},{rng},0)"
         add(f"effort_{word}_at", f"… at {t.mechanism.input_symbol}",
-            f"=INDEX({inputs},MATCH({peak},{rng},0))",
+            f"=IF({k}={r1 - r0 + 1},$A${r1},$A${r0}+({k}-1)*($A${r0 + 1}-$A${r0}))",
             "deg" if crank else t.length_unit, fmt=number_format(
                 t.mechanism.input_unit, t.length_unit))
     for key in pin_keys(model):

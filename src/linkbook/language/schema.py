@@ -182,6 +182,7 @@ _KEYWORDS = {
     "allOf": lambda value, want, part: all(_fits(value, sub) for sub in want),
     "oneOf": lambda value, want, part: sum(_fits(value, sub) for sub in want) == 1,
     "if": _if,
+    "not": lambda value, want, part: not _fits(value, want),
 }
 
 
