@@ -15,7 +15,7 @@ from openpyxl.utils import column_index_from_string, get_column_letter
 
 from ..base.sheets import FORCES_SHEET, MOTION_SHEET, SWEEP
 from ..language.excel import in_domain_or_na
-from ..language.forces import FORCE, NEWTON, TO_METRES
+from ..language.forces import FORCE, NEWTON, NEWTON_METRE, TO_METRES
 from ..language.model import Model
 from ..language.domain import LENGTH_UNITS
 from ..language.templates import Template
@@ -49,7 +49,7 @@ def forces_table(wb, ws, t: Template, model: Model, names: dict, sweep: dict, po
     table = row_table(ws, t, model, {**names, TO_METRES: TO_METRES}, model.of_role(FORCE),
                       sweep, position, f"{t.title}: forces", note, (MOTION_SHEET, motion))
     for q in model.of_role(FORCE):
-        if q.unit != NEWTON and q.unit != "N·m":
+        if q.unit not in (NEWTON, NEWTON_METRE):
             continue
         letter = table["columns"][q.key]
         for r in [table["current_row"], *range(table["rows"][0], table["rows"][1] + 1)]:
@@ -135,13 +135,13 @@ def summary(wb, ws, t: Template, model: Model, names: dict, table: dict) -> dict
         add("flywheel", "flywheel inertia ΔE / (Cs·ω²)",
             f"=IF({cs}*{omega}^2=0,NA(),{energy}/({cs}*{omega}^2))", "kg·m²",
             fmt=ENERGY_FORMAT)
-    _mean_line(ws, t, cells, row + 2, (label_col, value_col), mean, r0, r1)
+    _mean_line_cells(ws, t, cells, row + 2, (label_col, value_col), mean, r0, r1)
     ws.column_dimensions[label_col].width = 44
     ws.column_dimensions[value_col].width = 14
     return {"summary": cells, **({"work": work} if work else {})}
 
 
-def _mean_line(ws, t: Template, cells: dict, row: int, columns: tuple[str, str], mean: str,
+def _mean_line_cells(ws, t: Template, cells: dict, row: int, columns: tuple[str, str], mean: str,
                r0: int, r1: int) -> None:
     """Two points for the chart's mean line: the first and the last input, the mean at both."""
     x, y = columns

@@ -2,16 +2,17 @@
 equations of all the links at once), at the sweep's inputs and at the current position.
 
 The bound scales with the mechanism's loads as a length's scales with its size: F, the larger of
-Σm·(S·(ω² + |α|) + g) (its masses' inertia and weight at its size S in metres) and the largest
-force the reference finds anywhere in the sweep (the loads the description puts on it); a
+Σm·(S·(ω² + |α|) + 10 m/s²) (its masses' inertia and weight at its size S in metres) and the
+largest force the reference finds anywhere in the sweep (the loads the description puts on it); a
 force may differ by 1e-12·F, a moment by 1e-12·F·S. Where a group of links nears a position in
 which it cannot carry a load, the forces grow like 1/D and their rounding like 1/D²: the same
 allowance as a rate's near a dead centre (checks.compare's sine), and the growth allowance of
 a value beyond its scale. At a row where the reference finds the equations singular (a group in
 the position where it cannot carry a load: a rod square to its guide, a dyad stretched
 straight), the forces are not determined by the data: the book's #N/A or any number there is
-its honest answer (as a rate's at a dead centre), but not #DIV/0! or another error; and the
-summary's sums over the sweep, which such a row enters, are judged the same way."""
+its honest answer (as a rate's at a dead centre), but not #DIV/0! or another error; the
+summary's sums and extremes over such a sweep are then the reference's arithmetic on the rows
+the book shows (each judged on its own)."""
 from __future__ import annotations
 
 import numpy as np
@@ -86,13 +87,22 @@ def _trapezoid(y: np.ndarray, x: np.ndarray) -> float:
 
 
 def _check_summary(j, ref: dict, scale: float, metres: float, dead: np.ndarray) -> None:
-    """The summary's cells and the work column, from the reference's effort over the sweep (a
-    sum over a row where the forces are not determined is not determined either)."""
+    """The summary's cells and the work column: the trapezoid rule, the extremes and the
+    work, taken of the reference's effort and pin loads over the sweep. Where a row's forces are
+    not determined (see `_singular`: the book may show any number there, judged row by row
+    already) they are taken of the book's own row cells instead: the sums must still be the
+    sums of what the sheet shows."""
     table, sheet = j.record.forces, j.record.forces.sheet
     effort = "F_in" if "F_in" in ref else next(k for k in ref if k.startswith("T1"))
     moment = scale * j.size * metres
     size = moment if effort != "F_in" else scale
-    x, y = np.asarray(j.angles, dtype=float), np.asarray(ref[effort], dtype=float)
+    x = np.asarray(j.angles, dtype=float)
+    undetermined = bool(dead.any())
+    rows = _rows_of(j, effort, ref) if undetermined else None
+
+    def column(key: str) -> np.ndarray:
+        return rows(key) if undetermined else np.asarray(ref[key], dtype=float)
+    y = column(effort)
     # a sum or an extreme over the sweep carries the rounding of its worst-conditioned row
     sines = np.asarray(j.ref.get("sine", np.ones(1)), dtype=float)
     worst = np.array([float(np.nanmin(sines)) if np.isfinite(sines).any() else 1.0])
@@ -104,14 +114,13 @@ def _check_summary(j, ref: dict, scale: float, metres: float, dead: np.ndarray) 
         expected[f"effort_{word}"] = (fn(y), size)
     for key in table.summary:
         if key.startswith("peak_"):
-            expected[key] = (np.max(np.asarray(ref[key[5:]], dtype=float)), scale)
+            expected[key] = (np.max(column(key[5:])), scale)
     if table.work is not None:
         work = np.concatenate([[0.0], np.cumsum(((y[1:] + y[:-1]) / 2 - mean)
                                                 * np.radians(np.diff(x)))])
         r0, r1 = table.rows
         c = Check(sheet, "W", j.size, 1.0, moment * 2 * np.pi)
         j.compare(c, sheet, [f"{table.work}{r}" for r in range(r0 + 1, r1 + 1)], work[1:], "J",
-                  dead=np.full(len(work) - 1, bool(dead.any())),   # each W reads the mean
                   sine=np.full(len(work) - 1, worst[0]))
         j.checks.append(c)
         energy = float(np.max(work) - np.min(work))
@@ -126,20 +135,30 @@ def _check_summary(j, ref: dict, scale: float, metres: float, dead: np.ndarray) 
     for i in (0, 1):
         expected[f"mean_line_x{i}"] = (x[-i], 1.0)
         expected[f"mean_line_y{i}"] = (mean, size)
-    undetermined = np.array([bool(dead.any())])
     for key, (value, bound) in expected.items():
         c = Check("forces summary", key, j.size, 1.0, bound)
-        j.compare(c, sheet, [table.summary[key].cell], np.array([value]), "",
-                  dead=None if key.startswith("mean_line_x") else undetermined, sine=worst)
+        j.compare(c, sheet, [table.summary[key].cell], np.array([value]), "", sine=worst)
         j.checks.append(c)
     for word in ("largest", "smallest"):
         _check_where(j, table.summary[f"effort_{word}_at"].cell, x, y,
-                     float(expected[f"effort_{word}"][0]), size / min(worst[0], 1.0) ** 2, word,
-                     bool(dead.any()))
+                     float(expected[f"effort_{word}"][0]), size / min(worst[0], 1.0) ** 2, word)
+
+
+def _rows_of(j, effort: str, ref: dict):
+    """A force column's values as the book's rows show them (NaN for an error)."""
+    table = j.record.forces
+    r0, r1 = table.rows
+
+    def values(key: str) -> np.ndarray:
+        letter = table.columns[key]
+        got = j.got(table.sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)])
+        return np.array([float(v) if isinstance(v, (int, float)) and not isinstance(v, bool)
+                         and not j.rules.is_error(v) else np.nan for v in got])
+    return values
 
 
 def _check_where(j, cell: str, x: np.ndarray, y: np.ndarray, peak: float, size: float,
-                 word: str, undetermined: bool) -> None:
+                 word: str) -> None:
     """Where the effort is largest (smallest): an input of the sweep at which the reference's
     effort is its peak within the bound (two rows may tie)."""
     sheet = j.record.forces.sheet
@@ -147,10 +166,7 @@ def _check_where(j, cell: str, x: np.ndarray, y: np.ndarray, peak: float, size: 
     got = j.values.get((sheet, cell))
     c.cells += 1
     c.judged.add((sheet, cell))
-    if undetermined:        # a row where the forces are not determined: #N/A or any input
-        ok = not j.rules.is_error(got) or j.rules.error_code(got) == "#N/A"
-        c.dead_centre += 1
-    elif np.isnan(peak):
+    if np.isnan(peak):
         c.na_expected += 1
         ok = j.rules.is_error(got) and j.rules.error_code(got) == "#N/A"
         c.na_agree += ok

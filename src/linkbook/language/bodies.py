@@ -15,7 +15,7 @@ from .model import ACCEL, LENGTH, DescriptionError
 
 GROUND = 1
 METRES = "to_metres"          # the named cell of metres per length unit (forces.TO_METRES)
-_METRES = f"{{{METRES}}}"
+METRES_REF = f"{{{METRES}}}"    # the placeholder of that cell in a formula
 
 
 @dataclass
@@ -33,13 +33,20 @@ class Body:
 
 
 class BodiesAndLoads:
-    """The force writer's first half: the bodies and their known loads (the writer's state:
-    the compiler `c`, the motion writer `w`, `entries`, `loads`, `dynamics`, `centres`)."""
+    """The force writer's first half: the bodies and their known loads. It reads the writer's
+    state (the compiler `c`, the motion writer `w`, `entries`, `loads`, `dynamics`, `centres`)
+    and calls the writer's `add`, `alias` and `holders` (forces.ForceWriter)."""
 
     def expr(self, where: str, raw: object) -> str:
-        known = self.c.symbols | self.c.swept | {q.key for q in self.model.quantities} | \
-            {METRES}
-        return expression(where, raw, known).text
+        return self.expression(where, raw).text
+
+    def expression(self, where: str, raw: object, constant: bool = False):
+        """A value of the force keys: what an `expression` step may name, and to_metres; a
+        `constant` one (a centre's place, gravity) the parameters and to_metres alone."""
+        known = self.c.symbols | {METRES}
+        if not constant:
+            known |= self.c.swept | {q.key for q in self.model.quantities}
+        return expression(where, raw, known)
 
     def _actuator(self) -> tuple[str, str] | None:
         """(END, N) of the dyad side that is the linear actuator's length."""
@@ -64,6 +71,9 @@ class BodiesAndLoads:
             if kind == "crank" and crank is None:
                 crank = [rec["pivot"], n]
                 implied.append(crank)
+            elif kind == "crank" and rec["pivot"] != crank[0]:
+                raise DescriptionError(rec["field"], "force analysis: a second crank on another "
+                                                     "pivot (not supported)")
             elif kind == "crank":
                 crank.append(n)
             elif kind == "dyad":
@@ -126,18 +136,25 @@ class BodiesAndLoads:
     def _masses(self) -> None:
         """Each body's weight and inertia force at its centre G, its inertia torque."""
         g = self._gravity()
+        described: set[int] = set()
         for k, entry in enumerate(self.entries):
             where = f"{self.field}.bodies[{k}]"
             entry = as_table(where, entry)
             body = self._entry_body(k, entry)
+            if body.number in described:
+                raise DescriptionError(f"{where}.joints", f"a second entry for the link "
+                                                          f"{body.joints}")
+            described.add(body.number)
             mass = self.expr(f"{where}.mass", entry.get("mass", 0))
             inertia = self.expr(f"{where}.inertia", entry.get("inertia", 0))
             if body.block:
                 centre, (ax, ay) = body.joints[0], self.w.acc(body.joints[0])
-            else:
+            elif "centre" in entry:
                 centre, (ax, ay) = self._centre(where, body, entry)
-            wx = lin((1, mul(mass, g[0])), (-1, mul(mass, _METRES, ax)))
-            wy = lin((1, mul(mass, g[1])), (-1, mul(mass, _METRES, ay)))
+            else:               # no mass to place (the language's check): an inertia alone
+                centre, ax, ay, mass = body.joints[0], ZERO, ZERO, ZERO
+            wx = lin((1, mul(mass, g[0])), (-1, mul(mass, METRES_REF, ax)))
+            wy = lin((1, mul(mass, g[1])), (-1, mul(mass, METRES_REF, ay)))
             if (wx, wy) != (ZERO, ZERO):
                 body.forces.append((wx, wy, centre))
             if inertia != ZERO and not body.block:
@@ -168,17 +185,17 @@ class BodiesAndLoads:
         (axp, ayp) = self.c.points[a]
         name = f"G{body.number}"
         if "local" in spec:
-            u, v = (expression(f"{where}.centre.local[{i}]", spec["local"][i],
-                               self.c.symbols).at_least(PRODUCT) for i in (0, 1))
+            u, v = (self.expression(f"{where}.centre.local[{i}]", spec["local"][i], True)
+                    .at_least(PRODUCT) for i in (0, 1))
             t = theta.text
             x = plus(axp, f"{u}*COS({t})-{v}*SIN({t})")
             y = plus(ayp, f"{u}*SIN({t})+{v}*COS({t})")
         elif "distances" in spec:
             x, y = self._by_distances(where, spec, name, a, b, theta)
         else:
-            d = expression(f"{where}.centre.distance", spec.get("distance", 0),
-                           self.c.symbols).at_least(PRODUCT)
-            turn = expression(f"{where}.centre.angle", spec.get("angle", 0), self.c.symbols)
+            d = self.expression(f"{where}.centre.distance", spec.get("distance", 0), True) \
+                .at_least(PRODUCT)
+            turn = self.expression(f"{where}.centre.angle", spec.get("angle", 0), True)
             t = theta.text if turn.zero else plus(theta, radians(turn).text)
             x, y = plus(axp, f"{d}*COS({t})"), plus(ayp, f"{d}*SIN({t})")
         gx = self.add(f"x{name}", f"x{name}", LENGTH, x,
@@ -205,7 +222,7 @@ class BodiesAndLoads:
         sides = spec["distances"]
         keys = [self.alias(f"_{name}_{k}", e.text) for k, e in (
             ("frame", self.c.length_of(a, b)),
-            *((k, expression(f"{where}.centre.distances[{i}]", sides[i], self.c.symbols))
+            *((k, self.expression(f"{where}.centre.distances[{i}]", sides[i], True))
               for i, k in enumerate(("from_a", "from_b"))))]
         ab, da, db = (k[1:-1] for k in keys)
         gamma = self.alias(f"_{name}_gamma", angle_of_triangle_or_na(ab, da, db, once=ab))
@@ -220,8 +237,8 @@ class BodiesAndLoads:
             return ZERO, ZERO
         where = f"{self.field}.dynamics.gravity"
         spec = as_table(where, spec)
-        g = self.expr(f"{where}.g", spec.get("g", 0))
-        angle = expression(f"{where}.angle", spec.get("angle", -90), self.c.symbols)
+        g = self.expression(f"{where}.g", spec.get("g", 0), True).text
+        angle = self.expression(f"{where}.angle", spec.get("angle", -90), True)
         return _turned(g, angle)
 
     def _vector(self, where: str, raw: object) -> tuple[str, str]:
@@ -229,8 +246,7 @@ class BodiesAndLoads:
             return self.expr(f"{where}[0]", raw[0]), self.expr(f"{where}[1]", raw[1])
         if isinstance(raw, dict) and "magnitude" in raw:
             size = self.expr(f"{where}.magnitude", raw["magnitude"])
-            angle = expression(f"{where}.angle", raw.get("angle", 0),
-                               self.c.symbols | {q.key for q in self.model.quantities})
+            angle = self.expression(f"{where}.angle", raw.get("angle", 0))
             return _turned(size, angle)
         raise DescriptionError(where, "must be [Fx, Fy] or { magnitude, angle }")
 
@@ -285,12 +301,13 @@ def _merged(groups: list[Body]) -> list[Body]:
 
 def _turned(size: str, angle: Expr) -> tuple[str, str]:
     """size·(cos, sin) of an angle in degrees: exact at a literal quarter turn."""
-    quarter = {0: ("1", "0"), 90: ("0", "1"), 180: ("-1", "0"), 270: ("0", "-1"),
-               -90: ("0", "-1"), -180: ("-1", "0"), -270: ("0", "1")}
+    quarter = {0: ("1", "0"), 90: ("0", "1"), 180: ("-1", "0"), 270: ("0", "-1")}
     try:
-        c, s = quarter[int(float(angle.text))] if float(angle.text) % 90 == 0 else (None, None)
+        degrees = float(angle.text)
     except ValueError:
-        c = s = None
+        degrees = None
+    c, s = quarter[int(degrees % 360)] if degrees is not None and degrees % 90 == 0 \
+        else (None, None)
     if c is None:
         r = radians(angle).text
         c, s = f"COS({r})", f"SIN({r})"

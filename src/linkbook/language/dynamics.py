@@ -32,12 +32,13 @@ def check_dynamics(c, data: dict, steps_keys: set[str]) -> None:
             raise DescriptionError(f"{c.origin}: {found[0]}", found[1])
     # what an expression step may name, less the compiler's own aliases (their keys start with _)
     known = {k for k in c.symbols | c.swept | steps_keys if not k.startswith("_")} | {METRES}
+    constant = set(c.symbols) | {METRES}   # a centre's place and gravity: the parameters alone
     field = c.field
     gravity = (data.get("dynamics") or {}).get("gravity")
     if gravity is not None:
         for k in ("g", "angle"):
             if k in gravity:
-                expression(f"{field}.dynamics.gravity.{k}", gravity[k], known)
+                expression(f"{field}.dynamics.gravity.{k}", gravity[k], constant)
     for i, body in enumerate(data.get("bodies") or []):
         _check_body(c, f"{field}.bodies[{i}]", body, known)
     for i, load in enumerate(data.get("loads") or []):
@@ -84,7 +85,7 @@ def _check_body(c, field: str, body: dict, known: set[str]) -> None:
         if k in body:
             expression(f"{field}.{k}", body[k], known)
     if "centre" in body:
-        _check_centre(c, f"{field}.centre", body["centre"], joints, known)
+        _check_centre(c, f"{field}.centre", body["centre"], joints, set(c.symbols) | {METRES})
 
 
 def _check_centre(c, field: str, centre: dict, joints: list[str], known: set[str]) -> None:

@@ -26,7 +26,7 @@ origin); a centre of mass G{j}: xG{j}, yG{j}, axG{j}, ayG{j}.
 """
 from __future__ import annotations
 
-from .bodies import GROUND, METRES, Body, BodiesAndLoads
+from .bodies import GROUND, METRES, METRES_REF, Body, BodiesAndLoads
 from .excel import ZERO, cross, guard, lin, mul, sq
 from .fields import as_table
 from .model import ALIAS, DescriptionError, Quantity
@@ -34,7 +34,6 @@ from .model import ALIAS, DescriptionError, Quantity
 FORCE = "force"              # the model's role of a force column (sheet Forces)
 NEWTON, NEWTON_METRE = "N", "N·m"
 TO_METRES = METRES           # the named cell: metres per length unit
-_METRES = f"{{{TO_METRES}}}"
 
 
 class ForceWriter(BodiesAndLoads):
@@ -45,7 +44,7 @@ class ForceWriter(BodiesAndLoads):
     def __init__(self, compiler, motion):
         self.c, self.w = compiler, motion
         self.model = compiler.model
-        self.field = f"{compiler.field}"
+        self.field = compiler.field
         data = compiler.data
         self.entries = data.get("bodies") or []
         self.loads = data.get("loads") or []
@@ -53,6 +52,7 @@ class ForceWriter(BodiesAndLoads):
         self.centres: dict[str, tuple[str, str]] = {}     # "G3": (x, y) texts
         self.rank: dict[str, tuple] = {}                   # a column: its place in the sheet
         self.actuator = self._actuator()
+        self.actuator_force: tuple[str, str, str] | None = None   # F_in·e at N, and END
         self.effort = ""
 
     # ------------------------------------------------------------------ the whole analysis
@@ -66,6 +66,11 @@ class ForceWriter(BodiesAndLoads):
             solve = STEPS[rec["type"]].forces
             if solve is not None:
                 solve(self, rec)
+        unsolved = [b.joints for b in self.bodies if b.number not in self.solved]
+        if unsolved:
+            raise DescriptionError(self.field, f"force analysis: no step's group carries the "
+                                               f"link {unsolved[0]} (a link of `links` that "
+                                               "is no rigid link of the steps?)")
         self._shaking()
         self._reading_order()
 
@@ -95,7 +100,7 @@ class ForceWriter(BodiesAndLoads):
     def arm(self, point: str, about: str) -> tuple[str, str]:
         """point − about, in metres."""
         (px, py), (ox, oy) = self.pos(point), self.pos(about)
-        return (mul(_METRES, lin((1, px), (-1, ox))), mul(_METRES, lin((1, py), (-1, oy))))
+        return (mul(METRES_REF, lin((1, px), (-1, ox))), mul(METRES_REF, lin((1, py), (-1, oy))))
 
     def pair(self, i: int, j: int) -> str:
         return f"{i}_{j}" if self.pairs else f"{i}{j}"
@@ -123,10 +128,7 @@ class ForceWriter(BodiesAndLoads):
         be one of the group that places the point."""
         first = min(self.holders(point), key=lambda b: b.number)
         if first not in group:
-            raise DescriptionError(where, f"force analysis: the pin {point} is carried by the "
-                                          f"link {first.joints}, which a later step places; "
-                                          "list the links that place it first in `links` "
-                                          "(not supported yet)")
+            raise _carried_later(where, point, first)
         return first
 
     def force_columns(self, key: str, fx: str, fy: str, what: str,
@@ -144,7 +146,7 @@ class ForceWriter(BodiesAndLoads):
     def outer(self, body: Body, point: str, fx: str, fy: str, where: str) -> None:
         """(fx, fy) acts on `body` at `point` from the links placed before this group (the
         ground at a ground point): a pin force column, and its reaction on the other link."""
-        if point in self.c.ground:
+        if point in self.fixed:
             self.force_columns(f"F{self.pair(GROUND, body.number)}", fx, fy,
                                f"ground on link {body.number} at {point}", (GROUND, body.number))
             return
@@ -164,10 +166,7 @@ class ForceWriter(BodiesAndLoads):
             e.forces.append((x, y, point))
             return
         if k.number in self.solved:
-            raise DescriptionError(where, f"force analysis: the pin {point} is carried by the "
-                                          f"link {k.joints}, which a later step places; list "
-                                          "the links that place it first in `links` (not "
-                                          "supported yet)")
+            raise _carried_later(where, point, k)
         x, y = self.force_columns(f"F{self.pair(k.number, body.number)}", fx, fy,
                                   f"link {k.number} on link {body.number} at {point}",
                                   (k.number, body.number))
@@ -226,7 +225,7 @@ class ForceWriter(BodiesAndLoads):
                          "actuator force, pushing its ends apart", (1,))
         fx, fy = mul(force, e[0]), mul(force, e[1])
         s.forces.append((fx, fy, n))
-        if end not in self.c.ground:
+        if end not in self.fixed:
             host = min(self.holders(end), key=lambda b: b.number)
             host.forces.append((self.neg(fx), self.neg(fy), end))
         self.actuator_force = (fx, fy, end)
@@ -275,9 +274,9 @@ class ForceWriter(BodiesAndLoads):
     def crank(self, pivot: str, point: str, where: str) -> None:
         """The crank turns about its pivot: the pivot takes −ΣF, the motor gives
         T12 = −M_crank(pivot)."""
+        if point != self.crank_joints[1]:
+            return      # a later crank on the same pivot: the same link, solved at the first
         body = self.body(pivot, point)
-        if body.number in self.solved:
-            return            # a second crank on the same pivot: the same link
         key = f"T{self.pair(GROUND, body.number)}"
         self.effort = key
         self.add(key, key, NEWTON_METRE, self.neg(self.moment(body, pivot)),
@@ -296,24 +295,30 @@ class ForceWriter(BodiesAndLoads):
         guides, the actuator's base) and their moments about the origin, with the motor's."""
         keys = {b.number: f"F{self.pair(GROUND, b.number)}" for b in self.bodies}
         ground = [(f"{{{keys[b.number]}x}}", f"{{{keys[b.number]}y}}", p)
-                  for b in self.bodies if not b.block for p in b.joints if p in self.c.ground]
+                  for b in self.bodies if not b.block for p in b.joints if p in self.fixed]
         ground += self.guides
-        if self.actuator is not None and getattr(self, "actuator_force", None):
+        if self.actuator_force is not None:
             fx, fy, end = self.actuator_force
-            if end in self.c.ground:      # through the actuator, the frame pushes with F_in·e
+            if end in self.fixed:      # through the actuator, the frame pushes with F_in·e
                 ground.append((fx, fy, end))
         sx = self.add("shaking_x", "Fs_x", NEWTON, self.neg(lin(*((1, f) for f, _, _ in ground))),
                       "shaking force on the frame, x")
         sy = self.add("shaking_y", "Fs_y", NEWTON, self.neg(lin(*((1, f) for _, f, _ in ground))),
                       "shaking force on the frame, y")
         self.add("shaking", "Fs", NEWTON, f"SQRT({sq(sx)}+{sq(sy)})", "shaking force, size")
-        moments = [(-1, cross((mul(_METRES, self.pos(p)[0]), mul(_METRES, self.pos(p)[1])),
+        moments = [(-1, cross((mul(METRES_REF, self.pos(p)[0]), mul(METRES_REF, self.pos(p)[1])),
                               (fx, fy))) for fx, fy, p in ground]
         moments += [(-1, m) for m in self.guide_couples]
         if self.effort.startswith("T"):
             moments.append((-1, f"{{{self.effort}}}"))
         self.add("shaking_moment", "Ms", NEWTON_METRE, lin(*moments),
                  "shaking moment on the frame about the origin")
+
+
+def _carried_later(where: str, point: str, body: Body) -> DescriptionError:
+    return DescriptionError(where, f"force analysis: the pin {point} is carried by the link "
+                                   f"{body.joints}, which a later step places; list the links "
+                                   "that place it first in `links` (not supported yet)")
 
 
 def _or_na(text: str, witness: str) -> str:
