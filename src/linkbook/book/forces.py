@@ -107,7 +107,8 @@ def summary(wb, ws, t: Template, model: Model, names: dict, table: dict) -> dict
 
     mean = add("effort_mean", f"{q.symbol}: mean (trapezoid rule over the sweep)",
                f"=SUMPRODUCT(({lo}+{hi})/2*{span})/{length}", q.unit)
-    square = f"SUMPRODUCT(({lo}^2+{hi}^2)/2*{span})/{length}"
+    # products, not ^2: LibreOffice squares an array's #N/A into #NUM!
+    square = f"SUMPRODUCT(({lo}*{lo}+{hi}*{hi})/2*{span})/{length}"
     add("effort_rms", f"{q.symbol}: RMS", "=" + in_domain_or_na("SQRT", square), q.unit)
     for word, fn in (("largest", "MAX"), ("smallest", "MIN")):
         peak = add(f"effort_{word}", f"{q.symbol}: {word}", f"={fn}({rng})", q.unit)
