@@ -52,7 +52,9 @@ def _measure(png) -> tuple[float, float] | None:
     grid = np.array([int(charts.GRID_COLOUR[i:i + 2], 16) for i in (0, 2, 4)])
     mask = (np.abs(rgb - grid) <= 30).all(axis=2)
     xs, ys = _grid_lines(mask.sum(axis=0)), _grid_lines(mask.sum(axis=1))
-    if len(xs) < 3 and len(ys) < 3:
+    if len(xs) < 3 or len(ys) < 3:
+        # a frame is a grid both ways; a long flat curve in a colour near the grid's (a pin
+        # load on the Forces charts) makes lines one way only
         return None
     return _spacing(xs, png), _spacing(ys, png)
 
