@@ -54,6 +54,7 @@ def forces_table(wb, ws, t: Template, model: Model, names: dict, sweep: dict, po
         letter = table["columns"][q.key]
         for r in [table["current_row"], *range(table["rows"][0], table["rows"][1] + 1)]:
             ws[f"{letter}{r}"].number_format = FORCE_FORMAT
+    ws.column_dimensions["A"].width = 14      # room for A3's "0.001 m/mm"
     out = {"sheet": FORCES_SHEET, **table}
     out.update(summary(wb, ws, t, model, names, out))
     return out
