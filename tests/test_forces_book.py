@@ -399,3 +399,24 @@ def test_inline_slider_crank_piston_inertia_by_hand():
     scale = m * np.max(np.abs(a)) * np.max(np.abs(v)) / w
     np.testing.assert_allclose(got["T12"], m * a * v / w, rtol=0, atol=1e-10 * scale)
     np.testing.assert_allclose(got["F34x"], m * a, rtol=0, atol=1e-10 * m * np.max(np.abs(a)))
+
+
+def test_a_book_without_a_force_column_the_mechanism_has_cannot_be_verified(tmp_path, capsys):
+    """A force the book leaves out is not a force it got right: a record whose Forces sheet
+    lacks a column of the reference's (here F23, the size of the crank's pin force) is refused
+    with one line naming it, exit 2 — never "all agree"."""
+    import openpyxl
+    from linkbook.apps import cli
+    from linkbook.base import sheets as layout
+    path = tmp_path / "slider-crank.xlsx"
+    builder.build_file(load("slider-crank"), path)
+    wb = openpyxl.load_workbook(path)
+    meta = layout.read_meta(wb)
+    del meta["forces"]["columns"]["F23"]
+    del wb[layout.META]
+    layout.write_meta(wb.create_sheet(layout.META), meta)
+    wb.save(path)
+    capsys.readouterr()
+    assert cli.main(["verify", str(path)]) == 2
+    out = capsys.readouterr()
+    assert "no column of F23" in out.out + out.err

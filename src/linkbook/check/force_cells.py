@@ -19,6 +19,7 @@ import numpy as np
 
 from ..base.sheets import FORCES_SHEET
 from .checks import Check, unit_scale
+from .reading import UnusableFile
 from .forces import LENGTH_UNITS, SINGULAR, forces
 from .context import motion_rates
 
@@ -45,6 +46,7 @@ def check_forces(j) -> None:
     params = {**j.params, "to_metres": metres}
     ref = forces(j.solver.description, params, j.angles, j.record.length_unit)
     one = forces(j.solver.description, params, [j.angle], j.record.length_unit)
+    _require_every_column(table, ref)
     scale = force_scale(j, ref, metres)
     _, rate2 = motion_rates(mech, j.params, j.size)
     (r0, r1), now = table.rows, table.current_row
@@ -70,6 +72,17 @@ def check_forces(j) -> None:
                       dead=singular, sine=kin.get("sine"))
             j.checks.append(c)
     _check_summary(j, ref, scale, metres, dead)
+
+
+def _require_every_column(table, ref: dict) -> None:
+    """The sheet must have a column for every force the reference finds (a guide's couple
+    only where it has one): a force the book leaves out is not a force it got right."""
+    wanted = {k for k, v in ref.items()
+              if isinstance(v, np.ndarray) and k != "cond" and not k.startswith("M1")}
+    missing = sorted(wanted - set(table.columns))
+    if missing:
+        raise UnusableFile(f"sheet {table.sheet} has no column of {', '.join(missing[:6])}, "
+                           "which the mechanism's force analysis has")
 
 
 def _singular(ref: dict, dead_centre) -> np.ndarray:
