@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from .excel import (PRODUCT, SUM, ZERO, Expr, angle_of_triangle_or_na, lin, mul, plus, radians,
-                    sq)
+                    sq, turned)
 from .expressions import expression
 from .fields import as_table
 from .model import ACCEL, LENGTH, DescriptionError
@@ -35,7 +35,7 @@ class Body:
 class BodiesAndLoads:
     """The force writer's first half: the bodies and their known loads. It reads the writer's
     state (the compiler `c`, the motion writer `w`, `entries`, `loads`, `dynamics`, `centres`)
-    and calls the writer's `add`, `alias` and `holders` (forces.ForceWriter)."""
+    and calls the writer's `add` and `holders` (forces.ForceWriter)."""
 
     def expr(self, where: str, raw: object) -> str:
         return self.expression(where, raw).text
@@ -115,9 +115,6 @@ class BodiesAndLoads:
                    if rec["type"] == "slider"]
         for number, b in enumerate(bodies, start=GROUND + 1):
             b.number = number
-        self.solved: set[int] = set()
-        self.guides: list[tuple[str, str, str]] = []
-        self.guide_couples: list[str] = []
         return bodies
 
     def _entry_body(self, k: int, entry: dict) -> Body:
@@ -220,12 +217,12 @@ class BodiesAndLoads:
         """G at given distances from A and B, on the side `side` of A→B: the angle at A by the
         cosine rule (#N/A where the three make no triangle)."""
         sides = spec["distances"]
-        keys = [self.alias(f"_{name}_{k}", e.text) for k, e in (
+        keys = [self.w.alias(f"_{name}_{k}", e.text) for k, e in (
             ("frame", self.c.length_of(a, b)),
             *((k, self.expression(f"{where}.centre.distances[{i}]", sides[i], True))
               for i, k in enumerate(("from_a", "from_b"))))]
         ab, da, db = (k[1:-1] for k in keys)
-        gamma = self.alias(f"_{name}_gamma", angle_of_triangle_or_na(ab, da, db, once=ab))
+        gamma = self.w.alias(f"_{name}_gamma", angle_of_triangle_or_na(ab, da, db, once=ab))
         side = self.c.branch(f"{where}.centre.side", spec.get("side", 1))
         t = f"{theta.at_least(SUM)}+{{{side}}}*{gamma}"
         (ax, ay), d = self.c.points[a], f"{{{da}}}"
@@ -301,17 +298,5 @@ def _merged(groups: list[Body]) -> list[Body]:
 
 def _turned(size: str, angle: Expr) -> tuple[str, str]:
     """size·(cos, sin) of an angle in degrees: exact at a literal quarter turn."""
-    quarter = {0: ("1", "0"), 90: ("0", "1"), 180: ("-1", "0"), 270: ("0", "-1")}
-    try:
-        degrees = float(angle.text)
-    except ValueError:
-        degrees = None
-    c, s = quarter[int(degrees % 360)] if degrees is not None and degrees % 90 == 0 \
-        else (None, None)
-    if c is None:
-        r = radians(angle).text
-        c, s = f"COS({r})", f"SIN({r})"
-    return mul(size, c) if c != "-1" else lin((-1, size)), \
-        mul(size, s) if s != "-1" else lin((-1, size))
-
-
+    return tuple(lin((-1, size)) if part == "-1" else mul(size, part)
+                 for part in turned(None, angle))

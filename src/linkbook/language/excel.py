@@ -121,17 +121,21 @@ def key_text(text: str) -> Expr:
     return Expr(text, NEGATION) if text.startswith("-") else Expr(text)
 
 
-QUARTERS = {0: 0, 90: 1, 180: 2, 270: 3, -90: 3, -180: 2, -270: 1, 360: 0, -360: 0}
+def quarters(degrees: Expr) -> int | None:
+    """How many quarter turns a number of degrees is (0 to 3), or None: not a number, or not a
+    whole number of quarter turns."""
+    try:
+        value = float(degrees.text.replace("(", "").replace(")", ""))
+    except ValueError:
+        return None
+    return int(value // 90) % 4 if value % 90 == 0 else None
 
 
 def turned(base: Expr | None, degrees: Expr) -> tuple[str, str]:
     """cos and sin of (base + degrees) as Excel text (base None: 0); a quarter turn is written
     exactly (cos(b + 90°) = −sin b), so a horizontal or vertical line carries no rounding."""
     c, s = ("1", "0") if base is None else (f"COS({base.text})", f"SIN({base.text})")
-    try:
-        quarter = QUARTERS.get(float(degrees.text.replace("(", "").replace(")", "")))
-    except ValueError:
-        quarter = None
+    quarter = quarters(degrees)
     if quarter is None:
         angle = radians(degrees) if base is None else Expr(plus(base, radians(degrees).text), SUM)
         return f"COS({angle.text})", f"SIN({angle.text})"

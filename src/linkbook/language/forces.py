@@ -29,7 +29,7 @@ from __future__ import annotations
 from .bodies import GROUND, METRES, METRES_REF, Body, BodiesAndLoads
 from .excel import ZERO, cross, guard, lin, mul, sq
 from .fields import as_table
-from .model import ALIAS, DescriptionError, Quantity
+from .model import DescriptionError, Quantity
 
 FORCE = "force"              # the model's role of a force column (sheet Forces)
 NEWTON, NEWTON_METRE = "N", "N·m"
@@ -54,6 +54,9 @@ class ForceWriter(BodiesAndLoads):
         self.actuator = self._actuator()
         self.actuator_force: tuple[str, str, str] | None = None   # F_in·e at N, and END
         self.effort = ""
+        self.solved: set[int] = set()                      # the bodies solved so far
+        self.guides: list[tuple[str, str, str]] = []       # each guide's force, and its point
+        self.guide_couples: list[str] = []
 
     # ------------------------------------------------------------------ the whole analysis
     def run(self) -> None:
@@ -123,10 +126,14 @@ class ForceWriter(BodiesAndLoads):
     def holders(self, point: str) -> list[Body]:
         return [b for b in self.bodies if point in b.joints]
 
+    def first_holder(self, point: str) -> Body:
+        """The lowest-numbered body holding a point: the one that carries a pin there."""
+        return min(self.holders(point), key=lambda b: b.number)
+
     def carrier(self, point: str, group: list[Body], where: str) -> Body:
-        """The body that carries a moving pin: the lowest-numbered body holding it, which must
-        be one of the group that places the point."""
-        first = min(self.holders(point), key=lambda b: b.number)
+        """The body that carries a moving pin, which must be one of the group that places the
+        point."""
+        first = self.first_holder(point)
         if first not in group:
             raise _carried_later(where, point, first)
         return first
@@ -150,27 +157,19 @@ class ForceWriter(BodiesAndLoads):
             self.force_columns(f"F{self.pair(GROUND, body.number)}", fx, fy,
                                f"ground on link {body.number} at {point}", (GROUND, body.number))
             return
-        holders = self.holders(point)
-        k = min(holders, key=lambda b: b.number)
-        if k is body:
-            others = [b for b in holders if b is not body and b.number not in self.solved]
+        other = self.first_holder(point)
+        if other is body:
+            others = [b for b in self.holders(point)
+                      if b is not body and b.number not in self.solved]
             if len(others) != 1:
                 raise DescriptionError(where, f"force analysis: the pin {point} joins "
                                               f"{len(others) + 1} links placed at once (not "
                                               "supported yet)")
-            e = others[0]
-            x, y = self.force_columns(f"F{self.pair(body.number, e.number)}", self.neg(fx),
-                                      self.neg(fy),
-                                      f"link {body.number} on link {e.number} at {point}",
-                                      (body.number, e.number))
-            e.forces.append((x, y, point))
-            return
-        if k.number in self.solved:
-            raise _carried_later(where, point, k)
-        x, y = self.force_columns(f"F{self.pair(k.number, body.number)}", fx, fy,
-                                  f"link {k.number} on link {body.number} at {point}",
-                                  (k.number, body.number))
-        k.forces.append((self.neg(x), self.neg(y), point))
+            other = others[0]
+        elif other.number in self.solved:
+            raise _carried_later(where, point, other)
+        x, y = self.inner(other, body, point, fx, fy)
+        other.forces.append((_reaction(x), _reaction(y), point))
 
     def inner(self, first: Body, second: Body, point: str, fx: str, fy: str) -> tuple[str, str]:
         """The pin force of `first` on `second` at `point`, as columns named for the pair."""
@@ -196,7 +195,7 @@ class ForceWriter(BodiesAndLoads):
         of, os_ = (p, q) if f is u else (q, p)
         a, b = self.arm(n, of), self.arm(n, os_)
         m1, m2 = self.moment(f, of), self.neg(self.moment(s, os_))
-        det = self.alias(f"_Dforce_{n}", cross(a, b))
+        det = self.w.alias(f"_Dforce_{n}", cross(a, b))
         xf = guard(det, lin((1, mul(m1, b[0])), (-1, mul(a[0], m2))))
         yf = guard(det, lin((1, mul(b[1], m1)), (-1, mul(a[1], m2))))
         x, y = self.inner(f, s, n, xf, yf)
@@ -219,15 +218,14 @@ class ForceWriter(BodiesAndLoads):
         length = f"{{{self.c.input_key}}}"
         (nx, ny), (ex, ey) = self.pos(n), self.pos(end)
         e = (guard(length, lin((1, nx), (-1, ex))), guard(length, lin((1, ny), (-1, ey))))
-        det = self.alias(f"_Dforce_{n}", cross(self.arm(n, q), e))
+        det = self.w.alias(f"_Dforce_{n}", cross(self.arm(n, q), e))
         self.effort = "F_in"
         force = self.add("F_in", "F_in", NEWTON, guard(det, self.neg(self.moment(s, q))),
                          "actuator force, pushing its ends apart", (1,))
         fx, fy = mul(force, e[0]), mul(force, e[1])
         s.forces.append((fx, fy, n))
         if end not in self.fixed:
-            host = min(self.holders(end), key=lambda b: b.number)
-            host.forces.append((self.neg(fx), self.neg(fy), end))
+            self.first_holder(end).forces.append((self.neg(fx), self.neg(fy), end))
         self.actuator_force = (fx, fy, end)
         self.solved.add(s.number)
         sx, sy = self.resultant(s)
@@ -246,7 +244,7 @@ class ForceWriter(BodiesAndLoads):
         kb = self.resultant(blk)
         c1 = self.neg(lin((1, mul(kb[0], ex)), (1, mul(kb[1], ey))))
         c2 = self.moment(u, p)
-        det = self.alias(f"_Dforce_{n}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
+        det = self.w.alias(f"_Dforce_{n}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
         x, y = self.inner(u, blk, n, guard(det, lin((1, mul(c1, a[0])), (-1, mul(ey, c2)))),
                           guard(det, lin((1, mul(ex, c2)), (1, mul(a[1], c1)))))
         tail = self.pair(GROUND, blk.number)
@@ -285,10 +283,6 @@ class ForceWriter(BodiesAndLoads):
         fx, fy = self.resultant(body)
         self.outer(body, pivot, self.neg(fx), self.neg(fy), where)
 
-    def alias(self, key: str, text: str) -> str:
-        self.model.add(Quantity(key, key, "-", text, ALIAS))
-        return f"{{{key}}}"
-
     # ------------------------------------------------------------------ the frame
     def _shaking(self) -> None:
         """What the links do to the frame: minus the ground's forces on them (its pins, the
@@ -319,6 +313,12 @@ def _carried_later(where: str, point: str, body: Body) -> DescriptionError:
     return DescriptionError(where, f"force analysis: the pin {point} is carried by the link "
                                    f"{body.joints}, which a later step places; list the links "
                                    "that place it first in `links` (not supported yet)")
+
+
+def _reaction(text: str) -> str:
+    """The force on the other link at a pin, from the columns `inner` gives (a column or its
+    negation): its negation, written without a double sign."""
+    return text[1:] if text.startswith("-{") and text.count("{") == 1 else f"-{text}"
 
 
 def _or_na(text: str, witness: str) -> str:
