@@ -19,7 +19,7 @@ from openpyxl.utils import column_index_from_string, get_column_letter, quote_sh
 
 from . import frames
 from ..base.palette import PART_COLOURS, PATH_COLOUR, drawing_colours, link_label
-from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, Model
+from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, NEWTON, NEWTON_METRE, Model
 from .style import header, unit_text
 from ..language.templates import Template
 from ..base.sheets import CHARTS, FORCES_SHEET, GRID, MECH, MOTION_SHEET, SWEEP
@@ -244,8 +244,8 @@ def _force_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:
     effort = model.get(effort_key(model))
     specs = [(f"Driving effort {effort.symbol} (mean: the horizontal line)",
               [effort.key], effort.unit, True),
-             ("Pin loads", pin_keys(model), "N", False),
-             ("Shaking moment on the frame", ["shaking_moment"], "N·m", False)]
+             ("Pin loads", pin_keys(model), NEWTON, False),
+             ("Shaking moment on the frame", ["shaking_moment"], NEWTON_METRE, False)]
     for title, keys, unit, with_mean in specs:
         chart = _chart(title, x_title, f"[{unit}]" if len(keys) > 1 else
                        header(model.get(keys[0]).symbol, unit, t.length_unit))
@@ -266,17 +266,11 @@ def _force_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:
 
 
 def _mean_line(ws, cells: dict) -> Series:
-    """The effort's mean as a horizontal line over the sweep: the summary's two points."""
-    (x0, x1), (y0, y1) = ([cells[f"mean_line_{a}{i}"]["cell"] for i in (0, 1)] for a in "xy")
-
-    def ref(first: str, last: str) -> Reference:
-        col = first.rstrip("0123456789")
-        return Reference(ws, min_col=column_index_from_string(col),
-                         min_row=int(first[len(col):]), max_row=int(last[len(col):]))
-    s = Series(ref(y0, y1), ref(x0, x1), title="mean")
-    s.smooth = False
-    s.marker.symbol = "none"
-    s.graphicalProperties.line.width = LINE_EMU
+    """The effort's mean as a horizontal line over the sweep: the summary's two points (the
+    inputs in one column, the mean beside them)."""
+    (x0, x1), (y0, _) = ([cells[f"mean_line_{a}{i}"]["cell"] for i in (0, 1)] for a in "xy")
+    x_col, y_col = x0.rstrip("0123456789"), y0.rstrip("0123456789")
+    s = _series(ws, x_col, y_col, (int(x0[len(x_col):]), int(x1[len(x_col):])), "mean")
     s.graphicalProperties.line.prstDash = "dash"
     return s
 

@@ -15,18 +15,18 @@ from openpyxl.utils import column_index_from_string, get_column_letter
 
 from ..base.sheets import FORCES_SHEET, MOTION_SHEET, SWEEP
 from ..language.excel import in_domain_or_na
-from ..language.forces import FORCE, NEWTON, NEWTON_METRE, TO_METRES
-from ..language.model import Model
+from ..language.forces import FORCE, TO_METRES
+from ..language.model import NEWTON, Model
 from ..language.domain import LENGTH_UNITS
 from ..language.templates import Template
 from .motion import MOTION_OFFSET, model_name, row_table
-from .style import (BOLD, DERIVED_FILL, INPUT_FILL, NOTE, define_name, header, number_format,
-                    put_head, put_text, set_formula)
+from .style import (BOLD, DERIVED_FILL, FORMATS, INPUT_FILL, NOTE, define_name, header,
+                    number_format, put_head, put_text, set_formula)
 
 METRES_CELL = "A3"
 SPEED_FLUCTUATION = "speed_fluctuation"    # the defined name of Cs
 CS_DEFAULT = 0.02     # a common design value for general machinery (Cs = (ωmax − ωmin)/ω)
-FORCE_FORMAT, ENERGY_FORMAT = "0.000", "0.0000"
+FORCE_FORMAT, ENERGY_FORMAT = FORMATS[NEWTON], "0.0000"
 
 
 def forces_table(wb, ws, t: Template, model: Model, names: dict, sweep: dict, position: dict,
@@ -48,12 +48,6 @@ def forces_table(wb, ws, t: Template, model: Model, names: dict, sweep: dict, po
     define_name(wb, TO_METRES, FORCES_SHEET, METRES_CELL)
     table = row_table(ws, t, model, {**names, TO_METRES: TO_METRES}, model.of_role(FORCE),
                       sweep, position, f"{t.title}: forces", note, (MOTION_SHEET, motion))
-    for q in model.of_role(FORCE):
-        if q.unit not in (NEWTON, NEWTON_METRE):
-            continue
-        letter = table["columns"][q.key]
-        for r in [table["current_row"], *range(table["rows"][0], table["rows"][1] + 1)]:
-            ws[f"{letter}{r}"].number_format = FORCE_FORMAT
     ws.column_dimensions["A"].width = 14      # room for A3's "0.001 m/mm"
     out = {"sheet": FORCES_SHEET, **table}
     out.update(summary(wb, ws, t, model, names, out))

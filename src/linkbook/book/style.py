@@ -15,7 +15,8 @@ from openpyxl.utils import column_index_from_string, get_column_letter, quote_sh
 from openpyxl.workbook.defined_name import DefinedName
 
 from ..base.sheets import DASH
-from ..language.model import ACCEL, ANG_ACCEL, ANG_SPEED, AREA, DEG, LENGTH, RAD, SPEED
+from ..language.model import (ACCEL, ANG_ACCEL, ANG_SPEED, AREA, DEG, LENGTH, NEWTON,
+                              NEWTON_METRE, RAD, SPEED)
 from .package import Formula
 
 
@@ -42,7 +43,8 @@ DERIVED_FILL = PatternFill("solid", fgColor="EDEDED")
 THIN = Side(style="thin", color="A6A6A6")
 BOX = Border(left=THIN, right=THIN, top=THIN, bottom=THIN)
 FORMATS = {LENGTH: "0.0000", RAD: "0.000000", DEG: "0.000", "-": "0.0000", SPEED: "0.000",
-           ACCEL: "0.00", ANG_SPEED: "0.00000", ANG_ACCEL: "0.0000"}
+           ACCEL: "0.00", ANG_SPEED: "0.00000", ANG_ACCEL: "0.0000", NEWTON: "0.000",
+           NEWTON_METRE: "0.000"}
 
 
 # Decimals a unit adds to a length's format, so that a book in m shows what one in mm does.

@@ -24,14 +24,12 @@ from .forces import LENGTH_UNITS, SINGULAR, forces
 from .context import motion_rates
 
 GRAVITY_SCALE = 10.0     # m/s²: the weight's share of the scale (gravity or not)
-NEWTON, NEWTON_METRE = "N", "N·m"
 
 
-def force_scale(j, ref: dict, metres: float) -> float:
-    """F (see the module's docstring), in N."""
+def force_scale(j, ref: dict, metres: float, rate2: float) -> float:
+    """F (see the module's docstring), in N; `rate2`: the input's ω² + |α| (motion_rates)."""
     kinds = j.record.kinds()
     mass = sum(abs(v) for s, v in j.params.items() if kinds.get(s) == "mass")
-    _, rate2 = motion_rates(j.mechanism, j.params, j.size)
     largest = [np.nanmax(np.abs(v)) for k, v in ref.items()
                if k.startswith(("F", "N")) and isinstance(v, np.ndarray) and np.isfinite(v).any()]
     return max(mass * (j.size * metres * rate2 + GRAVITY_SCALE), *largest, 1e-300)
@@ -40,6 +38,7 @@ def force_scale(j, ref: dict, metres: float) -> float:
 def check_forces(j) -> None:
     """Every column of the Forces sheet, over the sweep's rows and at the current position,
     then its summary and work column."""
+    from ..language.model import NEWTON, NEWTON_METRE
     table, mech = j.record.forces, j.mechanism
     metres = LENGTH_UNITS[j.record.length_unit]
     # a load's expression may convert a length with the book's `to_metres`
@@ -47,8 +46,8 @@ def check_forces(j) -> None:
     ref = forces(j.solver.description, params, j.angles, j.record.length_unit)
     one = forces(j.solver.description, params, [j.angle], j.record.length_unit)
     _require_every_column(table, ref)
-    scale = force_scale(j, ref, metres)
     _, rate2 = motion_rates(mech, j.params, j.size)
+    scale = force_scale(j, ref, metres, rate2)
     (r0, r1), now = table.rows, table.current_row
     sheet = table.sheet
     j.run(sheet, mech.input_column, sheet, [f"A{r}" for r in range(r0, r1 + 1)], j.angles,
@@ -111,7 +110,7 @@ def _check_summary(j, ref: dict, scale: float, metres: float, dead: np.ndarray) 
     size = moment if effort != "F_in" else scale
     x = np.asarray(j.angles, dtype=float)
     undetermined = bool(dead.any())
-    rows = _rows_of(j, effort, ref) if undetermined else None
+    rows = _book_rows(j) if undetermined else None
 
     def column(key: str) -> np.ndarray:
         return rows(key) if undetermined else np.asarray(ref[key], dtype=float)
@@ -157,8 +156,8 @@ def _check_summary(j, ref: dict, scale: float, metres: float, dead: np.ndarray) 
                      float(expected[f"effort_{word}"][0]), size / min(worst[0], 1.0) ** 2, word)
 
 
-def _rows_of(j, effort: str, ref: dict):
-    """A force column's values as the book's rows show them (NaN for an error)."""
+def _book_rows(j):
+    """A force column's values as the book's rows show them (NaN for an error), by key."""
     table = j.record.forces
     r0, r1 = table.rows
 

@@ -29,10 +29,9 @@ from __future__ import annotations
 from .bodies import GROUND, METRES, METRES_REF, Body, BodiesAndLoads
 from .excel import ZERO, cross, guard, lin, mul, sq
 from .fields import as_table
-from .model import DescriptionError, Quantity
+from .model import NEWTON, NEWTON_METRE, DescriptionError, Quantity
 
 FORCE = "force"              # the model's role of a force column (sheet Forces)
-NEWTON, NEWTON_METRE = "N", "N·m"
 TO_METRES = METRES           # the named cell: metres per length unit
 
 
@@ -326,4 +325,4 @@ def _or_na(text: str, witness: str) -> str:
     return f"IF(ISNUMBER({witness}),0,NA())" if text == ZERO else text
 
 
-__all__ = ["FORCE", "NEWTON", "NEWTON_METRE", "TO_METRES", "ForceWriter"]
+__all__ = ["FORCE", "TO_METRES", "ForceWriter"]

@@ -27,6 +27,7 @@ LENGTH, RAD, DEG, RATIO = "length", "rad", "deg", "-"
 SPEED, ACCEL = "length/s", "length/s²"          # a point's or a slider's velocity, acceleration
 AREA = "length²"                                # a dyad's determinant u_q × u_p
 ANG_SPEED, ANG_ACCEL, RPM = "rad/s", "rad/s²", "rpm"
+NEWTON, NEWTON_METRE = "N", "N·m"                # a force, a moment (sheet Forces)
 
 
 @dataclass(frozen=True)
