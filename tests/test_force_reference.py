@@ -14,6 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conftest import published
+from si_motion import SIMotion
 from linkbook.check.forces import forces
 from linkbook.check.reference import solve
 from linkbook.language import templates
@@ -191,47 +192,23 @@ def _draw_dynamics(data, name: str, moving: list[str]) -> dict:
     return out
 
 
-class _Kinematics:
-    """Positions, velocities and accelerations in SI units, read from the kinematic reference."""
+class _Kinematics(SIMotion):
+    """The kinematic reference's motion in SI units, as the drawn links see it."""
 
-    def __init__(self, solved: dict, unit: float):
-        self.s, self.unit, self.n = solved, unit, len(solved["assembled"])
-
-    def point(self, name: str):
-        x, y = (np.broadcast_to(np.asarray(c, dtype=float), (self.n,)) * self.unit
-                for c in self.s["points"][name])
-        if f"vx_{name}" not in self.s:          # a ground point
-            zero = np.zeros(self.n)
-            return (x, y), (zero, zero), (zero, zero)
-        return ((x, y), tuple(self.s[f"{k}_{name}"] * self.unit for k in ("vx", "vy")),
-                tuple(self.s[f"{k}_{name}"] * self.unit for k in ("ax", "ay")))
-
-    def spin(self, joints: list[str]):
-        """ω and α of a rigid link, from its first and last joints: Δv = ω k × r,
-        Δa = α k × r − ω² r."""
+    def link_spin(self, joints: list[str]):
+        """ω and α of a rigid link, from its first and last joints (a block does not turn)."""
         if len(joints) == 1:
             return np.zeros(self.n), np.zeros(self.n)
-        (p, v, a), (q, w, b) = self.point(joints[0]), self.point(joints[-1])
-        rx, ry = q[0] - p[0], q[1] - p[1]
-        r2 = rx * rx + ry * ry
-        return ((rx * (w[1] - v[1]) - ry * (w[0] - v[0])) / r2,
-                (rx * (b[1] - a[1]) - ry * (b[0] - a[0])) / r2)
+        return self.spin(joints[0], joints[-1])
 
     def centre(self, entry: dict):
         """The centre of mass's position, velocity and acceleration: G = A + u·ê + v·ê⊥ on the
-        frame A→B, moving with the link (v_G = v_A + ω k × AG, a_G = a_A + α k × AG − ω² AG)."""
+        frame A→B of the link's first two joints, moving with the link."""
         joints = entry["joints"]
         if entry.get("block"):
             return self.point(joints[0])
-        (a, va, aa), (b, _, _) = self.point(joints[0]), self.point(joints[1])
         u, v = (c * self.unit for c in entry["centre"]["local"])
-        ex, ey = b[0] - a[0], b[1] - a[1]
-        norm = np.hypot(ex, ey)
-        ex, ey = ex / norm, ey / norm
-        rx, ry = u * ex - v * ey, u * ey + v * ex
-        w, al = self.spin(joints)
-        return ((a[0] + rx, a[1] + ry), (va[0] - w * ry, va[1] + w * rx),
-                (aa[0] - al * ry - w * w * rx, aa[1] + al * rx - w * w * ry))
+        return self.carried(joints[0], joints[1], u, v)[:3]
 
 
 def _vector(force) -> tuple[float, float]:
@@ -256,7 +233,7 @@ def _balances(got: dict, dyn: dict, kin: _Kinematics, power_in, links: list[list
     for load in dyn["loads"]:
         if "torque" in load:
             link = next(j for j in links if load["body"] == j[:2])
-            power.append(load["torque"] * kin.spin(link)[0])
+            power.append(load["torque"] * kin.link_spin(link)[0])
             moment.append(np.full(kin.n, load["torque"]))
             continue
         fx, fy = _vector(load["force"])
@@ -268,7 +245,7 @@ def _balances(got: dict, dyn: dict, kin: _Kinematics, power_in, links: list[list
     for entry in dyn["bodies"]:
         m, inertia = entry["mass"], entry["inertia"]
         (x, y), (vx, vy), (ax, ay) = kin.centre(entry)
-        w, al = kin.spin(entry["joints"])
+        w, al = kin.link_spin(entry["joints"])
         power += [m * (g[0] * vx + g[1] * vy), -(m * (ax * vx + ay * vy)), -inertia * al * w]
         force_x += [np.full(kin.n, m * g[0]), -m * ax]
         force_y += [np.full(kin.n, m * g[1]), -m * ay]

@@ -19,6 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conftest import checks_of, formula_cells, published
+from si_motion import SIMotion
 from linkbook.book import builder
 from linkbook.check.reference import solve
 from linkbook.engine import evaluator as engine
@@ -193,54 +194,28 @@ def dynamics(t: templates.Template):
         lambda d: {**d[0], **(d[2] if d[1] else {}), **d[3]})
 
 
-class Motion:
-    """Positions, velocities and accelerations in SI units, from the independent kinematic
-    reference (linkbook.check.reference.solve), at the given inputs."""
+class Motion(SIMotion):
+    """The kinematic reference's motion at the given inputs, in SI units."""
 
     def __init__(self, t: templates.Template, params: dict, inputs):
-        self.s = solve(t.mechanism.description, params, np.asarray(inputs, dtype=float))
-        self.unit, self.n = METRES[t.length_unit], len(inputs)
-
-    def point(self, name: str):
-        x, y = (np.broadcast_to(np.asarray(c, dtype=float), (self.n,)) * self.unit
-                for c in self.s["points"][name])
-        if f"vx_{name}" not in self.s:          # a ground point
-            zero = np.zeros(self.n)
-            return (x, y), (zero, zero), (zero, zero)
-        return ((x, y), tuple(self.s[f"{k}_{name}"] * self.unit for k in ("vx", "vy")),
-                tuple(self.s[f"{k}_{name}"] * self.unit for k in ("ax", "ay")))
-
-    def spin(self, a: str, b: str):
-        """ω and α of the rigid link through a and b: Δv = ω k × r, Δa = α k × r − ω² r, so
-        r × Δv = ω r² and r × Δa = α r²."""
-        (p, v, acc), (q, w, bcc) = self.point(a), self.point(b)
-        rx, ry = q[0] - p[0], q[1] - p[1]
-        r2 = rx * rx + ry * ry
-        return ((rx * (w[1] - v[1]) - ry * (w[0] - v[0])) / r2,
-                (rx * (bcc[1] - acc[1]) - ry * (bcc[0] - acc[0])) / r2)
+        super().__init__(solve(t.mechanism.description, params, np.asarray(inputs, dtype=float)),
+                         METRES[t.length_unit])
 
     def centre(self, entry: dict, number):
         """The centre of mass's velocity and acceleration and its link's ω and α: G placed in
-        the frame A→B (by local coordinates, or by a distance and an angle from A→B), moving
-        with the link: v_G = v_A + ω k × AG, a_G = a_A + α k × AG − ω² AG."""
+        the frame A→B by local coordinates, or by a distance and an angle from A→B."""
         if entry.get("block"):
             _, v, a = self.point(entry["joints"][0])
             return v, a, np.zeros(self.n), np.zeros(self.n)
         spec = entry["centre"]
-        a_name, b_name = spec["frame"]
-        (pa, va, aa), (pb, _, _) = self.point(a_name), self.point(b_name)
-        theta = np.arctan2(pb[1] - pa[1], pb[0] - pa[0])
         if "local" in spec:
             u, v = (number(c) * self.unit for c in spec["local"])
-            rx = u * np.cos(theta) - v * np.sin(theta)
-            ry = u * np.sin(theta) + v * np.cos(theta)
         else:
             d = number(spec["distance"]) * self.unit
-            turned = theta + math.radians(number(spec.get("angle", 0.0)))
-            rx, ry = d * np.cos(turned), d * np.sin(turned)
-        w, al = self.spin(a_name, b_name)
-        return ((va[0] - w * ry, va[1] + w * rx),
-                (aa[0] - al * ry - w * w * rx, aa[1] + al * rx - w * w * ry), w, al)
+            turn = math.radians(number(spec.get("angle", 0.0)))
+            u, v = d * math.cos(turn), d * math.sin(turn)
+        _, vel, acc, w, al = self.carried(*spec["frame"], u, v)
+        return vel, acc, w, al
 
 
 def power_terms(t: templates.Template, params: dict, motion: Motion, effort) -> list:
