@@ -1,6 +1,7 @@
 """Positions, velocities and accelerations in SI units, from the independent kinematic
 reference (linkbook.check.reference.solve): what the power-balance tests of the forces multiply
-the efforts by (test_force_reference.py, test_forces_book.py)."""
+the efforts by (test_force_reference.py, test_forces_book.py); and the one closed form those
+tests derive by hand, the in-line slider-crank's piston."""
 from __future__ import annotations
 
 import numpy as np
@@ -42,3 +43,14 @@ class SIMotion:
         w, al = self.spin(a, b)
         return ((pa[0] + rx, pa[1] + ry), (va[0] - w * ry, va[1] + w * rx),
                 (aa[0] - al * ry - w * w * rx, aa[1] + al * rx - w * w * ry), w, al)
+
+
+def inline_piston(r: float, l: float, w: float, th):
+    """The piston's velocity and acceleration of an in-line slider-crank (crank r, rod l in
+    metres, constant ω = w, crank angles th in radians): x = r cos θ + D, D = √(l² − r² sin²θ),
+    differentiated once and twice."""
+    d = np.sqrt(l ** 2 - r ** 2 * np.sin(th) ** 2)
+    v = w * (-r * np.sin(th) - r ** 2 * np.sin(th) * np.cos(th) / d)
+    a = w ** 2 * (-r * np.cos(th) - r ** 2 * np.cos(2 * th) / d
+                  - r ** 4 * np.sin(th) ** 2 * np.cos(th) ** 2 / d ** 3)
+    return v, a, d

@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conftest import published
-from si_motion import SIMotion
+from si_motion import SIMotion, inline_piston
 from linkbook.check.forces import forces
 from linkbook.check.reference import solve
 from linkbook.language import templates
@@ -81,10 +81,7 @@ def test_inline_slider_crank_piston_inertia_by_hand():
     got = forces(description, params, angles, "mm")
     th = np.radians(angles)
     rm, lm = r * MM, l * MM
-    d = np.sqrt(lm ** 2 - rm ** 2 * np.sin(th) ** 2)
-    v = w * (-rm * np.sin(th) - rm ** 2 * np.sin(th) * np.cos(th) / d)
-    a = w ** 2 * (-rm * np.cos(th) - rm ** 2 * np.cos(2 * th) / d
-                  - rm ** 4 * np.sin(th) ** 2 * np.cos(th) ** 2 / d ** 3)
+    v, a, d = inline_piston(rm, lm, w, th)
     scale = m * np.max(np.abs(a)) * np.max(np.abs(v)) / w
     np.testing.assert_allclose(got["T12"], m * a * v / w, rtol=0, atol=1e-10 * scale)
     np.testing.assert_allclose(got["F34x"], m * a, rtol=0, atol=1e-10 * m * np.max(np.abs(a)))

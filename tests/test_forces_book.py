@@ -19,7 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conftest import checks_of, formula_cells, published
-from si_motion import SIMotion
+from si_motion import SIMotion, inline_piston
 from linkbook.book import builder
 from linkbook.check.reference import solve
 from linkbook.engine import evaluator as engine
@@ -367,10 +367,7 @@ def test_inline_slider_crank_piston_inertia_by_hand():
     got = {key: np.array([values[(SHEET, f"{table['columns'][key]}{r_}")] for r_ in rows])
            for key in ("T12", "F34x")}
     rm, lm = r * 1e-3, l * 1e-3
-    d = np.sqrt(lm ** 2 - rm ** 2 * np.sin(th) ** 2)
-    v = w * (-rm * np.sin(th) - rm ** 2 * np.sin(th) * np.cos(th) / d)
-    a = w ** 2 * (-rm * np.cos(th) - rm ** 2 * np.cos(2 * th) / d
-                  - rm ** 4 * np.sin(th) ** 2 * np.cos(th) ** 2 / d ** 3)
+    v, a, d = inline_piston(rm, lm, w, th)
     scale = m * np.max(np.abs(a)) * np.max(np.abs(v)) / w
     np.testing.assert_allclose(got["T12"], m * a * v / w, rtol=0, atol=1e-10 * scale)
     np.testing.assert_allclose(got["F34x"], m * a, rtol=0, atol=1e-10 * m * np.max(np.abs(a)))
