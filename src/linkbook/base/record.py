@@ -215,14 +215,10 @@ class Motion(Part):
 
 
 @_frozen
-class Forces(Part):
+class Forces(Motion):
     """The Forces sheet: laid out as the Motion sheet, with the summary of the sweep beside it
     (its cells; the coefficient of speed fluctuation is an input among them) and, for a crank,
     the column of the work of the driving torque above its mean."""
-    sheet: str = _entry(_str)
-    rows: tuple[int, int] = _entry(_rows)
-    current_row: int = _entry(_int)
-    columns: dict[str, str] = _entry(_cells)
     summary: dict[str, SummaryCell] = _entry(_map(_part(SummaryCell)))
     work: str | None = _entry(_optional(_str), None)
 
