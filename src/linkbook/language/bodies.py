@@ -20,13 +20,19 @@ METRES_REF = f"{{{METRES}}}"    # the placeholder of that cell in a formula
 
 @dataclass
 class Body:
-    """One moving link: the points it holds, and what is known to act on it so far."""
+    """One moving link: the points it holds, and what is known to act on it so far. A block
+    (a step's sliding pair, docs/language.md "Sliding pairs") holds one point and slides on
+    its guide: the link holding `guide`'s points (none: the ground), along `line` (cos, sin),
+    turning with it at `spin` (ω, α; None on a fixed line)."""
     joints: list[str]
     rank: int
     block: bool = False
     number: int = 0
     forces: list[tuple[str, str, str]] = field(default_factory=list)   # (Fx, Fy, at point)
     couples: list[str] = field(default_factory=list)                  # N·m
+    guide: tuple[str, ...] = ()
+    line: tuple[str, str] = ("1", "0")
+    spin: tuple[str, str] | None = None
 
     def holds(self, *points: str) -> bool:
         return all(p in self.joints for p in points)
@@ -60,11 +66,37 @@ class BodiesAndLoads:
                     return rec[end], rec["point"]
         return None
 
+    def _sliding_points(self) -> list[tuple[str, set[str]]]:
+        """Each point a block slides with, and the points of its guide (a slide's pivot and
+        point, a slot's points, the link of a slider's moving line)."""
+        out = []
+        for rec in self.c.records:
+            if rec["type"] == "slide":
+                out.append((rec["p"], {rec["pivot"], rec["point"]}))
+            elif rec["type"] == "slot":
+                out.append((rec["point"], {rec["slot_through"], *rec["frame"]}))
+            elif rec["type"] == "slider" and rec["along"]:
+                out.append((rec["point"], {*rec["along"], rec["through"]}))
+        return out
+
+    def _drawn(self) -> list[list[str]]:
+        """The `links` entries as rigid sets: a sliding point drawn on its guide (an entry
+        holding a point of the guide) is no joint of it."""
+        sliding = self._sliding_points()
+        drawn = []
+        for link in self.c.data.get("links") or []:
+            joints = list(dict.fromkeys(map(str, link)))
+            joints = [j for j in joints
+                      if not any(j == point and guide & set(joints) for point, guide in sliding)]
+            if len(joints) >= 2 and set(joints) != set(self.actuator or ()):
+                drawn.append(joints)
+        return drawn
+
     def _links(self) -> list[list[str]]:
         """The rigid sets the description implies, in the textbook's order: its `links`, then
-        the steps' own (a crank and the cranks on its pivot, a dyad's sides, a slider's rod)."""
-        drawn = [list(dict.fromkeys(map(str, link))) for link in self.c.data.get("links") or []]
-        drawn = [j for j in drawn if len(j) >= 2 and set(j) != set(self.actuator or ())]
+        the steps' own (a crank and the cranks on its pivot, a dyad's sides, a slider's rod, a
+        slide's link)."""
+        drawn = self._drawn()
         implied, crank = [], None
         for rec in self.c.records:
             kind, n = rec["type"], rec.get("point")
@@ -81,6 +113,8 @@ class BodiesAndLoads:
                             if {rec[e], n} != set(self.actuator or ())]
             elif kind == "slider":
                 implied.append([rec["p"], n])
+            elif kind == "slide":
+                implied.append([rec["pivot"], n])
         self.crank_joints = crank
         return drawn + implied
 
@@ -97,25 +131,31 @@ class BodiesAndLoads:
                 elif host:
                     host[0].joints.append(rec["point"])
                 else:
-                    raise DescriptionError(self.field, f"force analysis: the point "
-                                                       f"{rec['point']} is carried by {a}→{b}, "
-                                                       "which is no rigid link (not supported "
-                                                       "yet)")
-            elif rec["type"] in ("slide", "slot") or rec["type"] == "slider" and rec["along"]:
-                what = "a slider on a moving line" if rec["type"] == "slider" else \
-                    f"a {rec['type']} step"
-                raise DescriptionError(self.field, f"force analysis of {what} is not supported "
-                                                   "yet")
+                    raise DescriptionError(rec["field"], f"force analysis: the point "
+                                                         f"{rec['point']} is carried by "
+                                                         f"{a}→{b}, which is no rigid link "
+                                                         "(a slotted link turned by a vector "
+                                                         "step: write it as a slide step)")
         groups = [g for g in _merged(groups) if not set(g.joints) <= fixed]
         self.fixed = fixed
         crank = next((g for g in groups if self.crank_joints and
                       set(self.crank_joints) <= set(g.joints)), None)
         bodies = ([crank] if crank else []) + [g for g in groups if g is not crank]
-        bodies += [Body([rec["point"]], 0, block=True) for rec in self.c.records
-                   if rec["type"] == "slider"]
+        bodies += [self._block(rec) for rec in self.c.records
+                   if rec["type"] in ("slider", "slide", "slot")]
         for number, b in enumerate(bodies, start=GROUND + 1):
             b.number = number
         return bodies
+
+    def _block(self, rec: dict) -> Body:
+        """The block a sliding step makes: its point, its guide, its line and its spin."""
+        if rec["type"] == "slide":       # the block at P on the slide's link
+            return Body([rec["p"]], 0, block=True, guide=(rec["pivot"], rec["point"]),
+                        line=rec["direction"], spin=self.w.links[(rec["point"], rec["p"])])
+        if rec["type"] == "slider" and rec["along"]:
+            return Body([rec["point"]], 0, block=True, guide=tuple(rec["along"]),
+                        line=rec["direction"], spin=self.w.link_rates(*rec["along"]))
+        return Body([rec["point"]], 0, block=True, line=rec["direction"])
 
     def _entry_body(self, k: int, entry: dict) -> Body:
         where = f"{self.field}.bodies[{k}]"
@@ -154,15 +194,15 @@ class BodiesAndLoads:
             wy = lin((1, mul(mass, g[1])), (-1, mul(mass, METRES_REF, ay)))
             if (wx, wy) != (ZERO, ZERO):
                 body.forces.append((wx, wy, centre))
-            if inertia != ZERO and not body.block:
-                alpha = self._alpha(body)
+            if inertia != ZERO and (not body.block or body.spin is not None):
+                alpha = self._rates(body)[1]
                 body.couples.append(lin((-1, mul(inertia, alpha))))
 
-    def _alpha(self, body: Body) -> str:
-        return self._rates(body)[1]
-
     def _rates(self, body: Body) -> tuple[str, str]:
-        """The body's ω and α: those of a link it holds (the Motion sheet's)."""
+        """The body's ω and α: those of a link it holds (the Motion sheet's); a block's, its
+        guide's."""
+        if body.block:
+            return body.spin
         for (a, b), rates in self.w.links.items():
             if body.holds(a, b):
                 return rates

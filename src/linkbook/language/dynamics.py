@@ -61,22 +61,26 @@ def _points(c, field: str, names: list) -> list[str]:
     return list(names)
 
 
-def _slider_points(c) -> set[str]:
-    return {s.get("point") for s in c.data["steps"] if s.get("type") == "slider"}
+def _block_points(c) -> set[str]:
+    """The points blocks slide with: a slider's and a slot's point, a slide's p."""
+    steps = c.data["steps"]
+    return ({s.get("point") for s in steps if s.get("type") in ("slider", "slot")}
+            | {s.get("p") for s in steps if s.get("type") == "slide"})
 
 
 def _check_body(c, field: str, body: dict, known: set[str]) -> None:
     joints = _points(c, f"{field}.joints", body["joints"])
     if body.get("block", False):
-        if len(joints) != 1 or joints[0] not in _slider_points(c):
+        if len(joints) != 1 or joints[0] not in _block_points(c):
             raise DescriptionError(f"{field}.joints", "a block is named by its one point, a "
-                                                      f"slider step's point (got {joints!r})")
+                                                      "slider's or a slot's point or a slide's "
+                                                      f"p (got {joints!r})")
         if "centre" in body:
             raise DescriptionError(f"{field}.centre", "a block's centre of mass is its point")
     else:
         if len(joints) < 2:
             raise DescriptionError(f"{field}.joints", "a link is named by two of its points or "
-                                                      f"more (a slider's block: block = true) "
+                                                      f"more (a block: block = true) "
                                                       f"(got {joints!r})")
         if "mass" in body and "centre" not in body:
             raise DescriptionError(f"{field}.centre", "is missing: a link's mass needs its "

@@ -230,15 +230,15 @@ class ForceWriter(BodiesAndLoads):
         sx, sy = self.resultant(s)
         self.outer(s, q, self.neg(sx), self.neg(sy), where)
 
-    def slider(self, n: str, p: str, direction: tuple[str, str], where: str) -> None:
-        """A slider: the rod u (P–N) pinned at N to the block b on a fixed line of direction
-        e. With X the pin force of u on b: the block along its line, X·e = −ΣF_b·e; the rod
+    def slider(self, n: str, p: str, where: str) -> None:
+        """A slider: the rod u (P–N) pinned at N to the block b on its line, of direction e.
+        With X the pin force of u on b: the block along its line, X·e = −ΣF_b·e; the rod
         about P, (N−P)×X = M_u(P) — over D = e·(N−P), zero when the rod is square to the
-        line. The guide's normal force N1b = −(X + ΣF_b)·n (n = e turned +90°), its couple
-        M1b = −M_b(N); the rod's pin at P takes X − ΣF_u."""
+        line. The guide's force across the line and its couple follow from the block's
+        balance (guided); the rod's pin at P takes X − ΣF_u."""
         u, blk = self.body(p, n), self.body(n, block=True)
         self.carrier(n, [u, blk], where)
-        ex, ey = direction
+        ex, ey = blk.line
         a = self.arm(n, p)
         kb = self.resultant(blk)
         c1 = self.neg(lin((1, mul(kb[0], ex)), (1, mul(kb[1], ey))))
@@ -246,27 +246,95 @@ class ForceWriter(BodiesAndLoads):
         det = self.w.alias(f"_Dforce_{n}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
         x, y = self.inner(u, blk, n, guard(det, lin((1, mul(c1, a[0])), (-1, mul(ey, c2)))),
                           guard(det, lin((1, mul(ex, c2)), (1, mul(a[1], c1)))))
-        tail = self.pair(GROUND, blk.number)
-        normal = self.add(f"N{tail}", f"N{tail}", NEWTON,
-                          lin((1, mul(lin((1, x), (1, kb[0])), ey)),
-                              (-1, mul(lin((1, y), (1, kb[1])), ex))),
-                          f"guide on block {blk.number}, across its line", (3, blk.number))
-        gx = self.add(f"F{tail}x", f"F{tail}x", NEWTON,
-                      _or_na(self.neg(mul(ey, normal)), normal),
-                      f"guide on block {blk.number}, x", (3, blk.number))
-        gy = self.add(f"F{tail}y", f"F{tail}y", NEWTON, _or_na(mul(ex, normal), normal),
-                      f"guide on block {blk.number}, y", (3, blk.number))
-        self.add(f"F{tail}", f"F{tail}", NEWTON, f"ABS({normal})",
-                 f"guide on block {blk.number}, size", (3, blk.number))
-        self.guides.append((gx, gy, n))
-        if blk.couples:
-            self.guide_couples.append(self.add(f"M{tail}", f"M{tail}", NEWTON_METRE,
-                                               self.neg(lin(*((1, c) for c in blk.couples))),
-                                               f"guide's couple on block {blk.number}",
-                                               (3, blk.number)))
+        self.guided(blk, lin((1, x), (1, kb[0])), lin((1, y), (1, kb[1])))
         self.solved.update({u.number, blk.number})
         ux, uy = self.resultant(u)
         self.outer(u, p, lin((1, x), (-1, ux)), lin((1, y), (-1, uy)), where)
+
+    def slide(self, p: str, pivot: str, n: str, where: str) -> None:
+        """A slide: the block b at P slides on the link L (Q–N) turning about Q, along the
+        line e; the guide pushes it with N·n (n = e turned +90°) and the couple M = −M_b(P).
+        L turns about Q under −N·n at P and −M: N·((P−Q)·e) = M_L(Q) + M_b(P), zero when P
+        is at the foot of Q on the line. The block's pin at P takes −N·n − ΣF_b; L's pivot
+        N·n − ΣF_L."""
+        link, blk = self.body(pivot, n), self.body(p, block=True)
+        ex, ey = blk.line
+        a = self.arm(p, pivot)
+        det = self.w.alias(f"_Dforce_{p}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
+        normal = self.guide_normal(link, blk, guard(det, lin((1, self.moment(link, pivot)),
+                                                            (1, self.moment(blk, p)))))
+        nx, ny = self.neg(mul(ey, normal)), mul(ex, normal)
+        kb, kl = self.resultant(blk), self.resultant(link)
+        self.guide_columns(link, blk, normal, nx, ny)
+        self.solved.update({link.number, blk.number})
+        self.outer(link, pivot, lin((1, nx), (-1, kl[0])), lin((1, ny), (-1, kl[1])), where)
+        self.outer(blk, p, lin((-1, nx), (-1, kb[0])), lin((-1, ny), (-1, kb[1])), where)
+
+    def slot(self, n: str, frame: tuple[str, str], slot: tuple[str, str], where: str) -> None:
+        """A slot: the block b at N on its fixed line e, its pin N in the slot (direction u)
+        of the link S. S pushes the pin across the slot, λ·m (m = u turned +90°): along the
+        line, λ·(m·e) = −ΣF_b·e, zero when the slot is parallel to the line; the guide takes
+        the rest across the line (guided). S feels −λ·m at N."""
+        blk, link = self.body(n, block=True), self.body(*frame)
+        ex, ey = blk.line
+        ux, uy = slot
+        kb = self.resultant(blk)
+        det = self.w.alias(f"_Dforce_{n}", lin((1, mul(ux, ey)), (-1, mul(uy, ex))))
+        lam = self.guide_normal(link, blk, guard(det, self.neg(lin((1, mul(kb[0], ex)),
+                                                                  (1, mul(kb[1], ey))))),
+                                "across the slot")
+        mx, my = self.neg(mul(uy, lam)), mul(ux, lam)
+        self.guide_columns(link, blk, lam, mx, my, couple=False)
+        self.guided(blk, lin((1, mx), (1, kb[0])), lin((1, my), (1, kb[1])))
+        self.solved.add(blk.number)
+
+    def guided(self, blk: Body, fx: str, fy: str) -> None:
+        """The block's guide takes what (fx, fy) leaves across its line: N = −(fx, fy)·n, and
+        the couple M = −M_b(point); as columns, and on the guide with the opposite sign."""
+        ex, ey = blk.line
+        guide = self.guide_of(blk)
+        normal = self.guide_normal(guide, blk, lin((1, mul(fx, ey)), (-1, mul(fy, ex))))
+        self.guide_columns(guide, blk, normal, self.neg(mul(ey, normal)), mul(ex, normal))
+
+    def guide_of(self, blk: Body) -> Body | None:
+        """The link a block slides on (None: the ground)."""
+        return self.body(*blk.guide) if blk.guide else None
+
+    def guide_normal(self, guide: Body | None, blk: Body, text: str,
+                     across: str = "across its line") -> str:
+        """The signed force of a guide (or a slot's link) on a block, across the line."""
+        tail = self.pair(guide.number if guide else GROUND, blk.number)
+        what = f"link {guide.number}" if guide else "guide"
+        return self.add(f"N{tail}", f"N{tail}", NEWTON, text,
+                        f"{what} on block {blk.number}, {across}", (3, blk.number))
+
+    def guide_columns(self, guide: Body | None, blk: Body, normal: str, fx: str, fy: str,
+                      couple: bool = True) -> None:
+        """A guide's (or a slot's) force on a block as a vector and its size, its couple where
+        the block carries one; the opposite acts on a moving guide, a fixed one is the frame's."""
+        number = guide.number if guide else GROUND
+        tail = self.pair(number, blk.number)
+        what = f"link {number}" if guide else "guide"
+        point = blk.joints[0]
+        gx = self.add(f"F{tail}x", f"F{tail}x", NEWTON, _or_na(fx, normal),
+                      f"{what} on block {blk.number}, x", (3, blk.number))
+        gy = self.add(f"F{tail}y", f"F{tail}y", NEWTON, _or_na(fy, normal),
+                      f"{what} on block {blk.number}, y", (3, blk.number))
+        self.add(f"F{tail}", f"F{tail}", NEWTON, f"ABS({normal})",
+                 f"{what} on block {blk.number}, size", (3, blk.number))
+        m = None
+        if couple and blk.couples:
+            m = self.add(f"M{tail}", f"M{tail}", NEWTON_METRE,
+                         self.neg(lin(*((1, c) for c in blk.couples))),
+                         f"{what}'s couple on block {blk.number}", (3, blk.number))
+        if guide is None:
+            self.guides.append((gx, gy, point))
+            if m is not None:
+                self.guide_couples.append(m)
+            return
+        guide.forces.append((_reaction(gx), _reaction(gy), point))
+        if m is not None:
+            guide.couples.append(_reaction(m))
 
     def crank(self, pivot: str, point: str, where: str) -> None:
         """The crank turns about its pivot: the pivot takes −ΣF, the motor gives

@@ -77,8 +77,8 @@ def place(c, field: str, s: dict) -> None:
         x = plus(ax, f"{d}*COS({angle})")
         y = plus(ay, f"{d}*SIN({angle})")
     c.add_point(field, n, cols["x"], cols["y"], x, y)
-    c.records.append({"type": "point", "point": n, "frame": (a, b), "form": form,
-                      "theta": cols.get("theta")})
+    c.records.append({"type": "point", "field": field, "point": n, "frame": (a, b),
+                      "form": form, "theta": cols.get("theta")})
 
 
 def rates(w, rec: dict) -> None:

@@ -58,9 +58,9 @@ def place(c, field: str, s: dict) -> None:
     slide = (f"COS({{{cols['theta_slide'].key}}})", f"SIN({{{cols['theta_slide'].key}}})")
     c.slides_on(n, "guide", n, slide, cols["travel"])
     c.block(p, slide)
-    c.records.append({"type": "slide", "point": n, "p": p, "pivot": pivot,
+    c.records.append({"type": "slide", "field": field, "point": n, "p": p, "pivot": pivot,
                       "theta": cols["theta"], "theta_slide": cols["theta_slide"],
-                      "travel": cols["travel"]})
+                      "travel": cols["travel"], "direction": slide})
 
 
 def rates(w, rec: dict) -> None:
@@ -92,4 +92,9 @@ def rates(w, rec: dict) -> None:
             angle=False)
 
 
-STEP = StepType(schema_keys("slide"), place, rates, fixed({"offset": 1}))
+def forces(w, rec: dict) -> None:
+    """The block at P and the link it slides on."""
+    w.slide(rec["p"], rec["pivot"], rec["point"], rec["field"])
+
+
+STEP = StepType(schema_keys("slide"), place, rates, fixed({"offset": 1}), forces)

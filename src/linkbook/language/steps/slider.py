@@ -130,8 +130,8 @@ def rates(w, rec: dict) -> None:
 
 
 def forces(w, rec: dict) -> None:
-    """The rod and the block on its fixed line."""
-    w.slider(rec["point"], rec["p"], rec["direction"], rec["field"])
+    """The rod and the block on its line."""
+    w.slider(rec["point"], rec["p"], rec["field"])
 
 
 STEP = StepType(schema_keys("slider"), place, rates, fixed({"length": 1, "direction": 0}),

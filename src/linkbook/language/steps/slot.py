@@ -47,8 +47,9 @@ def place(c, field: str, s: dict) -> None:
     c.slides_on(n, "guide", through, (dc, ds), cols["s"])
     c.slides_on(n, "slot", e, (uc, us), cols["s_slot"])
     c.block(n, (dc, ds))
-    c.records.append({"type": "slot", "point": n, "slot_through": e, "frame": (a, b),
-                      "through": through, "slot_dir": (uc, us), "direction": (dc, ds),
+    c.records.append({"type": "slot", "field": field, "point": n, "slot_through": e,
+                      "frame": (a, b), "through": through, "slot_dir": (uc, us),
+                      "direction": (dc, ds),
                       "s_slot": cols["s_slot"], "s": cols["s"]})
 
 
@@ -77,4 +78,10 @@ def rates(w, rec: dict) -> None:
     w.point(n, mul(sd, dc), mul(sd, ds), mul(sdd, dc), mul(sdd, ds), witness=sd)
 
 
-STEP = StepType(schema_keys("slot"), place, rates, fixed({"direction": 0, "slot_angle": 0}))
+def forces(w, rec: dict) -> None:
+    """The block on the fixed line, its pin pushed across the slot."""
+    w.slot(rec["point"], rec["frame"], rec["slot_dir"], rec["field"])
+
+
+STEP = StepType(schema_keys("slot"), place, rates, fixed({"direction": 0, "slot_angle": 0}),
+                forces)
