@@ -241,9 +241,11 @@ def lines(data: dict) -> list[str]:
     """The summary as text, each line under 80 characters."""
     inp = data["input"]
     out = [*_fit(f"{data['book']}: {data['mechanism']} — {data['title']}"), "", "Inputs"]
+    width = max([10, *(len(r["symbol"]) for r in data["inputs"])])   # a long name, one column
     for r in data["inputs"]:
         value = _g(r["value"]) if number(r["value"]) is not None else str(r["value"])
-        out += _fit(f"  {r['symbol']:10} {value:>12} {r['unit']:7} {r['quantity']}", 34)
+        out += _fit(f"  {r['symbol']:{width}} {value:>12} {r['unit']:7} {r['quantity']}",
+                    width + 24)
     if data["fourbar_loops"]:
         out += ["", "Four-bar loops"]
         for r in data["fourbar_loops"]:
