@@ -24,6 +24,9 @@ from .forces import LENGTH_UNITS, SINGULAR, forces
 from .context import motion_rates
 
 GRAVITY_SCALE = 10.0     # m/s²: the weight's share of the scale (gravity or not)
+# A guide's couple a book must show: one beyond a thousand times a moment's bound somewhere in
+# the sweep (a block with no couple to carry has M = 0, the reference's to rounding).
+COUPLE_SHOWN = 1e-9
 
 
 def force_scale(j, ref: dict, metres: float, rate2: float) -> float:
@@ -45,9 +48,9 @@ def check_forces(j) -> None:
     params = {**j.params, "to_metres": metres}
     ref = forces(j.solver.description, params, j.angles, j.record.length_unit)
     one = forces(j.solver.description, params, [j.angle], j.record.length_unit)
-    _require_every_column(table, ref)
     _, rate2 = motion_rates(mech, j.params, j.size)
     scale = force_scale(j, ref, metres, rate2)
+    _require_every_column(table, ref, COUPLE_SHOWN * scale * j.size * metres)
     (r0, r1), now = table.rows, table.current_row
     sheet = table.sheet
     j.run(sheet, mech.input_column, sheet, [f"A{r}" for r in range(r0, r1 + 1)], j.angles,
@@ -73,11 +76,17 @@ def check_forces(j) -> None:
     _check_summary(j, ref, scale, metres, dead)
 
 
-def _require_every_column(table, ref: dict) -> None:
+def _require_every_column(table, ref: dict, couple: float) -> None:
     """The sheet must have a column for every force the reference finds (a guide's couple
-    only where it has one): a force the book leaves out is not a force it got right."""
+    only where it has one: beyond `couple` on some row): a force the book leaves out is not a
+    force it got right."""
+    def shown(key: str, v: np.ndarray) -> bool:
+        if not key.startswith("M"):
+            return True
+        finite = v[np.isfinite(v)]
+        return bool(finite.size) and float(np.max(np.abs(finite))) > couple
     wanted = {k for k, v in ref.items()
-              if isinstance(v, np.ndarray) and k != "cond" and not k.startswith("M1")}
+              if isinstance(v, np.ndarray) and k != "cond" and shown(k, v)}
     missing = sorted(wanted - set(table.columns))
     if missing:
         raise UnusableFile(f"sheet {table.sheet} has no column of {', '.join(missing[:6])}, "
