@@ -29,7 +29,8 @@ from test_properties import dimensions
 
 EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
 DATA = Path(__file__).resolve().parent / "data" / "forces"
-FAMILIES = ["fourbar", "slider-crank", "toggle-press", "boom-cylinder", "watt-sixbar"]
+FAMILIES = ["fourbar", "slider-crank", "toggle-press", "boom-cylinder", "watt-sixbar",
+            "inverted-slider-crank", "pump", "rocker-block"]
 METRES = {"mm": 1e-3, "cm": 1e-2, "m": 1.0}
 SHEET = "Forces"
 
@@ -194,18 +195,36 @@ def dynamics(t: templates.Template):
         lambda d: {**d[0], **(d[2] if d[1] else {}), **d[3]})
 
 
+def guides(description: dict) -> dict[str, tuple[str, str]]:
+    """The blocks on a moving line, by their point: the two points of the link they slide on
+    and turn with (a slide's block at p: the slide's link; a slider's along a link: that link).
+    A block on a fixed line does not turn."""
+    out = {}
+    for step in description["steps"]:
+        if step["type"] == "slide":
+            out[step["p"]] = (step["pivot"], step["point"])
+        elif step["type"] == "slider" and "along" in step:
+            out[step["point"]] = tuple(step["along"])
+    return out
+
+
 class Motion(SIMotion):
     """The kinematic reference's motion at the given inputs, in SI units."""
 
     def __init__(self, t: templates.Template, params: dict, inputs):
         super().__init__(solve(t.mechanism.description, params, np.asarray(inputs, dtype=float)),
                          METRES[t.length_unit])
+        self.guides = guides(t.mechanism.description)
 
     def centre(self, entry: dict, number):
         """The centre of mass's velocity and acceleration and its link's ω and α: G placed in
-        the frame A→B by local coordinates, or by a distance and an angle from A→B."""
+        the frame A→B by local coordinates, or by a distance and an angle from A→B; a block's
+        is its point, and it turns with its guide."""
         if entry.get("block"):
-            _, v, a = self.point(entry["joints"][0])
+            point = entry["joints"][0]
+            _, v, a = self.point(point)
+            if point in self.guides:
+                return (v, a, *self.spin(*self.guides[point]))
             return v, a, np.zeros(self.n), np.zeros(self.n)
         spec = entry["centre"]
         if "local" in spec:
@@ -345,6 +364,45 @@ def test_static_fourbar_with_an_output_torque_by_virtual_work():
     got = np.array([values[(SHEET, f"{table['columns']['T12']}{r}")] for r in rows])
     w14 = solve(t.mechanism.description, t.values(), np.asarray(inputs))["omega_theta14"]
     np.testing.assert_allclose(got, -torque * w14 / w12, rtol=1e-10)
+
+
+def efforts(t: templates.Template, key: str = "T12") -> tuple[np.ndarray, np.ndarray]:
+    """The inputs (degrees) and a force column of the book built from t, at the current
+    position and on every sweep row."""
+    built, values = builder.make(t)
+    table = built.meta["forces"]
+    first, last = table["rows"]
+    rows = [table["current_row"], *range(first, last + 1)]
+    inputs = np.array([values[(SHEET, f"A{r}")] for r in rows], dtype=float)
+    got = np.array([values[(SHEET, f"{table['columns'][key]}{r}")] for r in rows], dtype=float)
+    return inputs, got
+
+
+def test_static_inverted_slider_crank_with_an_output_torque_by_virtual_work():
+    """The slide (RPR): no masses, no gravity, only a torque T on link 4 (B0-B), which the block
+    at the crank pin A drives along its slide line. The pins and the slide are frictionless and
+    the links rigid, so the efforts' powers sum to zero: T12·ω12 + T·ω14 = 0, T12 = −T·ω14/ω12,
+    ω14 the rate of link 4's angle θ14 from the kinematic reference."""
+    torque, w12 = -4.0, 2.5
+    t = weightless(load("inverted-slider-crank"), T4=torque, omega_in=w12, alpha_in=-3.0)
+    inputs, got = efforts(t)
+    w14 = solve(t.mechanism.description, t.values(), inputs)["omega_theta14"]
+    np.testing.assert_allclose(got, -torque * w14 / w12, rtol=1e-10)
+
+
+def test_static_pump_with_a_plunger_force_by_virtual_work():
+    """The slot: no masses, no gravity, only a force F along the plunger's line (x) on its block
+    at P, whose pin runs in the rocker's slot. Virtual work: T12·ω12 + F·vPx = 0, with vPx the
+    plunger's velocity from the kinematic reference (its line is horizontal), so T12 =
+    −F·vPx/ω12; and the plunger's own balance along its line: the slot's push on it, F45x
+    (the rocker is link 4, the plunger block 5), is −F."""
+    force, w12 = 250.0, 4.0
+    t = weightless(load("pump"), FPx=force, omega_in=w12, alpha_in=0.0)
+    inputs, got = efforts(t)
+    vx = solve(t.mechanism.description, t.values(), inputs)["vx_P"] * 1e-3
+    np.testing.assert_allclose(got, -force * vx / w12, rtol=1e-10, atol=1e-12 * force)
+    _, push = efforts(t, "F45x")
+    np.testing.assert_allclose(push, -force, rtol=1e-12)
 
 
 def test_inline_slider_crank_piston_inertia_by_hand():
