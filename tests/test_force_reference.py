@@ -1,8 +1,10 @@
-"""The independent force reference (linkbook.check.forces): two cases derived by hand, the
-slider-crank a book printed, and the balances of power and momentum on random masses and loads of
-the bundled mechanisms. Every expected value comes from outside the code under test: statics and
-virtual work with the kinematic reference's angular velocities, a closed-form slider-crank, the
-book's numbers, and the energy and momentum the kinematic reference's motion implies."""
+"""The independent force reference (linkbook.check.forces): cases derived by hand (a four-bar, a
+slider-crank, and one mechanism per sliding pair: a slide, a slot, a slider on a moving line),
+the slider-crank a book printed, and the balances of power and momentum on random masses and
+loads of the bundled mechanisms and a slider on a moving line. Every expected value comes from
+outside the code under test: statics and virtual work with the kinematic reference's rates, a
+closed-form slider-crank, the book's numbers, and the energy and momentum the kinematic
+reference's motion implies."""
 from __future__ import annotations
 
 import math
@@ -135,6 +137,150 @@ def test_marghitu_slider_crank_derived():
                "shaking_y": -30 + r2 / 2, "shaking_moment": -20 * r2}
     for key, want in derived.items():
         assert got[key][0] == pytest.approx(want, rel=1e-12, abs=1e-12), key
+
+
+# --------------------------------------------------------------------------------------------
+# Sliding pairs: a slide, a slot and a slider on a moving line, statics by hand
+# --------------------------------------------------------------------------------------------
+
+# A four-bar A0-A-B-B0 whose rocker B0-B carries a guide (its line through B0 at δ to B0→B,
+# out beyond B) on which a block K slides, pushed by a rod from the coupler's point C: a slider
+# on a moving line. The drawing's rocker holds K (it is drawn on its guide); the force analysis
+# leaves it out.
+ROCKER_SLIDER = {
+    "input": {"key": "theta12"}, "ground": {"A0": [0, 0], "B0": ["a1", 0]},
+    "links": [["A0", "A"], ["A", "B", "C"], ["B0", "B", "K"], ["C", "K"]],
+    "steps": [{"type": "crank", "point": "A", "pivot": "A0", "length": "a2"},
+              {"type": "dyad", "point": "B", "p": "A", "q": "B0", "p_length": "a3",
+               "q_length": "a4", "branch": 1},
+              {"type": "point", "point": "C", "frame": ["A", "B"], "local": ["u3", "v3"]},
+              {"type": "slider", "point": "K", "p": "C", "length": "a5", "through": "B0",
+               "along": ["B0", "B"], "direction": "delta", "branch": 1}]}
+ROCKER_SLIDER_VALUES = {"a1": 100.0, "a2": 30.0, "a3": 90.0, "a4": 80.0, "u3": 45.0,
+                        "v3": 40.0, "a5": 70.0, "delta": 8.0}
+
+
+def _unit(points, a: str, b: str):
+    """The unit vector a→b of two solved points, per row."""
+    (ax, ay), (bx, by) = ((np.asarray(c, dtype=float) for c in points[p]) for p in (a, b))
+    size = np.hypot(bx - ax, by - ay)
+    return (bx - ax) / size, (by - ay) / size
+
+
+def test_the_sliding_pairs_bodies_and_keys():
+    """The numbering of docs/language.md (ground 1, crank 2, the links in `links` order, the
+    steps' links, the blocks last) with each sliding point left out of its guide's drawing, and
+    the keys of the pins, guides and slots with the point of each."""
+    cases = {
+        # the drawing's link 4 ["B0", "B", "A"] is the link B0-B: A slides on it
+        "inverted-slider-crank": ({2: ("A0", "A"), 3: ("B0", "B"), 4: ("A",)},
+                                  {"F12": "A0", "F24": "A", "F13": "B0", "F34": "A"}),
+        # ["E", "P"], the slot drawn from its foot E, is no link
+        "pump": ({2: ("A0", "A"), 3: ("A", "B"), 4: ("B", "B0", "E"), 5: ("P",)},
+                 {"F12": "A0", "F23": "A", "F34": "B", "F14": "B0", "F15": "P", "F45": "P"}),
+    }
+    for name, (bodies, joints) in cases.items():
+        t = templates.load(name)
+        got = forces(t.mechanism.description, t.values(), [30.0], t.length_unit)
+        assert got["bodies"] == bodies and got["joints"] == joints, name
+    got = forces(ROCKER_SLIDER, {**ROCKER_SLIDER_VALUES, "omega_in": 1.0, "alpha_in": 0.0},
+                 [30.0], "mm")
+    assert got["bodies"] == {2: ("A0", "A"), 3: ("A", "B", "C"), 4: ("B0", "B"),
+                             5: ("C", "K"), 6: ("K",)}
+    assert got["joints"] == {"F12": "A0", "F23": "A", "F34": "B", "F35": "C", "F14": "B0",
+                             "F56": "K", "F46": "K"}
+    assert {"N46", "M46", "F46"} <= set(got) and "N34" not in got     # B is a pin
+
+
+def test_inverted_slider_crank_static_by_hand():
+    """The bundled inverted slider-crank, no masses, only a torque T on the slide's link B0-B
+    (body 3; the block at A is body 4). Virtual work: T12·ω12 + T·ω14 = 0, ω14 the rate of its
+    column theta14 (the link's angle B0→B) from the kinematic reference: T12 = −T·ω14/ω12.
+    Statics: the massless block has the crank's pin force F24 and the guide's force N34·n and
+    couple M34, all at A: about A, M34 = 0, and F34 = N34·n = −F24, n the slide's direction
+    (the column theta13) turned +90°, n = (−sin θ13, cos θ13). The link 3 turns about B0 under
+    T and the block's push −N34·n at A: T − (A − B0) × N34·n = 0, N34 = T / ((A − B0) × n)."""
+    t = templates.load("inverted-slider-crank")
+    torque, w12 = 4.0, 5.0
+    params = {**t.values(), "omega_in": w12, "alpha_in": 0.0}
+    angles = np.arange(0.0, 360.0, 5.0)
+    got = forces(_with(t.mechanism.description, loads=[{"body": ["B0", "B"], "torque": torque}]),
+                 params, angles, t.length_unit)
+    motion = solve(t.mechanism.description, params, angles)
+    want = -torque * motion["omega_theta14"] / w12
+    np.testing.assert_allclose(got["T12"], want, rtol=0, atol=1e-10 * np.max(np.abs(want)))
+    nx, ny = -np.sin(motion["theta13"]), np.cos(motion["theta13"])
+    (ax, ay), (bx, by) = ((np.asarray(c) * MM for c in motion["points"][p]) for p in ("A", "B0"))
+    normal = torque / ((ax - bx) * ny - (ay - by) * nx)
+    size = np.max(np.abs(normal))
+    np.testing.assert_allclose(got["N34"], normal, rtol=1e-10)
+    np.testing.assert_allclose(got["M34"], 0.0, atol=1e-10 * size * 0.1)   # N·m: 0.1 m
+    for c, n in (("x", nx), ("y", ny)):
+        np.testing.assert_allclose(got["F34" + c], normal * n, rtol=0, atol=1e-10 * size)
+        np.testing.assert_allclose(got["F24" + c], -normal * n, rtol=0, atol=1e-10 * size)
+    np.testing.assert_allclose(got["F34"], np.abs(normal), rtol=1e-10)
+
+
+def test_pump_slot_static_by_hand():
+    """The bundled pump, no masses, only a force F along the plunger's line d (direction 180°:
+    d = (−1, 0)) on the block at P. Virtual work: T12·ω12 + F·(v_P·d) = 0, v_P from the
+    kinematic reference: T12 = −F·(v_P·d)/ω12. Statics of the massless block: the load F·d,
+    the guide's N15·n (n = d turned +90° = (0, −1)) and couple M15, the slot's N45·m (m the
+    slot's direction u = angle(B0→E) + 90° turned +90°), all at P: M15 = 0; along x,
+    −F + N45·m_x = 0, so N45 = F/m_x; along y, −N15 + N45·m_y = 0, so N15 = N45·m_y. The pin
+    in the slot pushes across the slot only: no M45."""
+    t = templates.load("pump")
+    push, w12 = 300.0, 8.0
+    params = {**t.values(), "omega_in": w12, "alpha_in": 0.0}
+    angles = np.arange(0.0, 360.0, 5.0)
+    got = forces(_with(t.mechanism.description, loads=[{"at": "P", "force": [-push, 0.0]}]),
+                 params, angles, t.length_unit)
+    motion = solve(t.mechanism.description, params, angles)
+    want = -push * (-motion["vx_P"] * MM) / w12
+    np.testing.assert_allclose(got["T12"], want, rtol=0, atol=1e-10 * np.max(np.abs(want)))
+    fx, fy = _unit(motion["points"], "B0", "E")          # u = the frame's direction + 90°
+    ux, uy = -fy, fx
+    mx, my = -uy, ux
+    slot = push / mx
+    size = np.max(np.abs(slot))
+    np.testing.assert_allclose(got["N45"], slot, rtol=1e-10)
+    np.testing.assert_allclose(got["N15"], slot * my, rtol=0, atol=1e-10 * size)
+    np.testing.assert_allclose(got["M15"], 0.0, atol=1e-10 * size * 0.1)   # N·m: 0.1 m
+    assert "M45" not in got
+    for key, n, sign in (("F45", (mx, my), slot), ("F15", (0.0, -1.0), slot * my)):
+        np.testing.assert_allclose(got[key + "x"], sign * n[0], rtol=0, atol=1e-10 * size)
+        np.testing.assert_allclose(got[key + "y"], sign * n[1], rtol=0, atol=1e-10 * size)
+
+
+def test_slider_on_a_moving_line_static_by_hand():
+    """ROCKER_SLIDER, no masses, only a force F along the guide's line d, at δ to B0→B, on
+    the block K (body 6, on the rocker 4, pushed by the rod C-K, body 5). Virtual work:
+    T12·ω12 + F·(v_K·d) = 0: T12 = −F·(v_K·d)/ω12, v_K from the kinematic reference. Statics:
+    the rod is a two-force member, F56 = f·w with w = (K − C)/|K − C|; the massless block has
+    F56, F·d, the guide's N46·n (n = d turned +90°) and couple M46, all at K: M46 = 0; along d,
+    f·(w·d) + F = 0; along n, f·(w·n) + N46 = 0: N46 = F·(w·n)/(w·d)."""
+    push, w12 = 120.0, 6.0
+    params = {**ROCKER_SLIDER_VALUES, "omega_in": w12, "alpha_in": 0.0}
+    angles = np.arange(0.0, 360.0, 5.0)
+    load = {"at": "K", "force": ["F*COS(line_K)", "F*SIN(line_K)"]}
+    got = forces({**ROCKER_SLIDER, "loads": [load]}, {**params, "F": push}, angles, "mm")
+    motion = solve(ROCKER_SLIDER, params, angles)
+    bx, by = _unit(motion["points"], "B0", "B")
+    cd, sd = math.cos(math.radians(params["delta"])), math.sin(math.radians(params["delta"]))
+    dx, dy = bx * cd - by * sd, bx * sd + by * cd
+    nx, ny = -dy, dx
+    wx, wy = _unit(motion["points"], "C", "K")
+    vd = (motion["vx_K"] * dx + motion["vy_K"] * dy) * MM
+    want = -push * vd / w12
+    np.testing.assert_allclose(got["T12"], want, rtol=0, atol=1e-10 * np.max(np.abs(want)))
+    f = -push / (wx * dx + wy * dy)
+    normal = push * (wx * nx + wy * ny) / (wx * dx + wy * dy)
+    size = np.max(np.abs(f))
+    np.testing.assert_allclose(got["N46"], normal, rtol=0, atol=1e-10 * size)
+    np.testing.assert_allclose(got["M46"], 0.0, atol=1e-10 * size * 0.1)   # N·m: 0.1 m
+    for c, n, w in (("x", nx, wx), ("y", ny, wy)):
+        np.testing.assert_allclose(got["F46" + c], normal * n, rtol=0, atol=1e-10 * size)
+        np.testing.assert_allclose(got["F56" + c], f * w, rtol=0, atol=1e-10 * size)
 
 
 # --------------------------------------------------------------------------------------------
