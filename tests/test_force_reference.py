@@ -283,12 +283,35 @@ def test_slider_on_a_moving_line_static_by_hand():
         np.testing.assert_allclose(got["F56" + c], f * w, rtol=0, atol=1e-10 * size)
 
 
+def test_a_block_turns_with_its_slide_of_offset_zero():
+    """The inverted slider-crank with its slide line through the pivot (offset 0: the link's
+    point B is its pivot B0, so the link's spin is its column's, theta14). Only the block at A
+    has mass m and inertia I; a torque T on the link. The block turns with the link, so the
+    motor's power feeds its kinetic energy less T's power:
+        T12·ω12 + T·ω14 = m·a_A·v_A + I·α14·ω14."""
+    t = templates.load("inverted-slider-crank")
+    m, inertia, torque, w12, a12 = 1.5, 0.02, -3.0, 12.0, 40.0
+    params = {**t.values(), "a4": 0.0, "omega_in": w12, "alpha_in": a12}
+    angles = np.arange(0.0, 360.0, 5.0)
+    got = forces(_with(t.mechanism.description,
+                       bodies=[{"joints": ["A"], "block": True, "mass": m, "inertia": inertia}],
+                       loads=[{"body": ["B0", "B"], "torque": torque}]),
+                 params, angles, t.length_unit)
+    kin = _Kinematics(solve(t.mechanism.description, params, angles), MM, {})
+    _, (vx, vy), (ax, ay) = kin.point("A")
+    w14, a14 = kin.s["omega_theta14"], kin.s["alpha_theta14"]
+    kinetic = m * (ax * vx + ay * vy) + inertia * a14 * w14
+    residual = got["T12"] * w12 + torque * w14 - kinetic
+    assert np.all(np.isfinite(residual))
+    assert np.all(np.abs(residual) <= 1e-9 * (np.abs(got["T12"] * w12) + np.abs(kinetic)))
+
+
 # --------------------------------------------------------------------------------------------
 # The balances of power and momentum on random masses and loads
 # --------------------------------------------------------------------------------------------
 
-# The moving links of the bundled mechanisms, as this test reads their drawings (a one-point
-# entry is a slider's block).
+# The moving links of the mechanisms, as this test reads their drawings (a one-point entry is
+# a block: it turns with the link GUIDES names, a block on a fixed line does not turn).
 LINKS = {
     "fourbar": [["A0", "A"], ["A", "B", "C"], ["B0", "B"]],
     "slider-crank": [["A0", "A"], ["A", "B", "C"], ["B"]],
@@ -296,11 +319,28 @@ LINKS = {
     "jansen": [["O", "A"], ["A", "B"], ["A", "C"], ["Z", "B", "D"], ["Z", "C"], ["D", "E"],
                ["C", "E", "F"]],
     "boom-cylinder": [["O", "B", "T"]],
+    "inverted-slider-crank": [["A0", "A"], ["B0", "B"], ["A"]],
+    "pump": [["A0", "A"], ["A", "B"], ["B", "B0", "E"], ["P"]],
+    "rocker-slider": [["A0", "A"], ["A", "B", "C"], ["B0", "B"], ["C", "K"], ["K"]],
 }
+GUIDES = {"inverted-slider-crank": {"A": ["B0", "B"]}, "rocker-slider": {"K": ["B0", "B"]}}
+
+
+def _mechanism(name: str):
+    """A mechanism of LINKS: its description, parameter values, swept inputs, length unit."""
+    if name == "rocker-slider":
+        return ROCKER_SLIDER, dict(ROCKER_SLIDER_VALUES), np.arange(0.0, 360.0, 5.0), "mm"
+    t = templates.load(name)
+    description = t.mechanism.description
+    angle_input = description["input"].get("kind", "angle") == "angle"
+    angles = np.asarray(t.sweep.angles()[:-1] if angle_input else t.sweep.angles(), dtype=float)
+    return description, t.values(), angles, t.length_unit
+
 
 def _draw_dynamics(data, name: str, moving: list[str]) -> dict:
     """Random masses (some links massless), centres (`local` in the link's frame), inertias,
-    point forces (as components or magnitude and angle), torques and gravity."""
+    point forces (as components or magnitude and angle), torques (on a link or a block) and
+    gravity."""
     bodies, loads = [], []
     for joints in LINKS[name]:
         if not data.draw(st.booleans()):
@@ -322,9 +362,8 @@ def _draw_dynamics(data, name: str, moving: list[str]) -> dict:
             force = {"magnitude": data.draw(st.floats(0.0, 500.0)),
                      "angle": data.draw(st.floats(-180.0, 180.0))}
         loads.append({"at": at, "force": force})
-    if data.draw(st.booleans()):
-        links = [j for j in LINKS[name] if len(j) > 1]
-        loads.append({"body": data.draw(st.sampled_from(links))[:2],
+    if data.draw(st.booleans()):               # on a link or a block (its one point)
+        loads.append({"body": data.draw(st.sampled_from(LINKS[name]))[:2],
                       "torque": data.draw(st.floats(-50.0, 50.0))})
     out = {"bodies": bodies, "loads": loads}
     if data.draw(st.booleans()):
@@ -336,11 +375,19 @@ def _draw_dynamics(data, name: str, moving: list[str]) -> dict:
 
 
 class _Kinematics(SIMotion):
-    """The kinematic reference's motion in SI units, as the drawn links see it."""
+    """The kinematic reference's motion in SI units, as the drawn links see it; `guides`:
+    {a block's point: its guide's joints}."""
+
+    def __init__(self, solved: dict, metres: float, guides: dict):
+        super().__init__(solved, metres)
+        self.guides = guides
 
     def link_spin(self, joints: list[str]):
-        """ω and α of a rigid link, from its first and last joints (a block does not turn)."""
+        """ω and α of a rigid link, from its first and last joints; a block's are its guide's
+        (a block on a fixed line does not turn)."""
         if len(joints) == 1:
+            if joints[0] in self.guides:
+                return self.link_spin(self.guides[joints[0]])
             return np.zeros(self.n), np.zeros(self.n)
         return self.spin(joints[0], joints[-1])
 
@@ -402,10 +449,8 @@ def test_power_and_momentum_balance(name):
     """On every row, for random masses, centres, inertias, loads, gravity and input rates: the
     input's power equals the rate of the kinetic energy less the loads' and gravity's power, and
     the shaking force and moment close the mechanism's momentum balance (to 1e-9 of the terms)."""
-    t = templates.load(name)
-    description = t.mechanism.description
+    description, values, angles, length_unit = _mechanism(name)
     angle_input = description["input"].get("kind", "angle") == "angle"
-    angles = np.asarray(t.sweep.angles()[:-1] if angle_input else t.sweep.angles(), dtype=float)
     moving = sorted({p for j in LINKS[name] for p in j} - set(description["ground"]))
 
     @settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
@@ -418,9 +463,9 @@ def test_power_and_momentum_balance(name):
                                   else st.floats(-500.0, 500.0)),
                  accel: data.draw(st.floats(-100.0, 100.0) if angle_input
                                   else st.floats(-1000.0, 1000.0))}
-        params = {**t.values(), **rates}
-        got = forces(_with(description, **dyn), params, angles, t.length_unit)
-        kin = _Kinematics(solve(description, params, angles), MM)
+        params = {**values, **rates}
+        got = forces(_with(description, **dyn), params, angles, length_unit)
+        kin = _Kinematics(solve(description, params, angles), MM, GUIDES.get(name, {}))
         assert np.isfinite(got["shaking_moment"]).all()
         power_in = got["T12"] * rates[speed] if angle_input else got["F_in"] * rates[speed] * MM
         for residual, size in _balances(got, dyn, kin, power_in, LINKS[name]):
