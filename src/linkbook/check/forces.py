@@ -7,7 +7,7 @@ The description is a template's ``[mechanism]`` table (docs/language.md) with it
     gravity = { g = "g", angle = -90 }    # m/s², degrees from +x (default −90); none if absent
     [[mechanism.bodies]]                  # one per moving link that has mass
     joints = ["A", "B", "C"]              # the points the link holds
-    block = false                         # true: a slider's block, its centre at its point
+    block = false                         # true: a block (joints = [its point]), centred there
     mass = "m3"                           # kg
     centre = { frame = ["A", "B"], distance = "g3", angle = 0 }   # placed as a `point` step
     inertia = "I3"                        # kg·m² about the centre of mass
@@ -17,7 +17,7 @@ The description is a template's ``[mechanism]`` table (docs/language.md) with it
 
 Every value is a number, a parameter or an expression, which may name the steps' columns too.
 Lengths are in the template's ``length_unit``, converted to metres once: forces in N, moments in
-N·m. A force at a slider's point acts on its block, at any other point on the lowest-numbered
+N·m. A force at a block's point acts on the block, at any other point on the lowest-numbered
 link holding it, unless the load names its link (``body`` beside ``at``).
 
 Why it is independent: it reads the topology from the description, assembles the equations from
@@ -27,14 +27,28 @@ kinematic reference's public ``solve``: the motion of every point, and the evalu
 expressions (as `expression` steps). No closed form of the workbook's is used.
 
 Topology. The rigid bodies are the sets of points that move together: each ``links`` entry and
-each step's links (a crank's pivot and pin, a dyad's two sides, a slider's rod; a carried point
-joins the body of its frame, or, by ``distances`` on a frame that is no body, makes two links);
-sets sharing two points are one body, and cranks on one pivot are one body. A ``bodies`` entry
-gives the body holding its joints a mass. A slider's point carries a block, a body of its own on
-a fixed line. The side of a dyad that is the linear actuator's length is no body: a massless
-member of unknown force. ``slide`` and ``slot`` steps and sliders on a moving line are refused.
-Numbering, as the textbook's: the ground 1, the crank 2, then the other bodies in the order of
-the ``links`` entries, then those that only the steps name, then the blocks.
+each step's links (a crank's pivot and pin, a dyad's two sides, a slider's rod, a slide's link
+from its pivot to its point; a carried point joins the body of its frame, or, by ``distances``
+on a frame that is no body, makes two links); sets sharing two points are one body, and cranks
+on one pivot are one body. A ``bodies`` entry gives the body holding its joints a mass. The side
+of a dyad that is the linear actuator's length is no body: a massless member of unknown force.
+Every step that slides makes a block, a body of one point (its centre), on a guide:
+- a ``slider``: at its point, on its fixed line (the ground) or on the link of ``along``,
+  pinned to its rod;
+- a ``slide``: at its ``p``, on the slide's link (its pivot and point), pinned to the links
+  holding p (the crank);
+- a ``slot``: at its point, on its fixed line (the ground), and in the slot of the link of
+  ``slot_frame``: a pin pushed across the slot only (one unknown, no couple).
+A guide pushes its block across its line and holds it with a couple; the block turns with its
+guide (not at all on a fixed line). A sliding point is no joint of its guide: a ``links`` entry
+holding a point of the guide (``along`` and ``through``; the slide's pivot and point; the slot's
+``slot_through`` and ``slot_frame``) leaves it out, and one left with fewer than two points only
+draws. Numbering, as the textbook's: the ground 1, the crank 2, then the other bodies in the
+order of the ``links`` entries, then those that only the steps name, then the blocks in the
+order of their steps. Links that are no mechanism of one degree of freedom (unknowns, 2 per pin
+and guide, 1 per slot and the effort, other than 3 per body) are refused; so is a slotted link
+written with a ``vector`` step (the direction from its pivot to a pin sliding in it): it is no
+link of the steps, a ``slide`` step is.
 
 What ``forces`` returns (arrays over the rows; i < j body numbers, written together as "23", or
 with "_" between them, "2_13", in a mechanism of ten bodies or more):
@@ -43,16 +57,24 @@ with "_" between them, "2_13", in a mechanism of ten bodies or more):
 - ``F{i}{j}x``, ``F{i}{j}y``, ``F{i}{j}``: the force of body i on body j at the pin joining
   them, and its size. A pin held by more than two bodies is carried by the lowest-numbered of
   them (the ground at a ground point): each other body j gets F{that}{j};
-- for a block j: ``N1{j}``, the guide's force on it along the line turned +90°; ``M1{j}``, the
-  guide's couple on it; ``F1{j}x``, ``F1{j}y``, ``F1{j}``: that force as a vector, its size;
+- for a block j on its guide i (1: a fixed line): ``N{i}{j}``, the guide's force on it along
+  the line's direction turned +90°; ``M{i}{j}``, the guide's couple on it; ``F{i}{j}x``,
+  ``F{i}{j}y``, ``F{i}{j}``: that force as a vector, its size (|N|). The line's direction: a
+  fixed line's ``direction``; angle(U→V) + ``direction`` along [U, V]; a slide's column
+  ``theta_slide``. On the guide, the opposite force and couple;
+- for a slot's block j in the link i: ``N{i}{j}``, the link's force on it across the slot (its
+  direction, angle(slot_frame) + ``slot_angle``, turned +90°), ``F{i}{j}x``, ``F{i}{j}y``,
+  ``F{i}{j}``; no couple;
 - ``shaking_x``, ``shaking_y``, ``shaking``: the force the moving links exert on the ground
-  (through the ground pins, the guides and the actuator's ground end); ``shaking_moment``: its
-  moment about the frame's origin, the motor's reaction −T12 included;
+  (through the ground pins, the fixed guides with their couples and the actuator's ground
+  end); ``shaking_moment``: its moment about the frame's origin, the motor's reaction −T12
+  included;
 - ``xG{n}``, ``yG{n}``, ``axG{n}``, ``ayG{n}``: a link's centre of mass and its acceleration,
   in the template's length unit (per s²);
 - ``cond``: each row's condition number (equilibrated). A row is NaN where a position or a rate
   is NaN, or where the system is singular (cond above SINGULAR);
-- ``bodies``: {number: the body's joints}; ``joints``: {reaction key F{i}{j}: its point}.
+- ``bodies``: {number: the body's joints}; ``joints``: {reaction key F{i}{j}: its point} for
+  every pin, guide and slot.
 """
 
 from __future__ import annotations
@@ -72,7 +94,6 @@ GROUND = 1
 # The data format's names of the input's speed and acceleration (docs/language.md).
 _RATES = {"angle": ("omega_in", "alpha_in"), "length": ("v_in", "a_in")}
 _OWN = "forces__"     # the points and keys this module adds to the description start so
-_UNSUPPORTED = ("slide", "slot")
 _CENTRE_KEYS = ("frame", "local", "distances", "side", "distance", "angle")
 
 
@@ -84,6 +105,22 @@ class _Body:
     spec: Mapping | None = None     # its `bodies` entry: mass, centre, inertia
     number: int = 0
     centre: str | None = None       # its centre of mass among the solved points
+    spin: str | None = None         # an angle column that turns with it (a slide's link's line)
+    guide: _Body | None = None      # a block's guide (None: the ground, a fixed line)
+
+
+@dataclass
+class _Pair:
+    """A step's sliding pair: the block at `point` slides on its guide (None: the ground) along
+    `line`; a slot's block also runs, by its pin, in the slot of the link `slotted` (None: the
+    ground) along `slot`. A line is ("fixed", degrees), ("along", U, V, degrees: angle(U→V)
+    plus these) or ("column", the key of an angle column, radians)."""
+    point: str
+    guide: _Body | None
+    line: tuple
+    slotted: _Body | None = None
+    slot: tuple | None = None
+    block: _Body = field(default_factory=lambda: _Body([], 0, block=True))
 
 
 @dataclass
@@ -92,11 +129,15 @@ class _Topology:
     fixed: set[str]                             # the ground's points
     crank: _Body | None                         # the body the motor turns
     actuator: tuple[str, str] | None            # (P, R): the actuator pushes R away from P
-    lines: dict[str, object]                    # a block's point: its line's direction, degrees
+    pairs: list[_Pair]                          # the sliding pairs, in the order of their steps
 
     def pair(self, i: int, j: int) -> str:
         """Two body numbers as a key's suffix: "23", or "2_13" from ten bodies on."""
         return f"{i}{j}" if len(self.bodies) + GROUND < 10 else f"{i}_{j}"
+
+
+def _number(body: _Body | None) -> int:
+    return GROUND if body is None else body.number
 
 
 # --------------------------------------------------------------------------------------------
@@ -120,13 +161,43 @@ def _merge(groups: list[_Body]) -> list[_Body]:
         out.remove(b)
 
 
-def _refuse_unsupported(steps: Sequence[Mapping]) -> None:
+def _sliding_points(steps: Sequence[Mapping]) -> list[tuple[str, set[str]]]:
+    """Each point that slides on a moving guide or in a slot, with the points of that guide (or
+    slotted link): a `links` entry holding one of them does not hold the sliding point."""
+    out = []
+    for step in steps:
+        kind, point = step.get("type"), str(step.get("point"))
+        if kind == "slider" and "along" in step:
+            out.append((point, {*map(str, step["along"]), str(step["through"])}))
+        elif kind == "slide":
+            out.append((str(step["p"]), {str(step["pivot"]), point}))
+        elif kind == "slot":
+            out.append((point, {str(step["slot_through"]), *map(str, step["slot_frame"])}))
+    return out
+
+
+def _drawn_links(description: Mapping) -> list[list[str]]:
+    """The `links` entries as sets of joints, each without the points that slide on it."""
+    sliding = _sliding_points(description.get("steps") or [])
+    out = []
+    for link in description.get("links") or []:
+        joints = list(dict.fromkeys(map(str, link)))
+        out.append([p for p in joints
+                    if not any(p == q and set(joints) & guide for q, guide in sliding)])
+    return out
+
+
+def _turned_by_vector(steps: Sequence[Mapping], groups: Sequence[Sequence[str]]) -> str:
+    """The hint for a link that only a `vector` step turns (a slotted link written as the
+    direction from its pivot to a pin), where its two points are one of these groups' or
+    a frame that is no link: empty where there is none."""
     for k, step in enumerate(steps):
-        kind = step.get("type")
-        what = f"a {kind} step" if kind in _UNSUPPORTED else "a slider on a moving line" \
-            if kind == "slider" and "along" in step else None
-        if what:
-            raise ValueError(f"{_where(k, step)}: force analysis of {what} is not supported yet")
+        ends = {str(step.get("from")), str(step.get("to"))}
+        if step.get("type") == "vector" and any(ends <= set(map(str, g)) for g in groups):
+            return (f"; {_where(k, step)} turns the link {step.get('from')}→{step.get('to')} "
+                    "as a direction to a pin that slides on it (a slotted link), which no step "
+                    "makes a link: write the slotted link as a slide step to give it forces")
+    return ""
 
 
 def _actuator(description: Mapping) -> tuple[str, str] | None:
@@ -142,10 +213,11 @@ def _actuator(description: Mapping) -> tuple[str, str] | None:
 
 
 def _step_groups(steps: Sequence[Mapping], actuator, first_rank: int
-                 ) -> tuple[list[_Body], dict[str, object], _Body | None]:
-    """The links the crank, dyad and slider steps imply (the cranks on one pivot are one body:
-    they turn together), the blocks' lines and the crank."""
-    groups, lines, crank = [], {}, None
+                 ) -> tuple[list[_Body], _Body | None]:
+    """The links the crank, dyad, slider and slide steps imply (the cranks on one pivot are one
+    body: they turn together; a slide's link runs from its pivot to its point), and the
+    crank."""
+    groups, crank = [], None
     for k, step in enumerate(steps):
         kind, point = step.get("type"), str(step.get("point"))
         sides = []
@@ -160,10 +232,11 @@ def _step_groups(steps: Sequence[Mapping], actuator, first_rank: int
             sides = [step[end] for end in ("p", "q") if {step[end], point} != set(actuator or ())]
         elif kind == "slider":
             sides = [step["p"]]
-            lines[point] = step.get("direction", 0.0)
+        elif kind == "slide":
+            sides = [step["pivot"]]
         groups += [_Body([str(a), point], first_rank + len(groups) + n)
                    for n, a in enumerate(sides)]
-    return groups, lines, crank
+    return groups, crank
 
 
 def _carry_points(steps: Sequence[Mapping], groups: list[_Body], fixed: set[str]
@@ -183,8 +256,57 @@ def _carry_points(steps: Sequence[Mapping], groups: list[_Body], fixed: set[str]
             rank = max(g.rank for g in groups) + 1
             groups = _merge(groups + [_Body([a, point], rank), _Body([b, point], rank + 1)])
         else:
-            raise ValueError(f"{_where(k, step)}: its frame {a}→{b} is no rigid link")
+            raise ValueError(f"{_where(k, step)}: its frame {a}→{b} is no rigid link"
+                             + _turned_by_vector(steps, [(a, b)]))
     return _merge(groups)
+
+
+def _link(bodies: Sequence[_Body], fixed: set[str], a: str, b: str, what: str) -> _Body | None:
+    """The moving body holding the points a and b (None: both are the ground's)."""
+    if a in fixed and b in fixed:
+        return None
+    found = next((g for g in bodies if a in g.joints and b in g.joints), None)
+    if found is None:
+        raise ValueError(f"{what}: its line's link {a}→{b} is no rigid link of the steps")
+    return found
+
+
+def _slide_key(step: Mapping) -> str:
+    """A slide's line: its `theta_slide` column, under the key the step's `columns` gives."""
+    spec = (step.get("columns") or {}).get("theta_slide")
+    key = str(spec.get("key") or "") if isinstance(spec, Mapping) else ""
+    return key or f"theta_slide_{step['point']}"
+
+
+def _pairs(steps: Sequence[Mapping], bodies: Sequence[_Body], fixed: set[str]) -> list[_Pair]:
+    """The sliding pairs of the slider, slide and slot steps, each with its block."""
+    pairs = []
+    for k, step in enumerate(steps):
+        kind, point, what = step.get("type"), str(step.get("point")), _where(k, step)
+        if kind == "slider" and "along" in step:
+            u, v = (str(p) for p in step["along"])
+            pair = _Pair(point, _link(bodies, fixed, u, v, what),
+                         ("along", u, v, step.get("direction", 0.0)))
+        elif kind == "slider":
+            pair = _Pair(point, None, ("fixed", step.get("direction", 0.0)))
+        elif kind == "slide":
+            guide = _link(bodies, fixed, str(step["pivot"]), point, what)
+            guide.spin = _slide_key(step)
+            pair = _Pair(str(step["p"]), guide, ("column", guide.spin))
+        elif kind == "slot":
+            a, b = (str(p) for p in step["slot_frame"])
+            pair = _Pair(point, None, ("fixed", step.get("direction", 0.0)),
+                         _link(bodies, fixed, a, b, what),
+                         ("along", a, b, step.get("slot_angle", 0.0)))
+        else:
+            continue
+        for other in (pair.guide, pair.slotted):
+            if other is not None and pair.point in other.joints:
+                raise ValueError(f"{what}: the link {other.joints} holds {pair.point!r}, the "
+                                 "point that slides on it")
+        pair.block = _Body([pair.point], 0, block=True, guide=pair.guide)
+        pairs.append(pair)
+    return pairs
 
 
 def _attach_entries(entries: Sequence[Mapping], bodies: list[_Body]) -> None:
@@ -192,11 +314,12 @@ def _attach_entries(entries: Sequence[Mapping], bodies: list[_Body]) -> None:
     for k, entry in enumerate(entries):
         joints = {str(p) for p in entry.get("joints") or []}
         block = bool(entry.get("block", False))
-        found = [b for b in bodies if b.block == block and
-                 (joints == set(b.joints) if block else len(joints) > 1 and joints <= set(b.joints))]
+        found = [b for b in bodies if b.block == block and (
+                 joints == set(b.joints) if block else len(joints) > 1 and joints <= set(b.joints))]
         if len(found) != 1:
             raise ValueError(f"mechanism.bodies[{k}]: {sorted(joints)} is no moving link of the "
-                             "steps and links (a slider's block: [point], block = true)")
+                             "steps and links (a block: [the point of a slider or a slot, or a "
+                             "slide's p], block = true)")
         if block and "centre" in entry:
             raise ValueError(f"mechanism.bodies[{k}]: a block's centre is its point")
         if found[0].spec is not None:
@@ -205,28 +328,46 @@ def _attach_entries(entries: Sequence[Mapping], bodies: list[_Body]) -> None:
 
 
 def topology(description: Mapping) -> _Topology:
-    """The moving bodies of a description, numbered (see the module's docstring)."""
+    """The moving bodies of a description, numbered (see the module's docstring); refused
+    where they are no mechanism of one degree of freedom."""
     steps = list(description.get("steps") or [])
-    _refuse_unsupported(steps)
     actuator = _actuator(description)
     fixed = {str(p) for p in (description.get("ground") or {})}
-    links = [list(dict.fromkeys(map(str, link))) for link in description.get("links") or []]
-    drawn = [_Body(joints, rank) for rank, joints in enumerate(links)    # the drawing's links
+    drawn = [_Body(joints, rank) for rank, joints in enumerate(_drawn_links(description))
              if len(joints) >= 2 and set(joints) != set(actuator or ())]
-    implied, lines, crank = _step_groups(steps, actuator, len(drawn))
+    implied, crank = _step_groups(steps, actuator, len(drawn))
     groups = _carry_points(steps, _merge(drawn + implied), fixed)
     groups = [g for g in groups if not set(g.joints) <= fixed]
     for g in groups:
         if len(set(g.joints) & fixed) >= 2:
-            raise ValueError(f"the link {g.joints} is held by two ground points: it cannot move")
+            raise ValueError(f"the link {g.joints} is held by two ground points: it cannot move"
+                             + _turned_by_vector(steps, [g.joints]))
     if crank is not None:          # the group the crank was merged into
         crank = next(g for g in groups if set(crank.joints) <= set(g.joints))
     bodies = ([crank] if crank else []) + [g for g in groups if g is not crank]
-    bodies += [_Body([p], len(drawn) + len(implied), block=True) for p in lines]
+    pairs = _pairs(steps, bodies, fixed)
+    bodies += [p.block for p in pairs]
     for number, body in enumerate(bodies, start=GROUND + 1):
         body.number = number
     _attach_entries(description.get("bodies") or [], bodies)
-    return _Topology(bodies, fixed, crank, actuator, lines)
+    top = _Topology(bodies, fixed, crank, actuator, pairs)
+    _count(top, steps)
+    return top
+
+
+def _count(top: _Topology, steps: Sequence[Mapping]) -> None:
+    """Two unknowns per pin and per guide, one per slot and the effort: as many as the
+    equations, three per moving body, or the links are no mechanism of one degree of
+    freedom."""
+    pins, guides = len(_pins(top)), len(top.pairs)
+    slots = sum(p.slot is not None for p in top.pairs)
+    unknowns, equations = 2 * pins + 2 * guides + slots + 1, 3 * len(top.bodies)
+    if unknowns != equations:
+        raise ValueError(
+            f"{unknowns} unknowns (2 × {pins} pins, 2 × {guides} guides, {slots} slots, the "
+            f"effort) for {equations} equations (3 × {len(top.bodies)} moving bodies: "
+            f"{[b.joints for b in top.bodies]}): the links are no mechanism of one degree of "
+            "freedom" + _turned_by_vector(steps, [b.joints for b in top.bodies]))
 
 
 def _pins(top: _Topology) -> list[tuple[int, _Body, str]]:
@@ -280,7 +421,7 @@ class _Loads:
     forces: list[tuple[_Body, str, tuple[str, str, str]]] = field(default_factory=list)
     torques: list[tuple[_Body, str]] = field(default_factory=list)
     masses: dict[int, tuple[str, str]] = field(default_factory=dict)   # number: (mass, inertia)
-    lines: dict[str, str] = field(default_factory=dict)                # block point: direction
+    lines: dict[tuple[int, str], tuple] = field(default_factory=dict)  # (block, "line"/"slot")
 
     def value(self, formula: object, what: str) -> str:
         if isinstance(formula, bool) or not isinstance(formula, (int, float, str)):
@@ -296,6 +437,10 @@ class _Loads:
             return ("polar", self.value(spec["magnitude"], f"{what}.magnitude"),
                     self.value(spec.get("angle", 0.0), f"{what}.angle"))
         raise ValueError(f"{what} must be [x, y] or {{ magnitude, angle }}")
+
+    def line(self, spec: tuple, what: str) -> tuple:
+        """A pair's line (see _Pair) with its degrees as a key."""
+        return (*spec[:-1], self.value(spec[-1], what)) if spec[0] != "column" else spec
 
     def centre(self, body: _Body, spec: Mapping, what: str) -> str:
         frame = spec.get("frame")
@@ -345,8 +490,11 @@ def _read_loads(description: Mapping, top: _Topology) -> _Loads:
                                   loads.value(load["torque"], f"{what}.torque")))
         else:
             raise ValueError(f"{what}: needs at and force, or body and torque")
-    for point, direction in top.lines.items():
-        loads.lines[point] = loads.value(direction, f"the slider {point}'s direction")
+    for pair in top.pairs:
+        what = f"the sliding pair at {pair.point}"
+        loads.lines[pair.block.number, "line"] = loads.line(pair.line, f"{what}: its line")
+        if pair.slot is not None:
+            loads.lines[pair.block.number, "slot"] = loads.line(pair.slot, f"{what}: its slot")
     return loads
 
 
@@ -384,11 +532,28 @@ class _Rows:
             return np.zeros(self.n), np.zeros(self.n)
         return (self.array(f"{kind}x_{point}") * self.m, self.array(f"{kind}y_{point}") * self.m)
 
-    def angular_acceleration(self, body: _Body) -> np.ndarray:
+    def direction(self, line: tuple) -> tuple[np.ndarray, np.ndarray]:
+        """The unit vector along a pair's line (see _Pair, its degrees evaluated) per row."""
+        if line[0] == "fixed":
+            return _cos_sin(self.array(line[1]))
+        if line[0] == "column":
+            angle = self.array(line[1])
+        else:
+            (ux, uy), (vx, vy) = self.position(line[1]), self.position(line[2])
+            angle = np.arctan2(vy - uy, vx - ux) + np.radians(self.array(line[3]))
+        return np.cos(angle), np.sin(angle)
+
+    def angular_acceleration(self, body: _Body | None) -> np.ndarray:
         """α of a body, from the motion of its first two joints: for r = P1 − P0,
-        Δa = α k×r − ω² r, so α = r×Δa / |r|². A block on a fixed line does not turn."""
-        if body.block:
+        Δa = α k×r − ω² r, so α = r×Δa / |r|². A block turns with its guide (a block on a
+        fixed line, the ground, does not turn); a slide's link as its line's column, whose
+        rates stay defined where its two joints meet (a slide of offset zero)."""
+        if body is None:
             return np.zeros(self.n)
+        if body.block:
+            return self.angular_acceleration(body.guide)
+        if body.spin is not None:
+            return self.array("alpha_" + body.spin)
         (x0, y0), (x1, y1) = self.position(body.joints[0]), self.position(body.joints[1])
         (a0, b0), (a1, b1) = self.rate("a", body.joints[0]), self.rate("a", body.joints[1])
         rx, ry = x1 - x0, y1 - y0
@@ -403,6 +568,19 @@ def _cross(px, py, fx, fy):
     return px * fy - py * fx
 
 
+@dataclass
+class _Reaction:
+    """An unknown force of body i on body j at a point: a pin's, its x and y unknown (cols),
+    or a guide's or a slot's, N along a unit normal (one col), with a guide's couple M."""
+    i: int
+    j: int
+    point: str
+    key: str                                    # F{i}{j}
+    cols: tuple[int, ...]
+    normal: tuple[np.ndarray, np.ndarray] | None = None
+    couple: int | None = None
+
+
 class _System:
     """A·x = b per row: for each moving body its ΣFx, ΣFy and ΣM about its first joint O:
     Σ(unknown loads) = m·a_G − Σ(known loads), the moment with I·α + (G − O)×m·a_G."""
@@ -415,6 +593,7 @@ class _System:
         self.A = np.zeros((rows.n, self.k, self.k))
         self.b = np.zeros((rows.n, self.k))
         self.names: list[str] = []
+        self.reactions: list[_Reaction] = []
         self.effort = ""                # the input's unknown: T12 or F_in
 
     def unknown(self, name: str) -> int:
@@ -431,8 +610,38 @@ class _System:
         self.A[:, r + 1, col] += sign * uy
         self.A[:, r + 2, col] += sign * _cross(px - ox, py - oy, ux, uy)
 
-    def couple(self, body: int, col: int) -> None:     # unknown col is a couple on body
-        self.A[:, self.first[body] + 2, col] += 1.0
+    def couple(self, body: int, col: int, sign: float = 1.0) -> None:
+        """Unknown col is a couple on body."""
+        if body != GROUND:
+            self.A[:, self.first[body] + 2, col] += sign
+
+    def pin(self, i: int, j: int, point: str, key: str) -> None:
+        """The force of body i on body j at the pin joining them, its x and y unknown, and
+        its reaction on i."""
+        cols = self.unknown(key + "x"), self.unknown(key + "y")
+        for col, ux, uy in ((cols[0], 1.0, 0.0), (cols[1], 0.0, 1.0)):
+            self.force(j, col, ux, uy, point)
+            self.force(i, col, ux, uy, point, -1.0)
+        self._add(_Reaction(i, j, point, key, cols))
+
+    def across(self, i: int, j: int, point: str, tail: str, normal, couple: bool) -> None:
+        """A guide's (couple = True) or a slot's force of body i on body j at its point, N
+        along the unit normal (nx, ny); and its reaction on i."""
+        col = self.unknown("N" + tail)
+        self.force(j, col, *normal, point)
+        self.force(i, col, *normal, point, -1.0)
+        moment = None
+        if couple:
+            moment = self.unknown("M" + tail)
+            self.couple(j, moment)
+            self.couple(i, moment, -1.0)
+        self._add(_Reaction(i, j, point, "F" + tail, (col,), normal, moment))
+
+    def _add(self, reaction: _Reaction) -> None:
+        if any(r.key == reaction.key for r in self.reactions):
+            raise ValueError(f"two joints between the bodies {reaction.i} and {reaction.j} "
+                             f"(at {reaction.point} and another): one key {reaction.key}")
+        self.reactions.append(reaction)
 
     def known_force(self, body: int, fx, fy, px, py) -> None:
         r, (ox, oy) = self.first[body], self.origin[body]
@@ -451,24 +660,17 @@ class _System:
         self.b[:, r + 2] += _cross(gx - ox, gy - oy, mass * ax, mass * ay)
 
 
-def _equations(top: _Topology, loads: _Loads, rows: _Rows, pins) -> _System:
-    unknowns = 2 * len(pins) + 2 * sum(b.block for b in top.bodies) + 1
-    if unknowns != 3 * len(top.bodies):
-        raise ValueError(f"{unknowns} unknowns for {3 * len(top.bodies)} equations: the links "
-                         f"{[b.joints for b in top.bodies]} are no mechanism of one degree of "
-                         "freedom (a pin sliding in a slotted link is not supported yet)")
+def _equations(top: _Topology, loads: _Loads, rows: _Rows) -> _System:
     system = _System(top, rows)
-    for i, body, point in pins:                       # the force of i on j, and its reaction
-        x, y = system.unknown("F" + top.pair(i, body.number) + "x"), system.unknown("")
-        for col, ux, uy in ((x, 1.0, 0.0), (y, 0.0, 1.0)):
-            system.force(body.number, col, ux, uy, point)
-            system.force(i, col, ux, uy, point, -1.0)
-    for body in top.bodies:
-        if body.block:                                # the guide: a normal force and a couple
-            c, s = _cos_sin(rows.array(loads.lines[body.joints[0]]))
-            normal = system.unknown("N" + top.pair(GROUND, body.number))
-            system.force(body.number, normal, -s, c, body.joints[0])
-            system.couple(body.number, system.unknown("M" + top.pair(GROUND, body.number)))
+    for i, body, point in _pins(top):
+        system.pin(i, body.number, point, "F" + top.pair(i, body.number))
+    for pair in top.pairs:           # a guide: across its line and a couple; a slot: across it
+        j = pair.block.number
+        sides = [(pair.guide, "line", True)] + [(pair.slotted, "slot", False)] * bool(pair.slot)
+        for other, which, couple in sides:
+            c, s = rows.direction(loads.lines[j, which])
+            i = _number(other)
+            system.across(i, j, pair.point, top.pair(i, j), (-s, c), couple)
     _input_equations(top, system, rows)
     _load_equations(top, loads, rows, system)
     return system
@@ -542,25 +744,25 @@ def _shake(shaking, fx, fy, at):
     return sx - fx, sy - fy, sm - _cross(at[0], at[1], fx, fy)
 
 
-def _report(top: _Topology, loads: _Loads, system: _System, x: np.ndarray) -> dict:
+def _report(top: _Topology, system: _System, x: np.ndarray) -> dict:
     rows, out, joints = system.rows, {}, {}
-    columns = {name: x[:, c] for c, name in enumerate(system.names)}
     shaking = (np.zeros(rows.n), np.zeros(rows.n), np.zeros(rows.n))
-    for c, (i, body, point) in enumerate(_pins(top)):
-        key, fx, fy = "F" + top.pair(i, body.number), x[:, 2 * c], x[:, 2 * c + 1]
-        out[key + "x"], out[key + "y"], out[key], joints[key] = fx, fy, np.hypot(fx, fy), point
-        if i == GROUND:
-            shaking = _shake(shaking, fx, fy, rows.position(point))
-    for body in (b for b in top.bodies if b.block):
-        point, tail = body.joints[0], top.pair(GROUND, body.number)
-        normal, couple = columns["N" + tail], columns["M" + tail]
-        c, s = _cos_sin(rows.array(loads.lines[point]))
-        fx, fy = -s * normal, c * normal
-        out["N" + tail], out["M" + tail], joints["F" + tail] = normal, couple, point
-        out["F" + tail + "x"], out["F" + tail + "y"], out["F" + tail] = fx, fy, np.abs(normal)
-        sx, sy, sm = _shake(shaking, fx, fy, rows.position(point))
-        shaking = sx, sy, sm - couple
-    effort = out[system.effort] = columns[system.effort]
+    for r in system.reactions:
+        if r.normal is None:                            # a pin
+            fx, fy = x[:, r.cols[0]], x[:, r.cols[1]]
+            out[r.key] = np.hypot(fx, fy)
+        else:                                           # a guide or a slot: N across its line
+            normal = out["N" + r.key[1:]] = x[:, r.cols[0]]
+            fx, fy = r.normal[0] * normal, r.normal[1] * normal
+            out[r.key] = np.abs(normal)
+        out[r.key + "x"], out[r.key + "y"], joints[r.key] = fx, fy, r.point
+        couple = np.zeros(rows.n) if r.couple is None else x[:, r.couple]
+        if r.couple is not None:
+            out["M" + r.key[1:]] = couple
+        if r.i == GROUND:
+            sx, sy, sm = _shake(shaking, fx, fy, rows.position(r.point))
+            shaking = sx, sy, sm - couple
+    effort = out[system.effort] = x[:, system.names.index(system.effort)]
     sx, sy, sm = shaking
     if top.crank is not None:
         sm = sm - effort                                # the motor's stator turns the other way
@@ -590,8 +792,9 @@ def forces(description: Mapping, params: Mapping[str, float], angles_deg,
     {parameter symbol: value}, the input's speed and acceleration among them (omega_in and
     alpha_in, or v_in and a_in); length_unit: the template's (mm, cm, m, in, ft).
 
-    Raises ValueError for a description it cannot analyse (a slide or slot step, a body entry
-    naming no link, links that do not make a mechanism of one degree of freedom, ...)."""
+    Raises ValueError for a description it cannot analyse (a body entry naming no link, links
+    that do not make a mechanism of one degree of freedom, a slotted link written with a
+    `vector` step, ...)."""
     if length_unit not in LENGTH_UNITS:
         raise ValueError(f"length_unit must be one of {sorted(LENGTH_UNITS)}")
     rates = _RATES[(description.get("input") or {}).get("kind", "angle")]
@@ -604,6 +807,6 @@ def forces(description: Mapping, params: Mapping[str, float], angles_deg,
     rows = _Rows(solve(loads.described(), params, angles), len(angles),
                  LENGTH_UNITS[length_unit])
     with np.errstate(invalid="ignore", divide="ignore"):
-        system = _equations(top, loads, rows, _pins(top))
+        system = _equations(top, loads, rows)
         x, cond = _solve_rows(system.A, system.b)
-        return {**_report(top, loads, system, x), "cond": cond}
+        return {**_report(top, system, x), "cond": cond}
