@@ -4,23 +4,26 @@ Every moving link with mass feels d'Alembert's inertia force −m·a_G at its ce
 the inertia torque −I_G·α, beside its weight m·g and the loads the description puts on it
 ([mechanism.dynamics], [[mechanism.bodies]], [[mechanism.loads]]: docs/language.md). The steps
 that placed the points forward are solved backward, last first: each loop step's group (a dyad's
-two links, a slider's rod and block) is in equilibrium under the known loads and the reactions
-of the groups solved before it, and its own joint reactions follow in closed form, a 2×2 system
-written out by Cramer's rule whose determinant is zero exactly where the group cannot carry a
-load (a dyad stretched straight, a rod square to its line): there the forces are #N/A. The
-crank comes last: the pivot's reaction and the driving torque T12 (a linear actuator's force
-F_in comes out of the dyad it drives).
+two links, a slider's rod and block, a slide's block and link, a slot's block) is in equilibrium
+under the known loads and the reactions of the groups solved before it, and its own joint
+reactions follow in closed form, written out by Cramer's rule over a determinant that is zero
+exactly where the group cannot carry a load (a dyad stretched straight, a rod square to its
+line): there the forces are #N/A. Each step type's group is solved in its module (steps
+package, `forces`) through the helpers here. The crank comes last: the pivot's reaction and the
+driving torque T12 (a linear actuator's force F_in comes out of the dyad it drives).
 
 Lengths are in the book's unit and accelerations in that unit per s²: the formulas convert them
 to metres with the one named cell `to_metres`; forces are in N and moments in N·m.
 
 Bodies are numbered as the textbook numbers links: the ground 1, the crank 2, then the links in
 the order of the description's `links` entries, then those only the steps make, then the
-sliders' blocks. A pin's force is the force of the lower-numbered body on the higher one,
-F{i}{j} (F{i}_{j} from ten bodies on); at a pin joining three bodies, the one that places the
-pin's point carries it and the others are joined to it. Keys (the force reference's, which
-verify compares with): T12 or F_in; F{i}{j}x, F{i}{j}y, F{i}{j} (its size); a block j's guide
-force N1{j} (along the line turned +90°) as F1{j}x, F1{j}y, F1{j} and its couple M1{j};
+blocks (docs/language.md, "Sliding pairs"). A pin's force is the force of the lower-numbered
+body on the higher one, F{i}{j} (F{i}_{j} from ten bodies on); at a pin joining three bodies,
+the one that places the pin's point carries it and the others are joined to it. Keys (the force
+reference's, which verify compares with): T12 or F_in; F{i}{j}x, F{i}{j}y, F{i}{j} (its size);
+a block j's guide i (1: the ground) force N{i}{j} (along the line turned +90°) as F{i}{j}x,
+F{i}{j}y, F{i}{j} and its couple M{i}{j}; a slot's link i on its block j, N{i}{j} across the
+slot, as F{i}{j}x, F{i}{j}y, F{i}{j};
 shaking_x, shaking_y, shaking, shaking_moment (what the moving links do to the frame, about the
 origin); a centre of mass G{j}: xG{j}, yG{j}, axG{j}, ayG{j}.
 """
@@ -230,64 +233,6 @@ class ForceWriter(BodiesAndLoads):
         sx, sy = self.resultant(s)
         self.outer(s, q, self.neg(sx), self.neg(sy), where)
 
-    def slider(self, n: str, p: str, where: str) -> None:
-        """A slider: the rod u (P–N) pinned at N to the block b on its line, of direction e.
-        With X the pin force of u on b: the block along its line, X·e = −ΣF_b·e; the rod
-        about P, (N−P)×X = M_u(P) — over D = e·(N−P), zero when the rod is square to the
-        line. The guide's force across the line and its couple follow from the block's
-        balance (guided); the rod's pin at P takes X − ΣF_u."""
-        u, blk = self.body(p, n), self.body(n, block=True)
-        self.carrier(n, [u, blk], where)
-        ex, ey = blk.line
-        a = self.arm(n, p)
-        kb = self.resultant(blk)
-        c1 = self.neg(lin((1, mul(kb[0], ex)), (1, mul(kb[1], ey))))
-        c2 = self.moment(u, p)
-        det = self.w.alias(f"_Dforce_{n}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
-        x, y = self.inner(u, blk, n, guard(det, lin((1, mul(c1, a[0])), (-1, mul(ey, c2)))),
-                          guard(det, lin((1, mul(ex, c2)), (1, mul(a[1], c1)))))
-        self.guided(blk, lin((1, x), (1, kb[0])), lin((1, y), (1, kb[1])))
-        self.solved.update({u.number, blk.number})
-        ux, uy = self.resultant(u)
-        self.outer(u, p, lin((1, x), (-1, ux)), lin((1, y), (-1, uy)), where)
-
-    def slide(self, p: str, pivot: str, n: str, where: str) -> None:
-        """A slide: the block b at P slides on the link L (Q–N) turning about Q, along the
-        line e; the guide pushes it with N·n (n = e turned +90°) and the couple M = −M_b(P).
-        L turns about Q under −N·n at P and −M: N·((P−Q)·e) = M_L(Q) + M_b(P), zero when P
-        is at the foot of Q on the line. The block's pin at P takes −N·n − ΣF_b; L's pivot
-        N·n − ΣF_L."""
-        link, blk = self.body(pivot, n), self.body(p, block=True)
-        ex, ey = blk.line
-        a = self.arm(p, pivot)
-        det = self.w.alias(f"_Dforce_{p}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
-        normal = self.guide_normal(link, blk, guard(det, lin((1, self.moment(link, pivot)),
-                                                            (1, self.moment(blk, p)))))
-        nx, ny = self.neg(mul(ey, normal)), mul(ex, normal)
-        kb, kl = self.resultant(blk), self.resultant(link)
-        self.guide_columns(link, blk, normal, nx, ny)
-        self.solved.update({link.number, blk.number})
-        self.outer(link, pivot, lin((1, nx), (-1, kl[0])), lin((1, ny), (-1, kl[1])), where)
-        self.outer(blk, p, lin((-1, nx), (-1, kb[0])), lin((-1, ny), (-1, kb[1])), where)
-
-    def slot(self, n: str, frame: tuple[str, str], slot: tuple[str, str], where: str) -> None:
-        """A slot: the block b at N on its fixed line e, its pin N in the slot (direction u)
-        of the link S. S pushes the pin across the slot, λ·m (m = u turned +90°): along the
-        line, λ·(m·e) = −ΣF_b·e, zero when the slot is parallel to the line; the guide takes
-        the rest across the line (guided). S feels −λ·m at N."""
-        blk, link = self.body(n, block=True), self.body(*frame)
-        ex, ey = blk.line
-        ux, uy = slot
-        kb = self.resultant(blk)
-        det = self.w.alias(f"_Dforce_{n}", lin((1, mul(ux, ey)), (-1, mul(uy, ex))))
-        lam = self.guide_normal(link, blk, guard(det, self.neg(lin((1, mul(kb[0], ex)),
-                                                                  (1, mul(kb[1], ey))))),
-                                "across the slot")
-        mx, my = self.neg(mul(uy, lam)), mul(ux, lam)
-        self.guide_columns(link, blk, lam, mx, my, couple=False)
-        self.guided(blk, lin((1, mx), (1, kb[0])), lin((1, my), (1, kb[1])))
-        self.solved.add(blk.number)
-
     def guided(self, blk: Body, fx: str, fy: str) -> None:
         """The block's guide takes what (fx, fy) leaves across its line: N = −(fx, fy)·n, and
         the couple M = −M_b(point); as columns, and on the guide with the opposite sign."""
@@ -323,9 +268,9 @@ class ForceWriter(BodiesAndLoads):
         self.add(f"F{tail}", f"F{tail}", NEWTON, f"ABS({normal})",
                  f"{what} on block {blk.number}, size", (3, blk.number))
         m = None
-        if couple and blk.couples:
+        if couple and blk.couples:     # the block's own couples: #N/A where its place is
             m = self.add(f"M{tail}", f"M{tail}", NEWTON_METRE,
-                         self.neg(lin(*((1, c) for c in blk.couples))),
+                         _na_with(self.neg(lin(*((1, c) for c in blk.couples))), normal),
                          f"{what}'s couple on block {blk.number}", (3, blk.number))
         if guide is None:
             self.guides.append((gx, gy, point))
@@ -390,7 +335,12 @@ def _reaction(text: str) -> str:
 
 def _or_na(text: str, witness: str) -> str:
     """A component zero by construction (a horizontal guide's x) is #N/A where `witness` is."""
-    return f"IF(ISNUMBER({witness}),0,NA())" if text == ZERO else text
+    return _na_with(text, witness) if text == ZERO else text
+
+
+def _na_with(text: str, witness: str) -> str:
+    """text, but #N/A where `witness` is (a value that reads nothing of the row's position)."""
+    return f"IF(ISNUMBER({witness}),{text},NA())"
 
 
 __all__ = ["FORCE", "TO_METRES", "ForceWriter"]

@@ -93,8 +93,24 @@ def rates(w, rec: dict) -> None:
 
 
 def forces(w, rec: dict) -> None:
-    """The block at P and the link it slides on."""
-    w.slide(rec["p"], rec["pivot"], rec["point"], rec["field"])
+    """The block b at P slides on the link L (Q–N) turning about Q, along the line e, through
+    the force writer `w`: the guide pushes it with N·n (n = e turned +90°) and the couple
+    M = −M_b(P). L turns about Q under −N·n at P and −M: N·((P−Q)·e) = M_L(Q) + M_b(P), zero
+    when P is at the foot of Q on the line. The block's pin at P takes −N·n − ΣF_b; L's pivot
+    N·n − ΣF_L."""
+    p, pivot, n, where = rec["p"], rec["pivot"], rec["point"], rec["field"]
+    link, blk = w.body(pivot, n), w.body(p, block=True)
+    ex, ey = blk.line
+    a = w.arm(p, pivot)
+    det = w.w.alias(f"_Dforce_{p}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
+    normal = w.guide_normal(link, blk, guard(det, lin((1, w.moment(link, pivot)),
+                                                      (1, w.moment(blk, p)))))
+    nx, ny = w.neg(mul(ey, normal)), mul(ex, normal)
+    kb, kl = w.resultant(blk), w.resultant(link)
+    w.guide_columns(link, blk, normal, nx, ny)
+    w.solved.update({link.number, blk.number})
+    w.outer(link, pivot, lin((1, nx), (-1, kl[0])), lin((1, ny), (-1, kl[1])), where)
+    w.outer(blk, p, lin((-1, nx), (-1, kb[0])), lin((-1, ny), (-1, kb[1])), where)
 
 
 STEP = StepType(schema_keys("slide"), place, rates, fixed({"offset": 1}), forces)

@@ -130,8 +130,26 @@ def rates(w, rec: dict) -> None:
 
 
 def forces(w, rec: dict) -> None:
-    """The rod and the block on its line."""
-    w.slider(rec["point"], rec["p"], rec["field"])
+    """The rod u (P–N) pinned at N to the block b on its line, of direction e, through the
+    force writer `w`. With X the pin force of u on b: the block along its line,
+    X·e = −ΣF_b·e; the rod about P, (N−P)×X = M_u(P) — over D = e·(N−P), zero when the rod is
+    square to the line. The guide's force across the line and its couple follow from the
+    block's balance (guided); the rod's pin at P takes X − ΣF_u."""
+    n, p, where = rec["point"], rec["p"], rec["field"]
+    u, blk = w.body(p, n), w.body(n, block=True)
+    w.carrier(n, [u, blk], where)
+    ex, ey = blk.line
+    a = w.arm(n, p)
+    kb = w.resultant(blk)
+    c1 = w.neg(lin((1, mul(kb[0], ex)), (1, mul(kb[1], ey))))
+    c2 = w.moment(u, p)
+    det = w.w.alias(f"_Dforce_{n}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
+    x, y = w.inner(u, blk, n, guard(det, lin((1, mul(c1, a[0])), (-1, mul(ey, c2)))),
+                   guard(det, lin((1, mul(ex, c2)), (1, mul(a[1], c1)))))
+    w.guided(blk, lin((1, x), (1, kb[0])), lin((1, y), (1, kb[1])))
+    w.solved.update({u.number, blk.number})
+    ux, uy = w.resultant(u)
+    w.outer(u, p, lin((1, x), (-1, ux)), lin((1, y), (-1, uy)), where)
 
 
 STEP = StepType(schema_keys("slider"), place, rates, fixed({"length": 1, "direction": 0}),

@@ -79,8 +79,23 @@ def rates(w, rec: dict) -> None:
 
 
 def forces(w, rec: dict) -> None:
-    """The block on the fixed line, its pin pushed across the slot."""
-    w.slot(rec["point"], rec["frame"], rec["slot_dir"], rec["field"])
+    """The block b at N on its fixed line e, its pin N in the slot (direction u) of the link S,
+    through the force writer `w`. S pushes the pin across the slot, λ·m (m = u turned +90°):
+    along the line, λ·(m·e) = −ΣF_b·e, zero when the slot is parallel to the line; the guide
+    takes the rest across the line (guided). S feels −λ·m at N."""
+    n = rec["point"]
+    blk, link = w.body(n, block=True), w.body(*rec["frame"])
+    ex, ey = blk.line
+    ux, uy = rec["slot_dir"]
+    kb = w.resultant(blk)
+    det = w.w.alias(f"_Dforce_{n}", lin((1, mul(ux, ey)), (-1, mul(uy, ex))))
+    lam = w.guide_normal(link, blk, guard(det, w.neg(lin((1, mul(kb[0], ex)),
+                                                         (1, mul(kb[1], ey))))),
+                         "across the slot")
+    mx, my = w.neg(mul(uy, lam)), mul(ux, lam)
+    w.guide_columns(link, blk, lam, mx, my, couple=False)
+    w.guided(blk, lin((1, mx), (1, kb[0])), lin((1, my), (1, kb[1])))
+    w.solved.add(blk.number)
 
 
 STEP = StepType(schema_keys("slot"), place, rates, fixed({"direction": 0, "slot_angle": 0}),

@@ -45,7 +45,7 @@ class StepType:
         through the motion writer `w` (motion.MotionWriter: vel, acc, rel, rate, point,
         link_rates, determinant); None for a step that records nothing.
     forces(w, record): solves the step's group for its joint reactions, through the force
-        writer `w` (forces.ForceWriter: two_links, slider, slide, slot, crank, actuated), the
+        writer `w` (forces.ForceWriter: its helpers, and two_links, crank, actuated), the
         steps being solved from the last back to the first; None for a step that places no
         link (a point carried by one, a column of the user's).
     dimensions(step): the power of length of each key that takes an expression (a length 1,
