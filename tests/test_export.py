@@ -110,11 +110,12 @@ def test_text_read_as_a_formula_is_prefixed(tmp_path, text):
 
 
 def test_every_table_sheet_of_the_pump(tmp_path):
-    """The grid's two header rows and its stroke row; the stroke sweep's header of s1 values."""
+    """The grid's two header rows and its stroke row; the stroke sweep's header of s1 values
+    (beside the sweep, its motion and, the pump having masses and a load, its forces)."""
     b, values = built("pump")
     book = Book("pump.xlsx", b.workbook, b.record, values)
     found = tables(book)
-    assert [t.sheet for t in found] == ["Sweep", "Motion", "Grid", "Stroke sweep"]
+    assert [t.sheet for t in found] == ["Sweep", "Motion", "Forces", "Grid", "Stroke sweep"]
     grid = next(t for t in found if t.sheet == "Grid")
     lines = list(csv.reader(table_text(book, grid).splitlines()))
     ws = b.workbook["Grid"]

@@ -219,6 +219,9 @@ def test_a_book_record_with_such_a_key_is_refused_too(what, keys, message):
 @pytest.mark.parametrize("kind,unit,value,message", [
     ("mass", "kg", -1.0, "parameters.m9.value: must be zero or more (got -1.0)"),
     ("inertia", "kg·m²", -1e-3, "parameters.m9.value: must be zero or more"),
+    ("torque", "N·m", 2.2250738585072014e-308,
+     "parameters.m9.value: must be 0 or from 1e-15 to 1e+15 either way (got 2.22"),
+    ("force", "N", -3e15, "parameters.m9.value: must be 0 or from 1e-15 to 1e+15 either way"),
     ("mass", "g", 1.0, "parameters.m9.unit: must be kg for a mass parameter"),
     ("inertia", "kg*m^2", 1.0, "must be kg·m² for an inertia parameter"),
     ("force", "kN", 1.0, "must be N for a force parameter"),

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .excel import (PRODUCT, SUM, ZERO, Expr, angle_of_triangle_or_na, lin, mul, plus, radians,
-                    sq, turned)
+from .excel import (PRODUCT, SUM, ZERO, Expr, angle_of_triangle_or_na, lin, minus, mul, plus,
+                    radians, sq, turned)
 from .expressions import expression
 from .fields import as_table
 from .model import ACCEL, LENGTH, DescriptionError
@@ -218,9 +218,9 @@ class BodiesAndLoads:
             raise DescriptionError(f"{where}.centre.frame", f"must be two joints of the link "
                                                             f"{body.joints}")
         a, b = map(str, frame)
-        theta = self.c.angle_of(a, b)
-        (axp, ayp) = self.c.points[a]
         name = f"G{body.number}"
+        theta = self._frame_angle(name, a, b)
+        (axp, ayp) = self.c.points[a]
         if "local" in spec:
             u, v = (self.expression(f"{where}.centre.local[{i}]", spec["local"][i], True)
                     .at_least(PRODUCT) for i in (0, 1))
@@ -251,6 +251,18 @@ class BodiesAndLoads:
                       lin((1, aay), (1, mul(alpha, rx)), (-1, mul(w2, ry))),
                       f"acceleration of G{body.number}, y", (0, body.number))
         return name, (ax, ay)
+
+    def _frame_angle(self, name: str, a: str, b: str) -> Expr:
+        """angle(A→B) of a centre's frame: a link's angle column, else ATAN2 of the points,
+        #N/A where they meet (a slide's link of offset 0 has its point on its pivot), not
+        ATAN2(0, 0)'s #DIV/0! (or LibreOffice's 0)."""
+        theta = self.c.angle_of(a, b)
+        if any(pair in self.c.rigid for pair in ((a, b), (b, a))):
+            return theta
+        (ax, ay), (bx, by) = self.c.points[a], self.c.points[b]
+        dx, dy = minus(bx, ax).at_least(SUM), minus(by, ay).at_least(SUM)
+        return Expr(self.w.alias(f"_{name}_frame",
+                                 f"IF(AND({dx}=0,{dy}=0),NA(),{theta.text})"))
 
     def _by_distances(self, where: str, spec: dict, name: str, a: str, b: str, theta: Expr
                       ) -> tuple[str, str]:
