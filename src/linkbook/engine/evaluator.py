@@ -78,6 +78,7 @@ from .errors import CircularReferenceError, EngineError, UnsupportedFormulaError
 from .groups import Group, Grouper, Member
 from .order import cell_order, closure, found_in, group_deps, untangled_components
 from .plan import Planner
+from .running import running_sum_input
 from .references import (RefDesc, References, cell_name, cells_read, formula_shape,
                          sheet_prefix)
 from .vector import VECTOR_SAFE, Batch
@@ -323,6 +324,8 @@ class Engine:
             for i in range(len(g.members)):
                 self._evaluate_cell(g, i)
             return
+        if len(component) == 1 and self._evaluate_running_sum(self.groups[component[0]]):
+            return
         for gid, i in cell_order(self.groups, set(component), self.owner, self.member,
                                  self.stats):
             self._evaluate_cell(self.groups[gid], i)
@@ -340,6 +343,39 @@ class Engine:
             self.stats["vector_fallbacks"] += 1
             return False
         self.grid[g.sheet][g.rows, g.cols] = values
+        return True
+
+    def _evaluate_running_sum(self, g: Group) -> bool:
+        """A running sum (running.py): its terms in one vector call, then each cell the cell
+        above plus its term, in row order; a cell whose sum is not a plain finite number (an
+        error above or in its term, a blank) by the cell path. False: not a running sum."""
+        k = running_sum_input(g)
+        if k is None:
+            return False
+        n = len(g.members)
+        args = []
+        for j, d in enumerate(g.inputs):
+            if j == k:
+                zeros = np.empty((n, 1), dtype=object)
+                zeros.fill(0.0)
+                args.append(zeros)
+                continue
+            r1, c1, _, _ = d.at(g.rows, g.cols)
+            rows, cols = np.broadcast_arrays(r1, c1, g.rows)[:2]
+            args.append(self.grid[d.sheet][rows, cols].reshape(n, 1))
+        terms = _per_row(g.func, g.batch, args, n, True)
+        if terms is None:
+            return False
+        grid = self.grid[g.sheet]
+        for i in np.argsort(g.rows, kind="stable").tolist():
+            m = g.members[i]
+            above, term = grid[m.row - 1, m.col], terms[i]
+            total = above + term if _plain(above) and _plain(term) else None
+            if total is not None and np.isfinite(total):
+                grid[m.row, m.col] = total
+            else:
+                self._evaluate_cell(g, i)
+        self.stats["running_sums"] = self.stats.get("running_sums", 0) + 1
         return True
 
     def _evaluate_cell(self, g: Group, i: int):
@@ -382,6 +418,11 @@ class Engine:
             for m in g.members:
                 out[(g.sheet, cell_name(m.row, m.col))] = public_value(grid[m.row, m.col], True)
         return out
+
+
+def _plain(value) -> bool:
+    """A number as a cell holds one (not a bool, an error, a blank or text)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
 def _per_row(func, batch: Batch, args: list, n: int, takes_inputs: bool) -> np.ndarray | None:
