@@ -126,6 +126,10 @@ TOML_CASES = [
      "mine.toml: parameters.m4.unit: must be kg for a mass parameter in a book of mm (got 'g')"),
     ("a negative mass", FOURBAR_TOML.replace('value = 0.02198', 'value = -0.02198'),
      "mine.toml: parameters.m4.value: must be zero or more (got -0.02198)"),
+    ("a torque written near the least double", FOURBAR_TOML.replace('torque = "T4"',
+                                                                    'torque = 2.2e-308'),
+     "mine.toml: mechanism.loads[0].torque: must be 0 or from 1e-30 to 1e+30 either way "
+     "(got 2.2e-308)"),
     ("gravity misspelt", FOURBAR_TOML.replace('gravity = { g = "g" }', 'gravity = { G = "g" }'),
      "mine.toml: mechanism.dynamics.gravity: unknown key 'G'; known: angle, g"),
     ("parameter not a table", FOURBAR_TOML.replace(

@@ -656,14 +656,16 @@ def test_aggregates_over_ranges_in_a_book_match_excel_model(tmp_path):
 
 def test_running_sums_are_summed_as_the_cells_add():
     """A column that is the cell above plus a term (the Forces sheet's work column) is summed
-    in one pass over its terms; every cell must be what the per-cell path gives, bit for bit:
-    with terms over many scales, an #N/A and a #DIV/0! in the chain, text above the first
-    cell, and shapes that are not one addend (`above + a - b`, a comparison), left to the
-    cell path."""
+    in one pass over its terms; every cell must be what the per-cell path gives, bit for bit
+    (the sign of a zero too): with terms over many scales, an #N/A and a #DIV/0! in the chain,
+    text above the first cell, a chain of negative zeros, and shapes that are no running sum,
+    left to the cell path: `above + a - b`, a comparison, a term that reads the cell above
+    again, two columns of one shape each reading the other."""
     rng = np.random.default_rng(7)
     wb = openpyxl.Workbook()
     ws = wb.active
     ws["C1"], ws["D1"], ws["E1"], ws["F1"], ws["G1"] = 0, 0.5, "W", -1e-300, 0
+    ws["H1"], ws["I1"], ws["J1"], ws["K1"], ws["M1"] = 1.5, -2.0, 1.0, 3.0, -0.0
     for r in range(2, 400):
         ws[f"A{r}"] = float(rng.normal() * 10.0 ** rng.integers(-12, 12))
         ws[f"B{r}"] = "=NA()" if r == 150 else float(rng.normal())
@@ -672,11 +674,20 @@ def test_running_sums_are_summed_as_the_cells_add():
         ws[f"E{r}"] = f"=E{r - 1}+A{r}*2"
         ws[f"F{r}"] = f"=F{r - 1}+1/(B{r}-B{r})" if r == 300 else f"=F{r - 1}+A{r}/3"
         ws[f"G{r}"] = f"=G{r - 1}+A{r}>0"
+        ws[f"H{r}"] = f"=H{r - 1}+H{r - 1}*0.5"
+        ws[f"I{r}"] = f"=I{r - 1}+(I{r - 1}+A{r})"
+        ws[f"J{r}"] = f"=J{r - 1}+K{r}"           # J and K: one shape, J's term is K's cell
+        ws[f"K{r}"] = f"=K{r - 1}+L{r}"
+        ws[f"L{r}"] = 0.25 * r
+        ws[f"M{r}"] = f"=M{r - 1}+(-0)*A{r}"       # -0.0 + -0.0 stays -0.0
     vector = engine.Engine(wb)
     got = vector.run()
     want = engine.Engine(wb, vectorize=False).run()
-    assert vector.stats.get("running_sums", 0) >= 2          # C and E at least
+    assert vector.stats["running_sums"] >= 3          # C, E and M at least
     assert set(got) == set(want)
     assert_as_per_cell(got, want)
+    for key, w in want.items():                       # == does not see the sign of a zero
+        if isinstance(w, float) and w == 0:
+            assert math.copysign(1.0, got[key]) == math.copysign(1.0, w), key
     assert engine.error_code(got[("Sheet", "C399")]) == "#N/A"
     assert engine.error_code(got[("Sheet", "E2")]) == "#VALUE!"

@@ -24,6 +24,11 @@ from .forces import LENGTH_UNITS, SINGULAR, forces
 from .context import motion_rates
 
 GRAVITY_SCALE = 10.0     # m/s²: the weight's share of the scale (gravity or not)
+# The least scale, in N: a book's force below about 1e-154 N has a square that underflows (its
+# size SQRT(x²+y²) reads 0), which the reference, scaling its equations, does not; the domain
+# keeps the loads' parameters and numbers from 1e-30 up, but an expression may still make a load
+# that small (T3*1e-300). Forces far below this are judged as the zero they nearly are.
+FORCE_FLOOR = 1e-140
 # A guide's couple a book must show: one beyond a thousand times a moment's bound somewhere in
 # the sweep (a block with no couple to carry has M = 0, the reference's to rounding).
 COUPLE_SHOWN = 1e-9
@@ -35,7 +40,7 @@ def force_scale(j, ref: dict, metres: float, rate2: float) -> float:
     mass = sum(abs(v) for s, v in j.params.items() if kinds.get(s) == "mass")
     largest = [np.nanmax(np.abs(v)) for k, v in ref.items()
                if k.startswith(("F", "N")) and isinstance(v, np.ndarray) and np.isfinite(v).any()]
-    return max(mass * (j.size * metres * rate2 + GRAVITY_SCALE), *largest, 1e-300)
+    return max(mass * (j.size * metres * rate2 + GRAVITY_SCALE), *largest, FORCE_FLOOR)
 
 
 def check_forces(j) -> None:

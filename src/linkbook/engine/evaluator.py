@@ -26,7 +26,9 @@ Method
    grouped only when a needed group reads it.
 3. *Order.* A group depends on the groups owning the cells it reads.  Groups are evaluated in
    topological order of their strongly connected components; a group that reads itself (a running
-   column) or a cycle of groups is evaluated cell by cell in cell-level topological order.
+   column) or a cycle of groups is evaluated cell by cell in cell-level topological order, but
+   for a running sum (running.py: each cell the cell above plus a term), whose terms are one
+   vector call and whose sum runs down the rows.
 4. *Modes.*
    - ``vector``: single-cell inputs only, functions from ELEMENTWISE and ROW_BY_ROW only.  The
      function is called once with an (n, 1) object array per input.  Each node of the compiled
@@ -59,7 +61,8 @@ that reads itself through ranges (``=SUM($C$5:C7)`` in column C) costs O(n^2) to
 Modules of the engine: references (what a formula reads: descriptors, shapes, the lexer),
 adapter (the one place that touches `formulas`' internals: its tokenizer, compiled pipes,
 ExcelModel), vector (vector calls), groups (cells into groups of one shape), plan (each group's
-mode and compiled function), order (the order of evaluation), grammar (the fast parser), and
+mode and compiled function), order (the order of evaluation), running (running sums), grammar
+(the fast parser), and
 this one: the public entry points and the Engine that runs the steps above.
 """
 
@@ -158,7 +161,8 @@ class Engine:
         self.member: dict[str, np.ndarray] = {}
         self.stats = dict(formula_cells=0, shapes=0, compiled=0, reused=0, vector_groups=0,
                           cell_groups=0, each_groups=0, cyclic_cells=0, tokenized_cells=0,
-                          vector_fallbacks=0, row_by_row_nodes=0, split_groups=0)
+                          vector_fallbacks=0, row_by_row_nodes=0, split_groups=0,
+                          running_sums=0)
         self.planner = Planner(self.refs, self.stats, vectorize)
 
     # ---- pipeline
@@ -330,15 +334,26 @@ class Engine:
                                  self.stats):
             self._evaluate_cell(self.groups[gid], i)
 
-    def _evaluate_vector(self, g: Group) -> bool:
-        """One call for the whole group; False (nothing stored) if the result is not per row."""
+    def _vector_args(self, g: Group, replaced: int | None = None, by=None) -> list:
+        """Each input's cells for every member, an (n, 1) object array; input `replaced` holds
+        `by` in every row instead."""
         n = len(g.members)
         args = []
-        for d in g.inputs:
+        for k, d in enumerate(g.inputs):
+            if k == replaced:
+                column = np.empty((n, 1), dtype=object)
+                column.fill(by)
+                args.append(column)
+                continue
             r1, c1, _, _ = d.at(g.rows, g.cols)
             rows, cols = np.broadcast_arrays(r1, c1, g.rows)[:2]  # absolute refs: one cell, n times
             args.append(self.grid[d.sheet][rows, cols].reshape(n, 1))
-        values = _per_row(g.func, g.batch, args, n, bool(g.inputs))
+        return args
+
+    def _evaluate_vector(self, g: Group) -> bool:
+        """One call for the whole group; False (nothing stored) if the result is not per row."""
+        n = len(g.members)
+        values = _per_row(g.func, g.batch, self._vector_args(g), n, bool(g.inputs))
         if values is None:
             self.stats["vector_fallbacks"] += 1
             return False
@@ -352,18 +367,7 @@ class Engine:
         k = running_sum_input(g)
         if k is None:
             return False
-        n = len(g.members)
-        args = []
-        for j, d in enumerate(g.inputs):
-            if j == k:
-                zeros = np.empty((n, 1), dtype=object)
-                zeros.fill(0.0)
-                args.append(zeros)
-                continue
-            r1, c1, _, _ = d.at(g.rows, g.cols)
-            rows, cols = np.broadcast_arrays(r1, c1, g.rows)[:2]
-            args.append(self.grid[d.sheet][rows, cols].reshape(n, 1))
-        terms = _per_row(g.func, g.batch, args, n, True)
+        terms = _per_row(g.func, g.batch, self._vector_args(g, k, -0.0), len(g.members), True)
         if terms is None:
             return False
         grid = self.grid[g.sheet]
@@ -375,7 +379,7 @@ class Engine:
                 grid[m.row, m.col] = total
             else:
                 self._evaluate_cell(g, i)
-        self.stats["running_sums"] = self.stats.get("running_sums", 0) + 1
+        self.stats["running_sums"] += 1
         return True
 
     def _evaluate_cell(self, g: Group, i: int):

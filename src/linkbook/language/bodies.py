@@ -133,9 +133,8 @@ class BodiesAndLoads:
                 else:
                     raise DescriptionError(rec["field"], f"force analysis: the point "
                                                          f"{rec['point']} is carried by "
-                                                         f"{a}→{b}, which is no rigid link "
-                                                         "(a slotted link turned by a vector "
-                                                         "step: write it as a slide step)")
+                                                         f"{a}→{b}, which is no rigid link"
+                                                         f"{self._vector_hint(a, b)}")
         groups = [g for g in _merged(groups) if not set(g.joints) <= fixed]
         self.fixed = fixed
         crank = next((g for g in groups if self.crank_joints and
@@ -147,15 +146,23 @@ class BodiesAndLoads:
             b.number = number
         return bodies
 
+    def _vector_hint(self, a: str, b: str) -> str:
+        """Where a vector step measures the frame a→b (a slotted link written as the direction
+        from its pivot to a pin), how to make it a link."""
+        if any(rec["type"] == "vector" and {rec["from"], rec["to"]} == {a, b}
+               for rec in self.c.records):
+            return " (a slotted link turned by a vector step: write it as a slide step)"
+        return ""
+
     def _block(self, rec: dict) -> Body:
         """The block a sliding step makes: its point, its guide, its line and its spin."""
         if rec["type"] == "slide":       # the block at P on the slide's link
             return Body([rec["p"]], 0, block=True, guide=(rec["pivot"], rec["point"]),
                         line=rec["direction"], spin=self.w.links[(rec["point"], rec["p"])])
-        if rec["type"] == "slider" and rec["along"]:
+        if rec["type"] == "slider" and rec["along"] and not set(rec["along"]) <= self.fixed:
             return Body([rec["point"]], 0, block=True, guide=tuple(rec["along"]),
                         line=rec["direction"], spin=self.w.link_rates(*rec["along"]))
-        return Body([rec["point"]], 0, block=True, line=rec["direction"])
+        return Body([rec["point"]], 0, block=True, line=rec["direction"])   # on the ground
 
     def _entry_body(self, k: int, entry: dict) -> Body:
         where = f"{self.field}.bodies[{k}]"
@@ -166,8 +173,9 @@ class BodiesAndLoads:
                   len(set(joints)) > 1 and set(joints) <= set(b.joints))]
         if len(found) != 1:
             raise DescriptionError(f"{where}.joints", f"{joints} is no moving link of the "
-                                                      "steps and links (a slider's block: "
-                                                      "[point] with block = true)")
+                                                      "steps and links (a block, a slider's, "
+                                                      "a slide's or a slot's: [point] with "
+                                                      "block = true)")
         return found[0]
 
     def _masses(self) -> None:

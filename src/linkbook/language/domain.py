@@ -15,8 +15,9 @@ was 2.65 mm apart between the workbook and the reference). That stays within the
 S/ℓ ≤ 4500; 1e3 keeps a margin of 4.5. (1e9, the bound before, let r2 = 1e9 beside r1 = 60
 build and then fail its own verify.)
 
-Loads. A mass, an inertia, a force, a torque or gravity is 0 or from 1e-15 to 1e15 of its unit
-either way (LOAD_RANGE). The force formulas multiply them by lengths in metres (down to 1e-9 m)
+Loads. A mass, an inertia, a force, a torque or gravity is 0 or from 1e-30 to 1e30 of its unit
+either way (LOAD_RANGE): the inertia of a part far below a millimetre fits, and no product of a
+few of them with the lengths and rates under- or overflows a double. The force formulas multiply them by lengths in metres (down to 1e-9 m)
 and by the rates, so a value near the least double (1e-308) underflows to 0 in the book where the
 reference, which scales its equations first, still finds a force: a torque of 2.2e-308 N·m made a
 pin force of 4e-307 N that the book showed as 0.
@@ -39,7 +40,7 @@ LENGTH_RANGE = (1e-6, 1e9)       # a length; an offset may also be 0 (or up to 1
 RATE_LIMIT = 1e9                 # |ω|, |α|, |v|, |a| of the input
 LENGTH_SPAN = 1e3                # the mechanism's extent over its smallest length (see above)
 INPUT_ANGLE_LIMIT = 3600.0       # degrees either way: the sweep and the current position
-LOAD_RANGE = (1e-15, 1e15)       # a mass, inertia, force, torque or gravity, if not 0 (above)
+LOAD_RANGE = (1e-30, 1e30)       # a mass, inertia, force, torque or gravity, if not 0 (above)
 BRANCH_WORDS = {"open": 1.0, "crossed": -1.0}
 # The length units a book may have, in metres: one per mechanism (the template's length_unit).
 LENGTH_UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}

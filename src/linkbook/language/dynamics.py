@@ -9,7 +9,9 @@ book built from a description with these keys is the book built without them.
 """
 from __future__ import annotations
 
+from ..base.errors import InputError
 from .bodies import METRES
+from .domain import check_value
 from .expressions import expression
 from .mechanisms import BRANCH_KIND
 from .model import DescriptionError
@@ -38,7 +40,8 @@ def check_dynamics(c, data: dict, steps_keys: set[str]) -> None:
     if gravity is not None:
         for k in ("g", "angle"):
             if k in gravity:
-                expression(f"{field}.dynamics.gravity.{k}", gravity[k], constant)
+                _value(f"{field}.dynamics.gravity.{k}", gravity[k], constant,
+                       "acceleration" if k == "g" else None)
     for i, body in enumerate(data.get("bodies") or []):
         _check_body(c, f"{field}.bodies[{i}]", body, known)
     for i, load in enumerate(data.get("loads") or []):
@@ -62,10 +65,9 @@ def _points(c, field: str, names: list) -> list[str]:
 
 
 def _block_points(c) -> set[str]:
-    """The points blocks slide with: a slider's and a slot's point, a slide's p."""
-    steps = c.data["steps"]
-    return ({s.get("point") for s in steps if s.get("type") in ("slider", "slot")}
-            | {s.get("p") for s in steps if s.get("type") == "slide"})
+    """The points blocks slide with (a slider's and a slot's point, a slide's p), as the steps
+    placed them."""
+    return {b.point for b in c.model.blocks}
 
 
 def _check_body(c, field: str, body: dict, known: set[str]) -> None:
@@ -87,7 +89,7 @@ def _check_body(c, field: str, body: dict, known: set[str]) -> None:
                                                       "centre")
     for k in ("mass", "inertia"):
         if k in body:
-            expression(f"{field}.{k}", body[k], known)
+            _value(f"{field}.{k}", body[k], known, k)
     if "centre" in body:
         _check_centre(c, f"{field}.centre", body["centre"], joints, set(c.symbols) | {METRES})
 
@@ -127,10 +129,23 @@ def _check_load(c, field: str, load: dict, known: set[str]) -> None:
     force = load.get("force")
     if isinstance(force, list):
         for i, value in enumerate(force):
-            expression(f"{field}.force[{i}]", value, known)
+            _value(f"{field}.force[{i}]", value, known, "force")
     elif isinstance(force, dict):
         for k in ("magnitude", "angle"):
             if k in force:
-                expression(f"{field}.force.{k}", force[k], known)
+                _value(f"{field}.force.{k}", force[k], known, "force" if k == "magnitude"
+                       else None)
     if "torque" in load:
-        expression(f"{field}.torque", load["torque"], known)
+        _value(f"{field}.torque", load["torque"], known, "torque")
+
+
+def _value(field: str, raw: object, known: set[str], kind: str | None) -> None:
+    """An expression of what `known` names; a number written as it is in the domain of its
+    kind, as a parameter's value is (domain.check_value: a load near the least double is
+    refused)."""
+    expression(field, raw, known)
+    if kind is not None and isinstance(raw, (int, float)) and not isinstance(raw, bool):
+        try:
+            check_value(field, kind, raw)
+        except InputError as exc:
+            raise DescriptionError(field, str(exc)[len(exc.field) + 2:]) from None

@@ -157,7 +157,7 @@ class ForceWriter(BodiesAndLoads):
         ground at a ground point): a pin force column, and its reaction on the other link."""
         if point in self.fixed:
             self.force_columns(f"F{self.pair(GROUND, body.number)}", fx, fy,
-                               f"ground on link {body.number} at {point}", (GROUND, body.number))
+                               f"ground on {_named(body)} at {point}", (GROUND, body.number))
             return
         other = self.first_holder(point)
         if other is body:
@@ -177,11 +177,11 @@ class ForceWriter(BodiesAndLoads):
         """The pin force of `first` on `second` at `point`, as columns named for the pair."""
         if first.number < second.number:
             return self.force_columns(f"F{self.pair(first.number, second.number)}", fx, fy,
-                                      f"link {first.number} on link {second.number} at {point}",
+                                      f"{_named(first)} on {_named(second)} at {point}",
                                       (first.number, second.number))
         x, y = self.force_columns(f"F{self.pair(second.number, first.number)}", self.neg(fx),
                                   self.neg(fy),
-                                  f"link {second.number} on link {first.number} at {point}",
+                                  f"{_named(second)} on {_named(first)} at {point}",
                                   (second.number, first.number))
         return self.neg(x), self.neg(y)
 
@@ -301,7 +301,7 @@ class ForceWriter(BodiesAndLoads):
         guides, the actuator's base) and their moments about the origin, with the motor's."""
         keys = {b.number: f"F{self.pair(GROUND, b.number)}" for b in self.bodies}
         ground = [(f"{{{keys[b.number]}x}}", f"{{{keys[b.number]}y}}", p)
-                  for b in self.bodies if not b.block for p in b.joints if p in self.fixed]
+                  for b in self.bodies for p in b.joints if p in self.fixed]
         ground += self.guides
         if self.actuator_force is not None:
             fx, fy, end = self.actuator_force
@@ -319,6 +319,11 @@ class ForceWriter(BodiesAndLoads):
             moments.append((-1, f"{{{self.effort}}}"))
         self.add("shaking_moment", "Ms", NEWTON_METRE, lin(*moments),
                  "shaking moment on the frame about the origin")
+
+
+def _named(body: Body) -> str:
+    """A body as the sheet's labels name it: "link 3", or "block 4" for a sliding block."""
+    return f"{'block' if body.block else 'link'} {body.number}"
 
 
 def _carried_later(where: str, point: str, body: Body) -> DescriptionError:

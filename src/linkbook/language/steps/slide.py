@@ -102,7 +102,7 @@ def forces(w, rec: dict) -> None:
     link, blk = w.body(pivot, n), w.body(p, block=True)
     ex, ey = blk.line
     a = w.arm(p, pivot)
-    det = w.w.alias(f"_Dforce_{p}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
+    det = w.w.alias(f"_Dforce_{n}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
     normal = w.guide_normal(link, blk, guard(det, lin((1, w.moment(link, pivot)),
                                                       (1, w.moment(blk, p)))))
     nx, ny = w.neg(mul(ey, normal)), mul(ex, normal)
