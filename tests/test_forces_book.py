@@ -24,9 +24,8 @@ from linkbook.book import builder
 from linkbook.check.reference import solve
 from linkbook.engine import evaluator as engine
 from linkbook.language import templates
-from linkbook.language.domain import LOAD_RANGE
 from linkbook.language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, OFFSET_KIND
-from test_properties import dimensions
+from test_properties import dimensions, in_load_domain
 
 EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
 DATA = Path(__file__).resolve().parent / "data" / "forces"
@@ -181,16 +180,11 @@ def near(t: templates.Template):
     return st.fixed_dictionaries(draws)
 
 
-def in_load_range(value: float) -> bool:
-    """0, or a load's size the domain allows (a value near the least double is refused)."""
-    return value == 0 or LOAD_RANGE[0] <= abs(value) <= LOAD_RANGE[1]
-
-
 def dynamics(t: templates.Template):
     """Dimensions as test_properties draws them (any angle, branch and rate) or, every other
     example, near the template's (`near`); masses 0..10 kg, inertias 0..0.1 kg·m², forces
     ±1e3 N, torques ±100 N·m, gravity off or 0..20 m/s² (its direction an angle parameter)."""
-    kinds = {kind: values.filter(in_load_range) for kind, values in (
+    kinds = {kind: values.filter(in_load_domain) for kind, values in (
         ("mass", st.floats(0.0, 10.0)), ("inertia", st.floats(0.0, 0.1)),
         ("force", st.floats(-1e3, 1e3)), ("torque", st.floats(-100.0, 100.0)),
         ("acceleration", st.one_of(st.just(0.0), st.floats(0.0, 20.0))))}

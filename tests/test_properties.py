@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 from conftest import checks_of, formula_cells
 from linkbook.book import builder
 from linkbook.language import templates
+from linkbook.language.domain import LOAD_RANGE
 from linkbook.language.steps import STEP_KEYS
 from linkbook.language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, LOAD_UNITS,
                                           MOTION_SYMBOLS, NOT_NEGATIVE_KINDS, OFFSET_KIND,
@@ -23,6 +24,12 @@ from linkbook.language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, 
 EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
 TALLY: Counter = Counter()
 FAMILIES = sorted(p.stem for p in templates.bundled())
+
+
+def in_load_domain(value: float) -> bool:
+    """0, or a load's size the domain allows (domain.LOAD_RANGE: one near the least double is
+    refused by build and verify alike)."""
+    return value == 0 or LOAD_RANGE[0] <= abs(value) <= LOAD_RANGE[1]
 
 
 def dimensions(t: templates.Template):
@@ -46,9 +53,11 @@ def dimensions(t: templates.Template):
                 st.tuples(st.floats(0.05, 30.0), st.sampled_from([1.0, -1.0])).map(
                     lambda fs, v=p.value: fs[0] * fs[1] * max(abs(v), 5.0)))
         elif p.kind in NOT_NEGATIVE_KINDS:          # a mass, an inertia: 0 to 3 times
-            draws[p.symbol] = st.floats(0.0, 3.0).map(lambda f, v=p.value: f * v)
+            draws[p.symbol] = st.floats(0.0, 3.0).map(lambda f, v=p.value: f * v) \
+                .filter(in_load_domain)
         elif p.kind in LOAD_UNITS:                  # a force, a torque, gravity: ±3 times
-            draws[p.symbol] = st.floats(-3.0, 3.0).map(lambda f, v=p.value: f * v)
+            draws[p.symbol] = st.floats(-3.0, 3.0).map(lambda f, v=p.value: f * v) \
+                .filter(in_load_domain)
         else:
             draws[p.symbol] = st.floats(-1.0, 1.0).map(lambda f, v=p.value: v + f * scale)
     return st.fixed_dictionaries(draws)
