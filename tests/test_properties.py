@@ -8,12 +8,14 @@ import dataclasses
 import os
 from collections import Counter
 
+import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from conftest import checks_of, formula_cells
 from linkbook.book import builder
+from linkbook.check.reference import solve
 from linkbook.language import templates
 from linkbook.language.domain import LOAD_RANGE
 from linkbook.language.steps import STEP_KEYS
@@ -71,6 +73,25 @@ def with_values(t: templates.Template, values: dict) -> templates.Template:
                                grid_values=grid, stroke_step=30.0)
 
 
+def through_a_pivot(t: templates.Template) -> bool:
+    """Does the vector Q→P a step measures vanish on a row of the sweep, exactly or to within
+    rounding (the crank pin on a pivot: a1 = a2 at θ = 0, the shaper's r1 = r2 at 270°)? There
+    its direction is ATAN2(0, 0) (#DIV/0! in Excel, Gnumeric and the engine, 0 in LibreOffice
+    and the reference) or the rounding's, and so is all that follows from it: the edge the
+    README names (Edge cases), left out of the random dimensions."""
+    d = t.mechanism.description
+    points = solve(d, t.values(), t.sweep.angles())["points"]
+    rounding = 1e-12 * sum(abs(v) for v in t.values().values())     # of the dimensions' size
+    ends = {"dyad": ("q", "p"), "slide": ("pivot", "p"), "vector": ("from", "to")}
+    for step in d["steps"]:
+        if step["type"] in ends:
+            (qx, qy), (px, py) = (np.broadcast_arrays(*points[step[k]])
+                                  for k in ends[step["type"]])
+            if np.any(np.hypot(px - qx, py - qy) <= rounding):
+                return True
+    return False
+
+
 @pytest.mark.parametrize("family", FAMILIES)
 def test_random_dimensions_match_the_reference(family):
     base = templates.load(family)
@@ -80,6 +101,7 @@ def test_random_dimensions_match_the_reference(family):
     @given(dimensions(base))
     def check(values):
         t = with_values(base, values)
+        assume(not through_a_pivot(t))
         built, computed = builder.make(t)       # the finished book: degree windows chosen
         checks = checks_of(built, computed)
         bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]

@@ -298,3 +298,38 @@ def test_verify_finds_a_broken_guide_or_block_formula(name, point, column, old, 
     code, out, _ = _verify(path, capsys=capsys)
     assert code == 1, out
     assert f"Mechanism!{column}{row}" in out and "likely cause" in out
+
+
+def _dead_cells(report: dict) -> dict:
+    return {(c["block"], c["column"]): c["dead_centre"] for c in report["checks"]
+            if c["dead_centre"]}
+
+
+def test_a_ram_pin_at_infinity_leaves_only_what_it_reaches_undetermined(tmp_path, capsys):
+    """The shaper with |O1O2| = 20 mm and its 40 mm crank: at θ2 = 210° and 330°, both on the
+    sweep, the lever lies parallel to the ram line, and the ram pin B is where a round-off
+    determinant puts it (some 1e17 mm, either sign: the book and the reference differ). The
+    ram line and the slot B slides on run over its least to its greatest travel, and the
+    drawing's x extent takes it in: those are not determined (#N/A or any number, as a rate at
+    a dead centre), and every other cell is judged and agrees. The bundled shaper
+    (|O1O2| = 60 mm) never gets there: nothing left undetermined."""
+    source = next(p for p in templates.bundled() if p.stem == "shaper")
+    text = source.read_text(encoding="utf-8")
+    near = text.replace('between the pivots", unit = "mm", value = 60.0',
+                        'between the pivots", unit = "mm", value = 20.0')
+    assert near != text
+    reports = {}
+    for name, body in (("bundled", text), ("near", near)):
+        toml, path = tmp_path / f"{name}.toml", tmp_path / f"{name}.xlsx"
+        toml.write_text(body, encoding="utf-8")
+        assert main(["build", str(toml), "-o", str(path)]) == 0
+        capsys.readouterr()
+        code, out, _ = _verify(path, "--json", capsys=capsys)
+        reports[name] = json.loads(out)[0]
+        assert code == 0, out
+    assert _dead_cells(reports["bundled"]) == {}
+    guide_ends = 4 * 2        # B guide 1, 2 and B slot 1, 2, x and y each
+    assert _dead_cells(reports["near"]) == {
+        ("joints", "drawing rows"): guide_ends, ("frame", "drawing: extents"): 2,
+        ("frame", "drawing: links x"): guide_ends // 2,
+        ("frame", "drawing: links y"): guide_ends // 2}

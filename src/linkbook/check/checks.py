@@ -78,6 +78,15 @@ class Check:
             return base
         return max(base, tol * expected * expected / (PER * magnitude))
 
+    def beyond_rounding(self, values) -> bool:
+        """Is some value so far out that its rounding bound (see `limit`) reaches a tenth of the
+        value itself? A point a round-off determinant puts at "infinity" (a lever parallel to
+        the ram line it should meet): its size, even its sign, is the rounding's, so an extreme
+        taken over it is not determined."""
+        v = np.abs(np.asarray(values, dtype=float))
+        v = v[np.isfinite(v)]
+        return bool(v.size) and self.limit(float(v.max())) >= 0.1 * float(v.max())
+
     def as_dict(self) -> dict:
         return {"block": self.block, "column": self.name, "cells": self.cells,
                 "max_abs_diff": self.max_abs, "na_expected": self.na_expected,

@@ -30,7 +30,7 @@ def check_drawing(j: Judging) -> None:
         j.run("joints", joint.name, pos.sheet, [x_cell, y_cell],
               np.array(joint_values[joint.name]), "length")
     joints = {joint.name: joint_values[joint.name] for joint in j.model.joints}  # the table's
-    drawn, over_sweep = dict(joint_values), j.ref
+    drawn, over_sweep, free = dict(joint_values), j.ref, set()
     if j.record.frames is not None:
         description = j.solver.description
         square = _drawing_square(j, joints)
@@ -38,17 +38,33 @@ def check_drawing(j: Judging) -> None:
         drawn.update({name: (float(x[0]), float(y[0])) for name, (x, y) in sliders.items()})
         over_sweep = {**j.ref, "points": {**j.ref["points"], **generic.slider_drawing(
             description, j.params, j.ref, j.ref, square)}}
-    drawing_cells, drawing_expected = [], []
+        free = _undetermined_guide_ends(j)
+        drawn.update({name: (math.nan, math.nan) for name in free})
+    drawing_cells, drawing_expected, dead = [], [], []
     for link in pos.drawing:
         for i, name in enumerate(link.joints):
             r = link.rows[0] + i
             drawing_cells += [f"N{r}", f"O{r}"]
             drawing_expected += list(drawn.get(name, (math.nan, math.nan)))
+            dead += [name in free] * 2
     j.run("joints", "drawing rows", pos.sheet, drawing_cells, np.array(drawing_expected),
-          "length")
+          "length", dead=np.array(dead))
     j.checks.append(_check_links(j, over_sweep))
     if j.record.frames is not None:
-        j.checks += _check_frames(j, joints, drawn)
+        j.checks += _check_frames(j, joints, drawn, free)
+
+
+def _undetermined_guide_ends(j: Judging) -> set[str]:
+    """The ends of each guide whose block's travel over the sweep reaches a row in round-off
+    beyond any bound (Check.beyond_rounding: a lever parallel to the line it should meet): the
+    guide runs to the smallest and largest travel, which are then not determined (#N/A or any
+    number, as a rate at a dead centre)."""
+    c = Check("joints", "drawing rows", j.size, 1.0, j.size)
+    out = set()
+    for label, mover in generic.guide_movers(j.solver.description).items():
+        if any(c.beyond_rounding(v) for v in j.ref["points"][mover]):
+            out |= {f"{label} 1", f"{label} 2"}
+    return out
 
 
 def joined_pairs(description: dict, ref: dict, size: float) -> set[frozenset]:
@@ -120,57 +136,89 @@ def frame_squares(need: float) -> list[tuple[float, float]]:
     return out
 
 
-def _frame_extents(frame: Frame, ref: dict, joint_values: dict) -> tuple[dict, dict, float]:
-    """The least and greatest x and y of what a frame holds (the reference's), and the size
-    needed per grid square."""
+def _frame_extents(j: Judging, frame: Frame, joint_values: dict) -> tuple[dict, dict]:
+    """The least and greatest x and y of what a frame holds (the reference's); NaN on an axis
+    where a value is beyond rounding (Check.beyond_rounding: its extreme is not determined)."""
     ext = frame.extent
+    judge = Check("frame", "extents", j.size, 1.0, j.size)
     lo, hi = {}, {}
     for i, axis in enumerate("xy"):
-        parts = [expected_of(ref, key) for key in getattr(ext, axis)]
+        parts = [expected_of(j.ref, key) for key in getattr(ext, axis)]
         if ext.position:
             parts.append(np.array([xy[i] for xy in joint_values.values()]))
         v = np.concatenate(parts) if parts else np.array([])
         v = v[np.isfinite(v)]
         lo[axis], hi[axis] = (float(v.min()), float(v.max())) if v.size else (0.0, 0.0)
-    need = max(hi["x"] - lo["x"], hi["y"] - lo["y"], 1e-12) * FRAME_MARGIN / (2 * FRAME_HALF)
-    return lo, hi, need
+        if judge.beyond_rounding(v):
+            lo[axis] = hi[axis] = math.nan
+    return lo, hi
+
+
+def _need(ext: dict) -> float:
+    """The size a grid square must hold, by the rule, for a frame's extents."""
+    return max(ext["xmax"] - ext["xmin"], ext["ymax"] - ext["ymin"], 1e-12) \
+        * FRAME_MARGIN / (2 * FRAME_HALF)
 
 
 def _drawing_square(j: Judging, joint_values: dict) -> float:
-    """The drawing's grid square by the rule, from the reference's extents (where the need is
-    within rounding of a step, the one the book chose)."""
+    """The drawing's grid square by the rule, from the book's extents (each judged against the
+    reference's; where the need is within rounding of a step, the one the book chose)."""
     frames = j.record.frames
     frame = frames.frames[0]
-    options = [square for _, square in frame_squares(_frame_extents(frame, j.ref,
-                                                                    joint_values)[2])]
+    lo, hi = _frame_extents(j, frame, joint_values)
+    need = _need(_book_extents(j, frames.sheet, frame.cells, lo, hi))
+    options = [square for _, square in frame_squares(need)]
     got = j.values.get((frames.sheet, frame.cells["square"]))
     return next((o for o in options if isinstance(got, (int, float))
                  and abs(got - o) <= 1e-12 * o), options[0])
 
 
-def _check_frames(j: Judging, joint_values: dict, drawn: dict) -> list[Check]:
+def _check_frames(j: Judging, joint_values: dict, drawn: dict, free: set[str]
+                  ) -> list[Check]:
     """Each equal-scale chart's frame (extents, centre, grid square, the scale bar's legend)
     from the reference's points (`joint_values`: the joints table's), and each mapped cell:
-    the reference's coordinate in squares of that frame (`drawn`: every drawn point's)."""
+    the reference's coordinate in squares of that frame (`drawn`: every drawn point's; `free`:
+    the drawn points that are not determined)."""
     sheet = j.record.frames.sheet
     checks = []
     for frame in j.record.frames.frames:
         name = "drawing" if frame.chart is None else f"chart {frame.chart + 1}"
         cells = frame.cells
-        lo, hi, need = _frame_extents(frame, j.ref, joint_values)
-        centre = {"x": (lo["x"] + hi["x"]) / 2, "y": (lo["y"] + hi["y"]) / 2}
+        lo, hi = _frame_extents(j, frame, joint_values)
+        # the extents against the reference; the centre and the need by the rule from the
+        # book's own extents (each within its bound of the reference's): near a position where
+        # a point runs far out, the two extents carry the rounding of that position, which their
+        # half-sum (the centre, often near 0) must not be judged without
+        ext = _book_extents(j, sheet, cells, lo, hi)
+        centre = {"x": (ext["xmin"] + ext["xmax"]) / 2, "y": (ext["ymin"] + ext["ymax"]) / 2}
+        need = _need(ext)
         expected = {"xmin": lo["x"], "xmax": hi["x"], "ymin": lo["y"], "ymax": hi["y"],
                     "cx": centre["x"], "cy": centre["y"], "need": need}
         c = Check("frame", f"{name}: extents", j.size, 1.0, j.size)
         keys = list(expected)
+        dead = np.array([k in ("xmin", "xmax", "ymin", "ymax") and math.isnan(expected[k])
+                         for k in keys])
         j.compare(c, sheet, [cells[k] for k in keys], np.array([expected[k] for k in keys]),
-                  "length")
+                  "length", dead=dead)
         checks.append(c)
         square_check, square = _check_square(j, sheet, cells, need, name)
         checks.append(square_check)
         for s in frame.series:
-            checks += _check_mapped(j, sheet, s, drawn, centre, square, f"{name}: {s.title}")
+            checks += _check_mapped(j, sheet, s, drawn, centre, square, f"{name}: {s.title}",
+                                    free)
     return checks
+
+
+def _book_extents(j: Judging, sheet: str, cells: dict, lo: dict, hi: dict) -> dict:
+    """The book's extents of a frame, each where it is a number, else the reference's."""
+    ref = {"xmin": lo["x"], "xmax": hi["x"], "ymin": lo["y"], "ymax": hi["y"]}
+    out = {}
+    for key, value in ref.items():
+        got = j.values.get((sheet, cells[key]))
+        number = isinstance(got, (int, float)) and not isinstance(got, bool) \
+            and math.isfinite(got)
+        out[key] = float(got) if number else value
+    return out
 
 
 def _check_square(j: Judging, sheet: str, cells: dict, need: float, name: str
@@ -197,7 +245,7 @@ def _check_square(j: Judging, sheet: str, cells: dict, need: float, name: str
 
 
 def _check_mapped(j: Judging, sheet: str, series: Series, joint_values: dict, centre: dict,
-                  square: float, name: str) -> list[Check]:
+                  square: float, name: str, free: set[str]) -> list[Check]:
     """A mapped column pair: (coordinate − centre) / square, the coordinate the reference's
     (a joint at the current position, or a sweep column at the sweep's angles), judged with the
     bound of a length scaled to squares."""
@@ -206,19 +254,20 @@ def _check_mapped(j: Judging, sheet: str, series: Series, joint_values: dict, ce
     for i, axis in enumerate("xy"):
         letter = series.columns[i]
         cells = [f"{letter}{r}" for r in range(first, last + 1)]
-        slope = None
+        slope, dead = None, None
         if series.kind == "links":
-            world = np.full(len(cells), np.nan)
+            world, dead = np.full(len(cells), np.nan), np.zeros(len(cells), dtype=bool)
             for link in j.record.position.drawing:
                 for k, joint in enumerate(link.joints):
-                    world[link.rows[0] + k - series.rows[0]] = \
-                        joint_values.get(joint, (math.nan, math.nan))[i]
+                    row = link.rows[0] + k - series.rows[0]
+                    world[row] = joint_values.get(joint, (math.nan, math.nan))[i]
+                    dead[row] = joint in free
         else:
             key = getattr(series, axis)
             world = expected_of(j.ref, key)
             if key in j.slopes:
                 slope = (lambda f: lambda k: f(k) / square)(j.slopes[key])
         c = Check("frame", f"{name} {axis}", j.size, 1.0, j.size / square)
-        j.compare(c, sheet, cells, (world - centre[axis]) / square, "-", slope)
+        j.compare(c, sheet, cells, (world - centre[axis]) / square, "-", slope, dead)
         out.append(c)
     return out

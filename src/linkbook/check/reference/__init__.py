@@ -29,7 +29,7 @@ from __future__ import annotations
 
 from .analysis import (EXTREME_STEP, REVERSAL_STEP, positions_only, refined_extreme, solve,
                        time_ratio)
-from .drawing import BLOCK, slider_drawing, slider_parts
+from .drawing import BLOCK, guide_movers, slider_drawing, slider_parts
 from .expressions import evaluate
 from .fourbar import fourbar_loops, grashof_class, limit_angles
 from .positions import pivots
@@ -38,5 +38,5 @@ from .steps import STEP_TYPES
 
 __all__ = ["solve", "pivots", "fourbar_loops", "grashof_class", "limit_angles", "evaluate",
            "refined_extreme", "positions_only", "time_ratio", "slider_drawing", "slider_parts",
-           "EXTREME_STEP", "REVERSAL_STEP", "BLOCK", "STEP_TYPES", "StepType", "Sliding",
-           "Guide"]
+           "guide_movers", "EXTREME_STEP", "REVERSAL_STEP", "BLOCK", "STEP_TYPES", "StepType",
+           "Sliding", "Guide"]

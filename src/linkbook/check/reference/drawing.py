@@ -54,6 +54,12 @@ def slider_drawing(description: Mapping, params: Mapping[str, float], sweep: Map
     return out
 
 
+def guide_movers(description: Mapping) -> dict[str, str]:
+    """{guide label: the point whose travel over the sweep sets the guide's extent}."""
+    return {label: mover for sliding in _slidings(description)
+            for label, _origin, mover, _line in sliding.guides}
+
+
 def slider_parts(description: Mapping) -> list[tuple[str, ...]]:
     """The points of each guide and each block slider_drawing places, part by part: the points
     of one part are joined (a guide is one line, a block one rigid body), whether or not the
