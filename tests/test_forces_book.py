@@ -26,6 +26,7 @@ from linkbook.engine import evaluator as engine
 from linkbook.language import templates
 from linkbook.language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, OFFSET_KIND
 from test_properties import dimensions, in_load_domain
+from test_properties import with_values as dimensioned
 
 EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
 DATA = Path(__file__).resolve().parent / "data" / "forces"
@@ -470,3 +471,21 @@ def test_a_book_without_a_force_column_the_mechanism_has_cannot_be_verified(tmp_
     assert cli.main(["verify", str(path)]) == 2
     out = capsys.readouterr()
     assert "no column of F23" in out.out + out.err
+
+
+def test_an_inertia_force_beyond_the_loads_scale_carries_its_accelerations_allowance():
+    """The pump's plunger alone with mass (0.5 kg), the crank starting from rest at 5 rad/s²,
+    dimensions hypothesis found: on one row the slot is within rounding of parallel to the
+    plunger's line, its acceleration some 3e11 m/s², and the pins carry 1.9e11 N where the
+    masses' and the loads' own scale F₀ is 7 N. The kinematics allows that acceleration its
+    growth (1e-12·a²/m); the forces on that row the same, 1e-12·X²/F₀ (the book's are within
+    1e-11 of the reference's; the bound of 1e-12·F alone refused them)."""
+    values = {"a2": 27.5, "a3": 48.0, "a4": 273.28125, "b1": 260.15625, "c4": 105.0, "s1": 20.0,
+              "branch": -1.0, "m2": 0.0, "I2": 0.0, "m3": 0.0, "I3": 0.0, "m4": 0.0, "I4": 0.0,
+              "u4": 57.93, "v4": -10.42, "m5": 0.5, "g": 0.0, "Fp": 0.0, "delivery_from": 0.0,
+              "delivery_to": 0.0, "omega_in": 0.0, "alpha_in": 5.0}
+    built, computed = builder.make(dimensioned(templates.load("pump"), values))
+    checks = checks_of(built, computed)
+    assert not [m for c in checks for m in c.mismatches[:2]]
+    forces = next(c for c in checks if c.block == "Forces" and c.name == "F12")
+    assert forces.max_abs > 1.0 and forces.cells > 0       # the row is there, and far out

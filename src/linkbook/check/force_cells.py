@@ -3,8 +3,12 @@ equations of all the links at once), at the sweep's inputs and at the current po
 
 The bound scales with the mechanism's loads as a length's scales with its size: F, the larger of
 Σm·(S·(ω² + |α|) + 10 m/s²) (its masses' inertia and weight at its size S in metres) and the
-largest force the reference finds anywhere in the sweep (the loads the description puts on it); a
-force may differ by 1e-12·F, a moment by 1e-12·F·S. Where a group of links nears a position in
+largest force the reference finds anywhere in the sweep (the loads the description puts on it,
+and what a sum of forces that cancel carries); a force may differ by 1e-12·F, a moment by
+1e-12·F·S. On a row whose largest force X runs beyond F₀ (F with the input at rest: the
+masses' and the loads' own scale), an inertia force where an acceleration runs far beyond its
+own scale (the pump's plunger where its slot nears parallel to its line), every force there
+carries that acceleration's growth allowance: 1e-12·X²/F₀, as a value beyond its scale. Where a group of links nears a position in
 which it cannot carry a load, the forces grow like 1/D and their rounding like 1/D²: the same
 allowance as a rate's near a dead centre (checks.compare's sine), and the growth allowance of
 a value beyond its scale. At a row where the reference finds the equations singular (a group in
@@ -34,13 +38,36 @@ FORCE_FLOOR = 1e-140
 COUPLE_SHOWN = 1e-9
 
 
-def force_scale(j, ref: dict, metres: float, rate2: float) -> float:
-    """F (see the module's docstring), in N; `rate2`: the input's ω² + |α| (motion_rates)."""
+def _largest(result: dict) -> np.ndarray:
+    """Per row, the largest |force| (a pin's or a guide's) of a forces() result (0 for none)."""
+    parts = [np.abs(np.nan_to_num(np.asarray(v, dtype=float), nan=0.0))
+             for k, v in result.items() if k.startswith(("F", "N")) and isinstance(v, np.ndarray)]
+    return np.max(parts, axis=0) if parts else np.zeros(1)
+
+
+def force_scale(j, ref: dict, params: dict, metres: float, rate2: float
+                ) -> tuple[float, float]:
+    """F and F₀ (see the module's docstring), in N; `rate2`: the input's ω² + |α|
+    (motion_rates)."""
+    from ..language.mechanisms import MOTION_SYMBOLS
     kinds = j.record.kinds()
     mass = sum(abs(v) for s, v in j.params.items() if kinds.get(s) == "mass")
-    largest = [np.nanmax(np.abs(v)) for k, v in ref.items()
-               if k.startswith(("F", "N")) and isinstance(v, np.ndarray) and np.isfinite(v).any()]
-    return max(mass * (j.size * metres * rate2 + GRAVITY_SCALE), *largest, FORCE_FLOOR)
+    at_rest = {**params, **dict.fromkeys(MOTION_SYMBOLS[j.mechanism.input_kind], 0.0)}
+    static = forces(j.solver.description, at_rest, j.angles, j.record.length_unit)
+    own = max(mass * (j.size * metres * rate2 + GRAVITY_SCALE), float(_largest(static).max()),
+              FORCE_FLOOR)
+    return max(own, float(_largest(ref).max())), own
+
+
+def _sine(kin: dict, result: dict, scale: float, own: float) -> np.ndarray:
+    """The rows' sine for checks.compare (which allows the base bound / sine²): the
+    kinematics' (near a dead centre) or the growth X²/(F₀·F) of a row's largest force X beyond
+    F₀, whichever allows more."""
+    row = _largest(result)
+    sine = 1.0 / np.sqrt(np.maximum(row * row / (own * scale), 1.0))
+    if kin.get("sine") is not None:
+        sine = np.minimum(sine, np.asarray(kin["sine"], dtype=float))
+    return sine
 
 
 def check_forces(j) -> None:
@@ -54,7 +81,7 @@ def check_forces(j) -> None:
     ref = forces(j.solver.description, params, j.angles, j.record.length_unit)
     one = forces(j.solver.description, params, [j.angle], j.record.length_unit)
     _, rate2 = motion_rates(mech, j.params, j.size)
-    scale = force_scale(j, ref, metres, rate2)
+    scale, own = force_scale(j, ref, params, metres, rate2)
     _require_every_column(table, ref, COUPLE_SHOWN * scale * j.size * metres)
     (r0, r1), now = table.rows, table.current_row
     sheet = table.sheet
@@ -63,22 +90,25 @@ def check_forces(j) -> None:
     j.run(sheet, mech.input_column, sheet, [f"A{now}"], np.array([j.angle]), mech.input_unit)
     dead = _singular(ref, j.ref.get("dead_centre"))
     dead_now = _singular(one, j.one.get("dead_centre"))
+    sines, sines_now = _sine(j.ref, ref, scale, own), _sine(j.one, one, scale, own)
     for key, letter in table.columns.items():
         unit = j.model.get(key).unit
-        if unit in (NEWTON, NEWTON_METRE):
+        force = unit in (NEWTON, NEWTON_METRE)
+        if force:
             size = scale * (j.size * metres if unit == NEWTON_METRE else 1.0)
             rate = 1.0
         else:                           # a centre of mass: a length, an acceleration
             size, rate = unit_scale(unit, j.size), (rate2 if unit != "length" else 1.0)
-        for block, cells, expected, kin, singular in (
-                (FORCES_SHEET, [f"{letter}{r}" for r in range(r0, r1 + 1)], ref[key], j.ref,
-                 dead),
-                ("forces now", [f"{letter}{now}"], one[key], j.one, dead_now)):
+        for block, cells, expected, sine, singular in (
+                (FORCES_SHEET, [f"{letter}{r}" for r in range(r0, r1 + 1)], ref[key],
+                 sines if force else j.ref.get("sine"), dead),
+                ("forces now", [f"{letter}{now}"], one[key],
+                 sines_now if force else j.one.get("sine"), dead_now)):
             c = Check(block, key, j.size, rate, size)
             j.compare(c, sheet, cells, np.asarray(expected, dtype=float), unit,
-                      dead=singular, sine=kin.get("sine"))
+                      dead=singular, sine=sine)
             j.checks.append(c)
-    _check_summary(j, ref, scale, metres, dead)
+    _check_summary(j, ref, scale, metres, dead, sines)
 
 
 def _require_every_column(table, ref: dict, couple: float) -> None:
@@ -112,7 +142,8 @@ def _trapezoid(y: np.ndarray, x: np.ndarray) -> float:
     return float(np.sum((y[1:] + y[:-1]) / 2 * np.diff(x)))
 
 
-def _check_summary(j, ref: dict, scale: float, metres: float, dead: np.ndarray) -> None:
+def _check_summary(j, ref: dict, scale: float, metres: float, dead: np.ndarray,
+                   sines: np.ndarray) -> None:
     """The summary's cells and the work column: the trapezoid rule, the extremes and the
     work, taken of the reference's effort and pin loads over the sweep. Where a row's forces are
     not determined (see `_singular`: the book may show any number there, judged row by row
@@ -130,7 +161,6 @@ def _check_summary(j, ref: dict, scale: float, metres: float, dead: np.ndarray) 
         return rows(key) if undetermined else np.asarray(ref[key], dtype=float)
     y = column(effort)
     # a sum or an extreme over the sweep carries the rounding of its worst-conditioned row
-    sines = np.asarray(j.ref.get("sine", np.ones(1)), dtype=float)
     worst = np.array([float(np.nanmin(sines)) if np.isfinite(sines).any() else 1.0])
     length = x[-1] - x[0]
     mean = _trapezoid(y, x) / length
