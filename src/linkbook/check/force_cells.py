@@ -8,10 +8,10 @@ and what a sum of forces that cancel carries); a force may differ by 1e-12·F, a
 1e-12·F·S. On a row whose largest force X runs beyond F₀ (F with the input at rest: the
 masses' and the loads' own scale), an inertia force where an acceleration runs far beyond its
 own scale (the pump's plunger where its slot nears parallel to its line), every force there
-carries that acceleration's growth allowance: 1e-12·X²/F₀, as a value beyond its scale. Where a group of links nears a position in
-which it cannot carry a load, the forces grow like 1/D and their rounding like 1/D²: the same
-allowance as a rate's near a dead centre (checks.compare's sine), and the growth allowance of
-a value beyond its scale. At a row where the reference finds the equations singular (a group in
+carries that acceleration's growth allowance: 1e-12·X²/F₀, as a value beyond its scale.
+Where a group of links nears a position in which it cannot carry a load, the forces grow like
+1/D and their rounding like 1/D²: the same allowance as a rate's near a dead centre
+(checks.compare's sine), and the growth allowance of a value beyond its scale. At a row where the reference finds the equations singular (a group in
 the position where it cannot carry a load: a rod square to its guide, a dyad stretched
 straight), the forces are not determined by the data: the book's #N/A or any number there is
 its honest answer (as a rate's at a dead centre), but not #DIV/0! or another error; the
