@@ -11,12 +11,12 @@ own scale (the pump's plunger where its slot nears parallel to its line), every 
 carries that acceleration's growth allowance: 1e-12·X²/F₀, as a value beyond its scale.
 Where a group of links nears a position in which it cannot carry a load, the forces grow like
 1/D and their rounding like 1/D²: the same allowance as a rate's near a dead centre
-(checks.compare's sine), and the growth allowance of a value beyond its scale. At a row where the reference finds the equations singular (a group in
-the position where it cannot carry a load: a rod square to its guide, a dyad stretched
-straight), the forces are not determined by the data: the book's #N/A or any number there is
-its honest answer (as a rate's at a dead centre), but not #DIV/0! or another error; the
-summary's sums and extremes over such a sweep are then the reference's arithmetic on the rows
-the book shows (each judged on its own)."""
+(checks.compare's sine), and the growth allowance of a value beyond its scale. At a row where
+the reference finds the equations singular (a group in the position where it cannot carry a
+load: a rod square to its guide, a dyad stretched straight), the forces are not determined by
+the data: the book's #N/A or any number there is its honest answer (as a rate's at a dead
+centre), but not #DIV/0! or another error; the summary's sums and extremes over such a sweep
+are then the reference's arithmetic on the rows the book shows (each judged on its own)."""
 from __future__ import annotations
 
 import numpy as np
