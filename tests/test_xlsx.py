@@ -221,6 +221,48 @@ def test_a_name_defined_twice_is_refused(tmp_path, fourbar_bytes, capsys, first)
     assert "xl/workbook.xml" in last and "is defined twice in the workbook" in last, last
 
 
+SWEEP_TITLES = "<definedName name=\"_xlnm.Print_Titles\" localSheetId=\"1\">'Sweep'!$3:$4,'Sweep'!$A:$A</definedName>"
+
+
+@pytest.mark.parametrize("again", [
+    "Sweep!$A:$A,Sweep!$3:$4",              # LibreOffice 7.4's save: the other order, unquoted
+    "'Sweep'!$3:$4,'Sweep'!$A:$A",          # the same text
+    "'SWEEP'!$a:$a,'Sweep'!$3:$4",          # case
+], ids=["reordered", "repeated", "case"])
+def test_a_built_in_name_repeated_with_the_same_ranges_is_accepted(tmp_path, fourbar_bytes,
+                                                                   capsys, again):
+    added = SWEEP_TITLES.replace("'Sweep'!$3:$4,'Sweep'!$A:$A", again)
+    path = _damaged(tmp_path, fourbar_bytes, "xl/workbook.xml", SWEEP_TITLES,
+                    SWEEP_TITLES + added)
+    from linkbook.apps.cli import main
+    code = main(["verify", str(path)])
+    out = capsys.readouterr()
+    assert code == 0 and ALL_AGREE.match(out.out.strip().splitlines()[-1]), out
+    assert "warning" not in out.err and "Traceback" not in out.err
+
+
+def test_a_built_in_name_repeated_with_other_ranges_is_a_warning(tmp_path, fourbar_bytes,
+                                                                 capsys):
+    """Print titles are the application's, not the numbers': verify judges the book and warns."""
+    added = SWEEP_TITLES.replace("'Sweep'!$3:$4,'Sweep'!$A:$A", "Sweep!$3:$5")
+    path = _damaged(tmp_path, fourbar_bytes, "xl/workbook.xml", SWEEP_TITLES,
+                    SWEEP_TITLES + added)
+    from linkbook.apps.cli import main
+    for command in (["verify"], ["info"], ["export", "-o", str(tmp_path / "csv")]):
+        code = main([command[0], str(path), *command[1:]])
+        out = capsys.readouterr()
+        assert code == 0, (command, out)
+        warning = [line for line in out.err.splitlines() if line.startswith("linkbook: warning")]
+        assert len(warning) == 1 and "'_xlnm.Print_Titles' is defined twice in sheet 'Sweep' " \
+            "with other ranges" in warning[0], (command, out.err)
+        if command == ["verify"]:
+            assert ALL_AGREE.match(out.out.strip().splitlines()[-1]), out.out
+    import json
+    main(["verify", str(path), "--json"])
+    data = json.loads(capsys.readouterr().out)[0]
+    assert data["status"] == 0 and len(data["notes"]) == 1
+
+
 # LibreOffice 7.4 reads '3_5' as 3, '３５' and '0x10' as 0, '35.0.0' as 35, and '1e999', 'INF'
 # and 'NaN' as infinities no formula can use (recalculated and saved as CSV); Python's int()
 # and float() read 35, 35, an error, an error, inf, inf and nan.

@@ -358,6 +358,12 @@ def _error(exc: Exception) -> None:
     print(f"linkbook: error: {' '.join(str(exc).split())}", file=sys.stderr)
 
 
+def _notes(path, notes) -> None:
+    """What a book holds that leaves its numbers alone, one warning line each on stderr."""
+    for note in notes:
+        print(f"linkbook: warning: {path}: {note}", file=sys.stderr)
+
+
 def _verify(args) -> int:
     import json
     from ..check.verifier import report_of
@@ -365,6 +371,7 @@ def _verify(args) -> int:
     for book in args.books:
         report = report_of(book, args.engine)
         reports.append(report)
+        _notes(report.path, report.notes)
         if report.error is not None:
             _error(report.error)
         elif not args.json and not (args.quiet and report.ok):
@@ -389,7 +396,7 @@ def _as_data(report) -> dict:
     return {
         "book": report.path, "mechanism": report.mechanism, "engine": report.engine,
         "linkbook": __version__, "status": report.status, "ok": report.ok,
-        "error": report.error,
+        "error": report.error, "notes": report.notes,
         "cells": report.cells, "formula_cells": report.formula_cells,
         "mismatches": report.differing,
         "likely_causes": _ranges(report, report.causes),
@@ -504,6 +511,7 @@ def _info(args) -> int:
     except UnusableFile as exc:
         _error(exc)
         return 2
+    _notes(book.name, getattr(book.wb, "notes", ()))
     print(json.dumps(data, indent=2, ensure_ascii=False) if args.json
           else "\n".join(info.lines(data)))
     return 0
@@ -516,10 +524,12 @@ def _export(args) -> int:
     from ..check.verifier import UnusableFile
     book = Path(args.book)
     try:
-        texts = read_record(open_book(book), table_texts)
+        opened = open_book(book)
+        texts = read_record(opened, table_texts)
     except UnusableFile as exc:
         _error(exc)
         return 2
+    _notes(book, getattr(opened.wb, "notes", ()))
     outdir = ensure_folder(Path(args.outdir) if args.outdir
                            else book.with_name(book.stem + "_csv"), "--outdir")
     for path in export(texts, book.stem, outdir):

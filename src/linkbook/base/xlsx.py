@@ -68,6 +68,30 @@ class Refused(Exception):
     be verified (one line naming the part and the cell or name)."""
 
 
+BUILT_IN_PREFIX = "_XLNM."
+
+
+def is_built_in(name: str) -> bool:
+    """Excel's own names (ECMA-376 18.2.5: _xlnm.Print_Titles, _xlnm.Print_Area, …)."""
+    return name.upper().startswith(BUILT_IN_PREFIX)
+
+
+def _areas(text: str) -> frozenset[str]:
+    """The ranges a built-in name lists, in any order, case and quoting of the sheet's name
+    (outside quoted sheet names, a comma separates them)."""
+    parts, quoted, current = [], False, []
+    for ch in text:
+        if ch == "'":
+            quoted = not quoted
+        if ch == "," and not quoted:
+            parts.append("".join(current))
+            current = []
+        else:
+            current.append(ch)
+    parts.append("".join(current))
+    return frozenset(p.strip().replace("'", "").upper() for p in parts)
+
+
 class Cell:
     __slots__ = ("parent", "row", "column", "value", "data_type")
 
@@ -113,9 +137,12 @@ class DefinedName:
 
 
 class Workbook:
-    def __init__(self, worksheets: list[Worksheet], defined_names: dict[str, DefinedName]):
+    def __init__(self, worksheets: list[Worksheet], defined_names: dict[str, DefinedName],
+                 notes: list[str] | None = None):
         self.worksheets = worksheets
         self.defined_names = defined_names
+        # what the book holds that does not change its numbers but a reader should hear of
+        self.notes = notes or []
         self._by_title = {ws.title: ws for ws in worksheets}
 
     @property
@@ -142,7 +169,8 @@ def read(path) -> Workbook:
             names else []
         date_styles = _date_styles(zf) if "xl/styles.xml" in names else frozenset()
         unmodelled: list[str] = []
-        sheets, defined = _workbook(zf, unmodelled)
+        notes: list[str] = []
+        sheets, defined = _workbook(zf, unmodelled, notes)
         worksheets = []
         for title, part in sheets:
             ws = Worksheet(title)
@@ -151,10 +179,10 @@ def read(path) -> Workbook:
             worksheets.append(ws)
     if unmodelled:
         raise Unsupported(unmodelled[0])
-    return Workbook(worksheets, defined)
+    return Workbook(worksheets, defined, notes)
 
 
-def _workbook(zf: zipfile.ZipFile, unmodelled: list[str]):
+def _workbook(zf: zipfile.ZipFile, unmodelled: list[str], notes: list[str]):
     """[(sheet title, part name)] in tab order (worksheets only: any other kind of sheet is
     noted in `unmodelled`), and the workbook-scoped defined names."""
     targets = {}
@@ -178,14 +206,18 @@ def _workbook(zf: zipfile.ZipFile, unmodelled: list[str]):
                 entries.append(DefinedName(el.get("name") or "", el.text or "",
                                            el.get("hidden") in ("1", "true"),
                                            el.get("localSheetId")))
-    return sheets, _workbook_names(entries, titles)
+    return sheets, _workbook_names(entries, titles, notes)
 
 
-def _workbook_names(entries: list[DefinedName], titles: list[str]) -> dict[str, DefinedName]:
+def _workbook_names(entries: list[DefinedName], titles: list[str],
+                    notes: list[str]) -> dict[str, DefinedName]:
     """The workbook-scoped names, once every name is known to be unambiguous: Excel compares
     names without case, so A_2 after a_2 in one scope is a second definition (Excel reads the
     first, openpyxl the last); and a formula on a sheet with its own a_2 reads that one, which
-    verify, reading workbook-scoped names only, would not."""
+    verify, reading workbook-scoped names only, would not. Excel's built-in names (print titles
+    and areas, filters) are the application's, and no formula of a book reads them: LibreOffice
+    writes each sheet's print titles twice, in both orders, so a repeat meaning the same ranges
+    passes, and one meaning others is a note in `notes`, not a reason to refuse the numbers."""
     def scope(entry: DefinedName) -> str:
         local = entry.localSheetId
         if local is None:
@@ -197,13 +229,18 @@ def _workbook_names(entries: list[DefinedName], titles: list[str]) -> dict[str, 
     for entry in entries:
         key = (entry.localSheetId, entry.name.upper())
         first = seen.setdefault(key, entry)
-        if first is not entry:
+        if first is not entry and is_built_in(entry.name):
+            if _areas(first.attr_text) != _areas(entry.attr_text):
+                notes.append(f"xl/workbook.xml: the built-in name {entry.name!r} is defined "
+                             f"twice in {scope(entry)} with other ranges ({first.attr_text!r} "
+                             f"and {entry.attr_text!r}); no formula reads it")
+        elif first is not entry:
             raise Refused(f"xl/workbook.xml: the name {entry.name!r} is defined twice in "
                           f"{scope(entry)} ({first.attr_text!r} and {entry.attr_text!r}; "
                           "names are compared without case)")
     for entry in entries:
         shadowed = seen.get((None, entry.name.upper()))
-        if entry.localSheetId is not None and shadowed is not None \
+        if entry.localSheetId is not None and shadowed is not None and not is_built_in(entry.name) \
                 and entry.attr_text.upper() != shadowed.attr_text.upper():
             raise Refused(f"xl/workbook.xml: the name {entry.name!r} of {scope(entry)} "
                           f"({entry.attr_text!r}) shadows the workbook's {shadowed.name!r} "

@@ -25,6 +25,9 @@ class Report:
     # cells the build record holds formulas in that are empty or on a sheet deleted (each
     # differs: it has no value)
     absent: list[tuple[str, str]] = field(default_factory=list)
+    # what the file holds that leaves the numbers alone but a reader should hear of (a
+    # built-in name an application wrote twice with other ranges)
+    notes: list[str] = field(default_factory=list)
 
     @property
     def disagrees(self) -> bool:

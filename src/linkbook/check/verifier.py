@@ -68,7 +68,8 @@ def verify(path: Path, engine: str = "vector") -> Report:
         return Report(str(path), record.mechanism, engine, checks, len(formulas),
                       sorted(formulas - judged, key=cell_order), params,
                       mechanism_size(record, params), likely_causes(wb, checks),
-                      sheets=list(wb.sheetnames), replaced=replaced, absent=absent)
+                      sheets=list(wb.sheetnames), replaced=replaced, absent=absent,
+                      notes=list(getattr(wb, "notes", ())))
     except RECORD_ERRORS as exc:
         raise UnusableFile(record_mismatch(path, exc)) from None
 
