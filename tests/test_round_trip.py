@@ -9,7 +9,7 @@ Every bundled book is built, then saved as .xlsx
 Each saved book must verify with exit 0 (every formula cell compared, the values the application
 stored judged too), and info, export and animate must read it; an edit is followed (verify agrees
 at the new inputs, info shows them); a formula changed after the save is caught. What each save
-changes in the file is pinned at the end, as the README describes it.
+changes in the file is pinned at the end, as docs/applications.md describes it.
 """
 from __future__ import annotations
 
@@ -233,7 +233,7 @@ def _hidden_sheets(path: Path) -> set[str]:
 @pytest.mark.libreoffice
 @pytest.mark.gnumeric
 def test_what_each_save_changes(saved_by_libreoffice, saved_by_gnumeric, built):
-    """What the README's "Books saved by other applications" says each save loses: neither keeps
+    """What docs/applications.md says each save loses: neither keeps
     the form controls (spin button, scroll bar); Gnumeric shows the record sheet; both keep
     every chart and every formula."""
     book = "fourbar.xlsx"
