@@ -119,3 +119,16 @@ def test_a_doubled_torque_near_a_limit_position_never_agrees(tmp_path, capsys):
     away, t12 = _fourbar_near_its_limit(tmp_path, 5.0, double_t12=True)
     code, report, last = _verify(away, capsys)
     assert code == 1 and t12 in last, last
+
+
+@pytest.mark.parametrize("short_of", [1e-9, 1e-11])
+def test_an_untouched_book_within_a_hair_of_its_limit_does_not_disagree(tmp_path, capsys,
+                                                                        short_of):
+    """1e-9° short of the limit angle (1.7e-11 rad) the untouched book disagreed in 18 cells:
+    the joints table had no limit-position allowance, and the slope |∂x/∂θ| was a difference
+    over 1e-7 rad to the one side that closes, taken √(h/δ) times too small there. Now the
+    joints carry the reference's slope and the difference steps closer until both sides
+    close: nothing differs, and what the bounds cannot judge is named."""
+    path, _ = _fourbar_near_its_limit(tmp_path, short_of, double_t12=False)
+    code, report, last = _verify(path, capsys)
+    assert code == 2 and report["mismatches"] == 0 and report["not_judged"], last

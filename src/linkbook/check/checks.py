@@ -144,6 +144,8 @@ def expected_of(ref: dict, key: str) -> np.ndarray:
 
 
 SENSITIVITY_STEP = 1e-7      # rad, for the central difference of the reference
+# rad: shorter steps, for a row within SENSITIVITY_STEP of a limit position (context.slope_of)
+NEARER_STEPS = tuple(SENSITIVITY_STEP * 10.0 ** -k for k in range(1, 7))
 ROUNDING = 1e-12             # rad: what rounding can do to an input angle's effect on a result
 EDGE_SLOPE = 1e6             # at an isolated limit position: ROUNDING·EDGE_SLOPE = 1e-6
 
