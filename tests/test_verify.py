@@ -311,8 +311,10 @@ def test_a_ram_pin_at_infinity_leaves_only_what_it_reaches_undetermined(tmp_path
     determinant puts it (some 1e17 mm, either sign: the book and the reference differ). The
     ram line and the slot B slides on run over its least to its greatest travel, and the
     drawing's x extent takes it in: those are not determined (#N/A or any number, as a rate at
-    a dead centre), and every other cell is judged and agrees. The bundled shaper
-    (|O1O2| = 60 mm) never gets there: nothing left undetermined."""
+    a dead centre). The ram's own cells on those two rows, and its least and greatest travel
+    in the summary, are named as not judged (their rounding bound is beyond their value:
+    exit 2), and every other cell is judged and agrees. The bundled shaper (|O1O2| = 60 mm)
+    never gets there: nothing left undetermined."""
     source = next(p for p in templates.bundled() if p.stem == "shaper")
     text = source.read_text(encoding="utf-8")
     near = text.replace('between the pivots", unit = "mm", value = 60.0',
@@ -326,10 +328,27 @@ def test_a_ram_pin_at_infinity_leaves_only_what_it_reaches_undetermined(tmp_path
         capsys.readouterr()
         code, out, _ = _verify(path, "--json", capsys=capsys)
         reports[name] = json.loads(out)[0]
-        assert code == 0, out
-    assert _dead_cells(reports["bundled"]) == {}
+        assert code == {"bundled": 0, "near": 2}[name], out
+    assert _dead_cells(reports["bundled"]) == {} and reports["bundled"]["not_judged"] == []
     guide_ends = 4 * 2        # B guide 1, 2 and B slot 1, 2, x and y each
     assert _dead_cells(reports["near"]) == {
         ("joints", "drawing rows"): guide_ends, ("frame", "drawing: extents"): 2,
         ("frame", "drawing: links x"): guide_ends // 2,
         ("frame", "drawing: links y"): guide_ends // 2}
+    assert reports["near"]["mismatches"] == 0 and not reports["near"]["unjudged"]
+    assert reports["near"]["not_judged"]
+    wb = openpyxl.load_workbook(tmp_path / "near.xlsx")
+    parallel = {"Sweep": {r for r in range(5, wb["Sweep"].max_row + 1)
+                          if wb["Sweep"][f"A{r}"].value in (210, 330)}}
+    parallel["Motion"] = {r for r in range(7, wb["Motion"].max_row + 1)
+                          if wb["Motion"][f"A{r}"].value in
+                          {f"='Sweep'!A{s}" for s in parallel["Sweep"]}}
+    assert all(len(rows) == 2 for rows in parallel.values())
+    for where in reports["near"]["not_judged"]:
+        sheet, cells = where.split("!")
+        for cell in cells.split(":"):
+            row = openpyxl.utils.cell.coordinate_from_string(cell)[1]
+            if sheet == "Mechanism":       # the summary: the ram's least and greatest travel
+                assert "r5 (ram position" in wb[sheet][f"A{row}"].value, where
+            else:
+                assert row in parallel[sheet], where

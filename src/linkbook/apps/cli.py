@@ -41,6 +41,8 @@ VERIFY_OUTPUT = """output:
     all agree: N of N formula cells compared, max |Δ| ...
     DISAGREES: K cells differ, likely cause Sweep!E5:E77; ...     (exit 1)
     CANNOT JUDGE K formula cells ...: Mechanism!Z3; ...            (exit 2)
+  (cells the build record does not describe, or too near a singular position: their
+  rounding bound there reaches 1% of their value, too wide to tell a wrong formula)
   Where cells differ, the checks that failed and up to 5 of each one's cells come between
   (the likely causes first: differing cells that read no other differing cell). A book that
   cannot be verified at all ends in one line on stderr, `linkbook: error: ...` (exit 2).
@@ -51,8 +53,9 @@ VERIFY_OUTPUT = """output:
   --json prints a list with one object per book, always with the same keys: book, mechanism,
   engine, linkbook (the version), status (0, 1 or 2), ok, error (null, or why the book cannot
   be verified), cells, formula_cells, mismatches (how many cells differ), likely_causes and
-  unjudged (cell ranges in the book's sheet order, a run down a column as one range:
-  "Sweep!E5:E77"), max_abs_diff, inputs, tolerance, checks."""
+  unjudged and not_judged (too near a singular position) (cell ranges in the book's sheet
+  order, a run down a column as one range: "Sweep!E5:E77"), max_abs_diff, inputs, tolerance,
+  checks."""
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -401,6 +404,7 @@ def _as_data(report) -> dict:
         "mismatches": report.differing,
         "likely_causes": _ranges(report, report.causes),
         "unjudged": _ranges(report, report.unjudged),
+        "not_judged": _ranges(report, report.not_judged),
         "replaced_by_constants": [f"{s}!{c}" for s, c in report.replaced],
         "stored_values_differ": report.stored_differ,
         "max_abs_diff": report.max_abs if usable else None, "inputs": report.inputs,
@@ -458,14 +462,24 @@ def _print_report(report, verbose: bool = False) -> None:
             (len(report.replaced), "hold a constant where the build wrote a formula"),
             (report.stored_differ, "store a value their formula does not give")) if n]
         kinds = f" ({'; '.join(kinds)})" if kinds else ""
+        unsure = "".join(f"; not judged: {what}" for what in _cannot_judge(report))
         print(f"DISAGREES: {report.differing} cells differ{kinds}, likely cause {causes}; "
-              f"{compared}, max |Δ| {report.max_abs:.2e}")
-    elif report.unjudged:
-        print(f"CANNOT JUDGE {len(report.unjudged)} formula cells (the build record does not "
-              f"say what they hold): {cell_ranges(_in_book_order(report, report.unjudged))}; "
-              f"{compared}")
+              f"{compared}, max |Δ| {report.max_abs:.2e}{unsure}")
+    elif report.unjudged or report.not_judged:
+        print(f"CANNOT JUDGE {'; '.join(_cannot_judge(report))}; {compared}")
     else:
         print(f"all agree: {compared}, max |Δ| {report.max_abs:.2e}")
+
+
+def _cannot_judge(report) -> list[str]:
+    """What cannot be judged and why, each kind with its cells named."""
+    from ..check.checks import DETERMINED
+    from ..check.verifier import cell_ranges
+    kinds = ((report.unjudged, "(the build record does not say what they hold)"),
+             (report.not_judged, "too near a singular position (their rounding bound reaches "
+                                 f"{DETERMINED:.0%} of their value)"))
+    return [f"{len(cells)} formula cells {why}: "
+            f"{cell_ranges(_in_book_order(report, cells))}" for cells, why in kinds if cells]
 
 
 def _positive_int(lo: int, hi: int):

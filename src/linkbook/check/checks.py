@@ -16,6 +16,9 @@ ANGLE_UNITS = {"rad": 2 * math.pi, "deg": 360.0}
 # velocity or an acceleration. So a mechanism in metres and the same one in micrometres are
 # judged alike: |Δ| ≤ 1e-12·S for a length, 1e-9 for an angle.
 PER = 1e3
+# A bound judges a value only while it is smaller than this fraction of it (of max(|x|, the
+# strict bound)): see Check.determines.
+DETERMINED = 1e-2
 TOLERANCE_RULE = {
     "length": "1e-12·S (S the mechanism's size; S² for an area; times the input's rate for a "
               "velocity or an acceleration)",
@@ -24,6 +27,10 @@ TOLERANCE_RULE = {
                 "limit position a further 1e-12·|∂x/∂θ|, at an isolated one 1e-6; a rate near a "
                 "dead centre its base bound / sine² (sine: between a loop's constraint "
                 "gradients)",
+    "not judged": "a cell the strict bound does not admit, whose allowance near a singular "
+                  "position reaches 1% of max(|x|, its strict bound): the reference's own "
+                  "conditioning leaves its value open to that much, so no allowance passes an "
+                  "error of 1% or more; such cells are named as not judged (exit status 2)",
     "libreoffice": "1e-9·max(|x|, the unit's bound): it keeps 15 digits",
     "gnumeric": "as libreoffice: 1e-9·max(|x|, the unit's bound)",
 }
@@ -52,6 +59,9 @@ class Check:
     na_expected: int = 0
     na_agree: int = 0
     dead_centre: int = 0        # rates at a dead centre: not determined by the data
+    # cells too near a singular position to judge: the allowance they need reaches DETERMINED
+    # of their value (see `determines`)
+    not_judged: list[tuple[str, str]] = field(default_factory=list)
     mismatches: list[Mismatch] = field(default_factory=list)
     judged: set[tuple[str, str]] = field(default_factory=set, repr=False)  # (sheet, cell)
 
@@ -78,19 +88,48 @@ class Check:
             return base
         return max(base, tol * expected * expected / (PER * magnitude))
 
+    @staticmethod
+    def determines(allowed: float, expected: float, strict: float) -> bool:
+        """Does a bound of `allowed` still judge a value of `expected` (whose strict bound is
+        `strict`)? Each allowance near a singular position is a forward-error bound, u·κ·|x|
+        (κ the condition number) with the bound's margin over u: it grows without limit as
+        the position nears the singularity. Once it reaches DETERMINED of the value, the data
+        (as the reference's conditioning sees them) no longer fix the value to better than
+        that, and a bound that wide would pass a wrong formula (twice the value, once it
+        reaches |x|): the cell is not judged. Below it, whatever passes is within 1%."""
+        return allowed < DETERMINED * max(abs(expected), strict)
+
+    def judge(self, sheet: str, cell: str, expected: float, got: float, diff: float,
+              strict: float, allowed: Callable[[], float]) -> None:
+        """One number against the reference, `diff` apart: agrees within `strict` (the bound
+        away from any singular position); else differs beyond `allowed()` (the allowance near
+        one, asked only here), or is not judged where that allowance no longer `determines`
+        the value."""
+        if diff <= strict:
+            return
+        bound = allowed()
+        if diff > bound:
+            self.mismatches.append(Mismatch(sheet, cell, expected, got))
+        elif not self.determines(bound, expected, strict):
+            self.not_judged.append((sheet, cell))
+
     def beyond_rounding(self, values) -> bool:
-        """Is some value so far out that its rounding bound (see `limit`) reaches a tenth of the
-        value itself? A point a round-off determinant puts at "infinity" (a lever parallel to
-        the ram line it should meet): its size, even its sign, is the rounding's, so an extreme
-        taken over it is not determined."""
+        """Is some value so far out that its rounding bound (see `limit`) no longer
+        `determines` it? A point a round-off determinant puts at "infinity" (a lever parallel
+        to the ram line it should meet): its size, even its sign, is the rounding's, so an
+        extreme taken over it is not determined."""
         v = np.abs(np.asarray(values, dtype=float))
         v = v[np.isfinite(v)]
-        return bool(v.size) and self.limit(float(v.max())) >= 0.1 * float(v.max())
+        if not v.size:
+            return False
+        far = float(v.max())
+        return not self.determines(self.limit(far), far, self.limit(far, grows=False))
 
     def as_dict(self) -> dict:
         return {"block": self.block, "column": self.name, "cells": self.cells,
                 "max_abs_diff": self.max_abs, "na_expected": self.na_expected,
-                "na_agree": self.na_agree, "dead_centre": self.dead_centre, "ok": self.ok,
+                "na_agree": self.na_agree, "dead_centre": self.dead_centre,
+                "not_judged": len(self.not_judged), "ok": self.ok,
                 "mismatches": [m.__dict__ for m in self.mismatches[:20]]}
 
 
@@ -105,6 +144,8 @@ def expected_of(ref: dict, key: str) -> np.ndarray:
 
 
 SENSITIVITY_STEP = 1e-7      # rad, for the central difference of the reference
+# rad: shorter steps, for a row within SENSITIVITY_STEP of a limit position (context.slope_of)
+NEARER_STEPS = tuple(SENSITIVITY_STEP * 10.0 ** -k for k in range(1, 7))
 ROUNDING = 1e-12             # rad: what rounding can do to an input angle's effect on a result
 EDGE_SLOPE = 1e6             # at an isolated limit position: ROUNDING·EDGE_SLOPE = 1e-6
 
@@ -162,13 +203,17 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
             diff = (diff + period / 2) % period - period / 2
         diff = abs(diff)
         check.max_abs = max(check.max_abs, diff)
-        limit = check.limit(exp, tol, relative, grows=not period)
-        if diff > limit and slope is not None:
-            limit += ROUNDING * slope(i)
-        if diff > limit and sine is not None and sine[i] < 1.0:
-            limit = max(limit, check.limit(0.0, tol, relative) / max(float(sine[i]), 1e-150) ** 2)
-        if diff > limit:
-            check.mismatches.append(Mismatch(sheet, cell, exp, float(value)))
+
+        def allowed(i=i, exp=exp, diff=diff) -> float:
+            limit = check.limit(exp, tol, relative, grows=not period)
+            if diff > limit and slope is not None:
+                limit += ROUNDING * slope(i)
+            if diff > limit and sine is not None and sine[i] < 1.0:
+                limit = max(limit, check.limit(0.0, tol, relative)
+                            / max(float(sine[i]), 1e-150) ** 2)
+            return limit
+        check.judge(sheet, cell, exp, float(value), diff,
+                    check.limit(exp, tol, relative, grows=False), allowed)
 
 
 def show(value, error_code):
@@ -205,14 +250,16 @@ def compare_exact(check: Check, sheet: str, cells: list[str], got: list, expecte
             if value != exp:
                 check.mismatches.append(Mismatch(sheet, cell, exp, value))
             continue
-        if units:
-            bound = Check(check.block, check.name, check.size, check.rate,
-                          unit_scale(units[i], check.size)).limit(
-                              exp, grows=units[i] not in ANGLE_UNITS)
-        else:
-            bound = check.limit(exp)
-        if not isinstance(value, (int, float)) or abs(float(value) - exp) > bound + extra:
+        if not isinstance(value, (int, float)):
             check.mismatches.append(Mismatch(sheet, cell, exp, value))
-        else:
-            check.max_abs = max(check.max_abs, abs(float(value) - exp))
+            continue
+        bounds = Check(check.block, check.name, check.size, check.rate,
+                       unit_scale(units[i], check.size)) if units else check
+        grows = units[i] not in ANGLE_UNITS if units else True
+        diff = abs(float(value) - exp)
+        before = len(check.mismatches)
+        check.judge(sheet, cell, exp, value, diff, bounds.limit(exp, grows=False),
+                    lambda: bounds.limit(exp, grows=grows) + extra)
+        if len(check.mismatches) == before:
+            check.max_abs = max(check.max_abs, diff)
 

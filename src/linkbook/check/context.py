@@ -10,8 +10,8 @@ import numpy as np
 
 from . import reference as generic
 from ..base.record import BuildRecord
-from .checks import (ANGLE_UNITS, EDGE_SLOPE, SENSITIVITY_STEP, Check, Rules, compare,
-                     expected_of, unit_scale)
+from .checks import (ANGLE_UNITS, EDGE_SLOPE, NEARER_STEPS, SENSITIVITY_STEP, Check, Rules,
+                     compare, expected_of, unit_scale)
 from .reading import UnusableFile
 
 
@@ -53,11 +53,28 @@ def slope_of(solver: Reference, params: dict, angles: np.ndarray, key: str, unit
         params = {k: v for k, v in params.items()
                   if k not in MOTION_SYMBOLS[solver.mechanism.input_kind]}
 
+    def around(p: dict, i: int, step: float) -> np.ndarray:
+        return expected_of(solver.solve(p, float(angles[i]) + scale * np.array(
+            [-step, 0.0, step])), key)
+
+    def differences(p: dict, i: int) -> tuple[np.ndarray, float]:
+        """x at θ − step, θ, θ + step, and the step: h, or on a row within h of a limit
+        position (one side closes, the other not) the first of NEARER_STEPS at which both
+        sides close. The slope there runs like 1/√δ (δ the row's distance from the limit):
+        a difference over h to the one side that closes takes it √(h/δ) times too small."""
+        x = around(p, i, h)
+        if np.isfinite(x[0]) == np.isfinite(x[2]):
+            return x, h
+        for step in NEARER_STEPS:
+            closer = around(p, i, step)
+            if np.isfinite(closer).all():
+                return closer, step
+        return x, h
+
     def at(i: int, j: int = 0) -> float:
         p = {**params, param: column_values[j]} if param else params
-        deg = float(angles[i]) + scale * np.array([-h, 0.0, h])
-        x = expected_of(solver.solve(p, deg), key)
-        pairs = [(a, b, span) for a, b, span in ((0, 2, 2 * h), (0, 1, h), (1, 2, h))
+        x, step = differences(p, i)
+        pairs = [(a, b, span) for a, b, span in ((0, 2, 2 * step), (0, 1, step), (1, 2, step))
                  if np.isfinite(x[a]) and np.isfinite(x[b])]
         if not pairs:
             # Both neighbours fail to close: a limit position, a double root, where any solver

@@ -28,7 +28,8 @@ def check_drawing(j: Judging) -> None:
     for joint in j.model.joints:
         x_cell, y_cell = pos.joints[joint.name]
         j.run("joints", joint.name, pos.sheet, [x_cell, y_cell],
-              np.array(joint_values[joint.name]), "length")
+              np.array(joint_values[joint.name]), "length",
+              _joint_slope(j, [(joint.name, 0), (joint.name, 1)]))
     joints = {joint.name: joint_values[joint.name] for joint in j.model.joints}  # the table's
     drawn, over_sweep, free = dict(joint_values), j.ref, set()
     if j.record.frames is not None:
@@ -40,15 +41,16 @@ def check_drawing(j: Judging) -> None:
             description, j.params, j.ref, j.ref, square)}}
         free = _undetermined_guide_ends(j)
         drawn.update({name: (math.nan, math.nan) for name in free})
-    drawing_cells, drawing_expected, dead = [], [], []
+    drawing_cells, drawing_expected, dead, coordinates = [], [], [], []
     for link in pos.drawing:
         for i, name in enumerate(link.joints):
             r = link.rows[0] + i
             drawing_cells += [f"N{r}", f"O{r}"]
             drawing_expected += list(drawn.get(name, (math.nan, math.nan)))
             dead += [name in free] * 2
+            coordinates += [(name, 0), (name, 1)]
     j.run("joints", "drawing rows", pos.sheet, drawing_cells, np.array(drawing_expected),
-          "length", dead=np.array(dead))
+          "length", _joint_slope(j, coordinates), dead=np.array(dead))
     j.checks.append(_check_links(j, over_sweep))
     if j.record.frames is not None:
         j.checks += _check_frames(j, joints, drawn, free)
@@ -244,6 +246,24 @@ def _check_square(j: Judging, sheet: str, cells: dict, need: float, name: str
     return c, square
 
 
+def _joint_slope(j: Judging, coordinates: list[tuple[str | None, int]], per: float = 1.0):
+    """slope(i) for checks.compare: |∂/∂θ| at the current position of cell i's joint
+    coordinate (name, axis 0 for x, 1 for y), from the reference's column of that coordinate,
+    divided by `per` (a drawing's square); 0 for a point with no such column (a fixed pivot, a
+    guide's end) or none."""
+    now = np.array([j.angle])
+
+    def slope(i: int) -> float:
+        name, axis = coordinates[i]
+        key = f"{'xy'[axis]}{name}"
+        points = j.one["points"]
+        if name not in points or key not in j.one or \
+                float(j.one[key][0]) != float(points[name][axis][0]):
+            return 0.0
+        return j.slope(now, key, "length")(0) / per
+    return slope
+
+
 def _check_mapped(j: Judging, sheet: str, series: Series, joint_values: dict, centre: dict,
                   square: float, name: str, free: set[str]) -> list[Check]:
     """A mapped column pair: (coordinate − centre) / square, the coordinate the reference's
@@ -257,11 +277,14 @@ def _check_mapped(j: Judging, sheet: str, series: Series, joint_values: dict, ce
         slope, dead = None, None
         if series.kind == "links":
             world, dead = np.full(len(cells), np.nan), np.zeros(len(cells), dtype=bool)
+            coordinates = [(None, i)] * len(cells)
             for link in j.record.position.drawing:
                 for k, joint in enumerate(link.joints):
                     row = link.rows[0] + k - series.rows[0]
                     world[row] = joint_values.get(joint, (math.nan, math.nan))[i]
                     dead[row] = joint in free
+                    coordinates[row] = (joint, i)
+            slope = _joint_slope(j, coordinates, square)
         else:
             key = getattr(series, axis)
             world = expected_of(j.ref, key)

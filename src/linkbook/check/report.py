@@ -34,23 +34,33 @@ class Report:
         return any(not c.ok for c in self.checks)
 
     @property
+    def not_judged(self) -> list[tuple[str, str]]:
+        """Cells too near a singular position to judge (Check.determines), each once: compared
+        with the reference, but by a bound too wide to tell a wrong formula; a cell that
+        differs elsewhere is counted there."""
+        differ = {(m.sheet, m.cell) for c in self.checks for m in c.mismatches}
+        return sorted(set().union(*(c.not_judged for c in self.checks)) - differ)
+
+    @property
     def ok(self) -> bool:
-        return not self.disagrees and not self.unjudged and self.error is None
+        return self.status == 0
 
     @property
     def status(self) -> int:
         """The exit status: 0 every formula cell agrees, 1 a cell disagrees, 2 some formula
-        cells cannot be judged (and none disagrees), or the book cannot be verified at all."""
+        cells cannot be judged (the record does not say what they hold, or they are too near a
+        singular position) and none disagrees, or the book cannot be verified at all."""
         if self.error is not None:
             return 2
-        return 1 if self.disagrees else 2 if self.unjudged else 0
+        return 1 if self.disagrees else 2 if self.unjudged or self.not_judged else 0
 
     @property
     def cells(self) -> int:
-        """Formula cells compared with the reference (each counted once; a constant where the
-        record has a formula is judged, and differs, but is not a formula cell)."""
+        """Formula cells judged against the reference (each counted once; a constant where the
+        record has a formula is judged, and differs, but is not a formula cell; a cell too near
+        a singular position is not judged)."""
         return len(set().union(*(c.judged for c in self.checks)) - set(self.replaced)
-                   - set(self.absent))
+                   - set(self.absent) - set(self.not_judged))
 
     @property
     def stored_differ(self) -> int:
