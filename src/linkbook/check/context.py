@@ -29,8 +29,8 @@ class Reference:
                 from None
         self.description = self.mechanism.description
 
-    def solve(self, params: dict, angles) -> dict:
-        return generic.solve(self.description, params, angles)
+    def solve(self, params: dict, angles, turns: dict | None = None) -> dict:
+        return generic.solve(self.description, params, angles, turns)
 
     def fourbar_loops(self, params: dict):
         return generic.fourbar_loops(self.description, params)
@@ -109,10 +109,28 @@ class Judging:
     slopes: dict = field(default_factory=dict)
     angle: float = 0.0
     one: dict | None = None
+    # the book's own angle columns over the sweep and at the current position (radians): the
+    # turn an expression of an angle reads them in (reference.solve's `turns`)
+    turns: dict = field(default_factory=dict)
+    turns_now: dict = field(default_factory=dict)
 
     @property
     def mechanism(self):
         return self.solver.mechanism
+
+    def shown_angles(self, sheet: str, cells: dict[str, list[str]]) -> dict[str, np.ndarray]:
+        """{key: the book's values} of the angle columns (radians) among `cells` ({key: its
+        cells}), NaN where a cell holds no number."""
+        def number(v):
+            return float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) \
+                else math.nan
+        def is_angle(key: str) -> bool:
+            try:
+                return self.model.get(key).unit == "rad"
+            except KeyError:            # the sweep's bookkeeping (where each row closes)
+                return False
+        return {key: np.array([number(v) for v in self.got(sheet, where)])
+                for key, where in cells.items() if is_angle(key)}
 
     def got(self, sheet: str, cells: list[str]) -> list:
         return [self.values.get((sheet, x)) for x in cells]

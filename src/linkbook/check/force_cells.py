@@ -53,7 +53,7 @@ def force_scale(j, ref: dict, params: dict, metres: float, rate2: float
     kinds = j.record.kinds()
     mass = sum(abs(v) for s, v in j.params.items() if kinds.get(s) == "mass")
     at_rest = {**params, **dict.fromkeys(MOTION_SYMBOLS[j.mechanism.input_kind], 0.0)}
-    static = forces(j.solver.description, at_rest, j.angles, j.record.length_unit)
+    static = forces(j.solver.description, at_rest, j.angles, j.record.length_unit, j.turns)
     own = max(mass * (j.size * metres * rate2 + GRAVITY_SCALE), float(_largest(static).max()),
               FORCE_FLOOR)
     return max(own, float(_largest(ref).max())), own
@@ -78,8 +78,8 @@ def check_forces(j) -> None:
     metres = LENGTH_UNITS[j.record.length_unit]
     # a load's expression may convert a length with the book's `to_metres`
     params = {**j.params, "to_metres": metres}
-    ref = forces(j.solver.description, params, j.angles, j.record.length_unit)
-    one = forces(j.solver.description, params, [j.angle], j.record.length_unit)
+    ref = forces(j.solver.description, params, j.angles, j.record.length_unit, j.turns)
+    one = forces(j.solver.description, params, [j.angle], j.record.length_unit, j.turns_now)
     _, rate2 = motion_rates(mech, j.params, j.size)
     scale, own = force_scale(j, ref, params, metres, rate2)
     _require_every_column(table, ref, COUPLE_SHOWN * scale * j.size * metres)

@@ -784,13 +784,14 @@ def _report(top: _Topology, system: _System, x: np.ndarray) -> dict:
 
 
 def forces(description: Mapping, params: Mapping[str, float], angles_deg,
-           length_unit: str = "m") -> dict:
+           length_unit: str = "m", turns: Mapping[str, np.ndarray] | None = None) -> dict:
     """Dynamic force analysis of a described mechanism at each input (degrees for a crank, the
     length for an actuator; 1-D array-like), as the module's docstring says.
 
     description: the [mechanism] table as parsed by tomllib, with its dynamics; params:
     {parameter symbol: value}, the input's speed and acceleration among them (omega_in and
-    alpha_in, or v_in and a_in); length_unit: the template's (mm, cm, m, in, ft).
+    alpha_in, or v_in and a_in); length_unit: the template's (mm, cm, m, in, ft); turns: as
+    the kinematic reference's (an expression reads each angle in the turn a book shows).
 
     Raises ValueError for a description it cannot analyse (a body entry naming no link, links
     that do not make a mechanism of one degree of freedom, a slotted link written with a
@@ -804,7 +805,7 @@ def forces(description: Mapping, params: Mapping[str, float], angles_deg,
     top = topology(description)
     loads = _read_loads(description, top)
     angles = np.atleast_1d(np.asarray(angles_deg, dtype=float))
-    rows = _Rows(solve(loads.described(), params, angles), len(angles),
+    rows = _Rows(solve(loads.described(), params, angles, turns), len(angles),
                  LENGTH_UNITS[length_unit])
     with np.errstate(invalid="ignore", divide="ignore"):
         system = _equations(top, loads, rows)

@@ -63,7 +63,8 @@ def _check_sweep(j: Judging) -> None:
     j.angles = input_column(j.wb[sweep.sheet], "A", sweep.rows, mech.input_is_angle)
     # the slope of a cell is taken per radian of a crank, per `size` of an actuator's stroke
     j.scale = math.degrees(1.0) if mech.input_is_angle else j.size
-    j.ref = j.solver.solve(j.params, j.angles)
+    j.turns = j.shown_angles(sweep.sheet, {key: sweep.cells(key) for key in sweep.columns})
+    j.ref = j.solver.solve(j.params, j.angles, j.turns)
     for key in sweep.columns:
         if key == mech.input_column or key in ASSEMBLY_COLUMNS:
             continue
@@ -78,7 +79,8 @@ def _check_position(j: Judging) -> None:
     mech, pos = j.mechanism, j.record.position
     j.angle = input_at(j.wb[pos.sheet], pos.input_cell, f"the current input {mech.input_word}",
                        mech.input_is_angle)
-    j.one = j.solver.solve(j.params, np.array([j.angle]))
+    j.turns_now = j.shown_angles(pos.sheet, {key: [cell] for key, cell in pos.cells.items()})
+    j.one = j.solver.solve(j.params, np.array([j.angle]), j.turns_now)
     for key, cell in pos.cells.items():
         unit = column_unit(j.model, key)
         j.run("position", key, pos.sheet, [cell], expected_of(j.one, key), unit,

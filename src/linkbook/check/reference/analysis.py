@@ -14,7 +14,8 @@ from .rates import MOTION_PARAMS, Rates
 from .steps import STEP_TYPES
 
 
-def solve(description: Mapping, params: Mapping[str, float], angles_deg) -> dict:
+def solve(description: Mapping, params: Mapping[str, float], angles_deg,
+          turns: Mapping[str, np.ndarray] | None = None) -> dict:
     """Position analysis of a described mechanism at each input angle (degrees, 1-D array-like).
 
     description: the [mechanism] table of a template as parsed by tomllib (input, ground, steps,
@@ -28,6 +29,12 @@ def solve(description: Mapping, params: Mapping[str, float], angles_deg) -> dict
     dyad, slider, slide, slot — closes on that row) and 'points': {point name: (x ndarray,
     y ndarray)} for every ground and step point.
 
+    turns: {angle column key: the values (radians) an evaluation shows for it, one per row}: an
+    expression step reads each of those angles as the one of its turns nearest that value. An
+    angle is determined only up to whole turns, and the window a workbook shows it in is its
+    own choice; a formula of the angle itself (a load `T*theta14`) then means what it means
+    with the angle as shown.
+
     Raises ValueError for a malformed description (unknown step type, unknown point, unknown
     parameter, a branch not ±1, a key written twice, ...).
     """
@@ -35,7 +42,7 @@ def solve(description: Mapping, params: Mapping[str, float], angles_deg) -> dict
     if angles.ndim != 1:
         raise ValueError("angles_deg must be one-dimensional")
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        solver = Positions(description, params, angles, STEP_TYPES)
+        solver = Positions(description, params, angles, STEP_TYPES, turns)
         out = solver.run()
         speed, accel = MOTION_PARAMS["angle" if solver.angle_input else "length"]
         if speed in params and accel in params:

@@ -74,12 +74,14 @@ class Positions:
     workbook makes them one named constant cell."""
 
     def __init__(self, description: Mapping, params: Mapping[str, float], angles: np.ndarray,
-                 step_types: Mapping[str, StepType]):
+                 step_types: Mapping[str, StepType],
+                 turns: Mapping[str, np.ndarray] | None = None):
         inp = description.get("input")
         if not isinstance(inp, Mapping) or not isinstance(inp.get("key"), str):
             raise ValueError("mechanism.input must be a table with a key")
         self.input_key = inp["key"]
         self.params = params
+        self.turns = turns or {}      # see analysis.solve: the turn an expression reads
         self.step_types = step_types
         self.steps = steps_of(description, step_types)
         # the input: a crank's angle (degrees given, radians used) or a linear actuator's

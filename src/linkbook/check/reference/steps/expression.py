@@ -10,6 +10,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..expressions import evaluate
+from ..geometry import near
 from ..positions import Positions
 from ..step_type import StepType
 
@@ -26,12 +27,23 @@ def place(solver: Positions, step: Mapping) -> None:
     # constant, a hidden value independent of the input angle); such names are passed as
     # floats, so that the value comes back as a float.
     env = {k: (float(np.asarray(v).flat[0]) if solver.fixed.get(k) and np.ndim(v) and solver.n
-               else v) for k, v in solver.env.items()}
+               else _turned(v, solver.turns.get(k))) for k, v in solver.env.items()}
     value = evaluate(step["formula"], env)
     if isinstance(value, float):
         solver.put(key, value, True)
     else:
         solver.put(key, np.broadcast_to(value, (solver.n,)).astype(float), False)
+
+
+def _turned(angle, shown):
+    """An angle column taken in the turn of the values an evaluation shows for it (`shown`,
+    radians, one per row), where it shows a number; else as it is."""
+    if shown is None or np.ndim(angle) == 0:
+        return angle
+    shown = np.asarray(shown, dtype=float)
+    if shown.shape != np.shape(angle):
+        return angle
+    return np.where(np.isfinite(shown), near(angle, np.nan_to_num(shown)), angle)
 
 
 STEP = StepType(place=place)
