@@ -132,6 +132,23 @@ TOML_CASES = [
      "(got 2.2e-308)"),
     ("gravity misspelt", FOURBAR_TOML.replace('gravity = { g = "g" }', 'gravity = { G = "g" }'),
      "mine.toml: mechanism.dynamics.gravity: unknown key 'G'; known: angle, g"),
+    # the defined names the book gives cells of its own (one cell per name, whatever the case)
+    ("a parameter named as the current position", FOURBAR_TOML.replace(
+        'name = "Branch"', 'name = "theta12_now"'),
+     "mine.toml: parameters.branch.name: 'theta12_now' is the book's own name 'theta12_now' "
+     "(the current position)"),
+    ("a parameter named as metres per unit, in capitals", FOURBAR_TOML.replace(
+        'name = "Branch"', 'name = "TO_Metres"'),
+     "mine.toml: parameters.branch.name: 'TO_Metres' is the book's own name 'to_metres'"),
+    ("a parameter named as Cs", FOURBAR_TOML.replace('name = "Branch"',
+                                                     'name = "speed_fluctuation"'),
+     "mine.toml: parameters.branch.name: 'speed_fluctuation' is the book's own name"),
+    ("a parameter's symbol a derived constant's name", FOURBAR_TOML.replace(
+        "a1 = {", 'k_rpm_in = { label = "x", unit = "mm", value = 1.0 }\na1 = {'),
+     "mine.toml: parameters.k_rpm_in: 'k_rpm_in' is the book's own name 'k_rpm_in'"),
+    ("a parameter's symbol the placeholder of metres per unit", FOURBAR_TOML.replace(
+        "a1 = {", 'to_metres = { label = "x", unit = "mm", value = 1.0, name = "tm" }\na1 = {'),
+     "mine.toml: parameters.to_metres: 'to_metres' is the book's own name 'to_metres'"),
     ("parameter not a table", FOURBAR_TOML.replace(
         'a1 = { label = "ground link |A0B0|", unit = "mm", value = 70.0 }', "a1 = 70"), "a1"),
 ]

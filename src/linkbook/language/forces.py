@@ -32,10 +32,10 @@ from __future__ import annotations
 from .bodies import GROUND, METRES, METRES_REF, Body, BodiesAndLoads
 from .excel import ZERO, cross, guard, lin, mul, sq
 from .fields import as_table
+from .mechanisms import FORCE_ROLE, TO_METRES
 from .model import NEWTON, NEWTON_METRE, DescriptionError, Quantity
 
-FORCE = "force"              # the model's role of a force column (sheet Forces)
-TO_METRES = METRES           # the named cell: metres per length unit
+FORCE = FORCE_ROLE           # the model's role of a force column (sheet Forces)
 
 
 class ForceWriter(BodiesAndLoads):

@@ -226,6 +226,7 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
                  check_value(f"{field}.value", kind, entry["value"]))
         params.append(Parameter(symbol, kind, label, unit, excel_name, value))
     _check_unique_names(params, origin)
+    _check_own_names(params, mech, origin)
     sweep_data = _need(data, "sweep", origin, dict)
     sweep = Sweep(*(parse_number(f"{origin}: sweep.{k}", _need(sweep_data, k, f"{origin}: sweep",
                                                                (int, float)))
@@ -365,6 +366,19 @@ def _check_unique_names(params: list[Parameter], origin: str) -> None:
         if other != p.symbol:
             raise InputError(f"{origin}: parameters.{p.symbol}.name",
                              f"{p.name!r} is already the name of {other}")
+
+
+def _check_own_names(params: list[Parameter], mech: Mechanism, origin: str) -> None:
+    """No parameter named as a cell the book names itself: two cells of one name, or a
+    placeholder standing for two cells, leave formulas reading the wrong one."""
+    own = {name.upper(): (name, what) for name, what in mech.book_names().items()}
+    for p in params:
+        for field, name in ((f"parameters.{p.symbol}", p.symbol),
+                            (f"parameters.{p.symbol}.name", p.name)):
+            if name.upper() in own:
+                taken, what = own[name.upper()]
+                raise InputError(f"{origin}: {field}", f"{name!r} is the book's own name "
+                                                       f"{taken!r} ({what}); choose another")
 
 
 def check_step_lengths(t: Template) -> None:
