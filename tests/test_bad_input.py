@@ -149,6 +149,15 @@ TOML_CASES = [
     ("a parameter's symbol the placeholder of metres per unit", FOURBAR_TOML.replace(
         "a1 = {", 'to_metres = { label = "x", unit = "mm", value = 1.0, name = "tm" }\na1 = {'),
      "mine.toml: parameters.to_metres: 'to_metres' is the book's own name 'to_metres'"),
+    # numbers and symbols spelt as verify's reference reads them (base.xlsx.NUMBER_LITERAL)
+    ("a load's number with an underscore", FOURBAR_TOML.replace('torque = "T4"',
+                                                                'torque = "-1_000"'),
+     "mine.toml: mechanism.loads[0].torque: '1_000' is not a number as a formula writes one"),
+    ("a hexadecimal number in a length", FOURBAR_TOML.replace('p_length = "a3"',
+                                                              'p_length = "a3 + 0x10"'),
+     "p_length: '0x10' is not a number as a formula writes one"),
+    ("a full-width symbol", FOURBAR_TOML.replace('p_length = "a3"', 'p_length = "ａ3"'),
+     "p_length: 'ａ3' is not a symbol: ASCII letters, digits and _ only"),
     ("parameter not a table", FOURBAR_TOML.replace(
         'a1 = { label = "ground link |A0B0|", unit = "mm", value = 70.0 }', "a1 = 70"), "a1"),
 ]

@@ -43,12 +43,16 @@ DATE_FORMAT_IDS = frozenset([*range(14, 23), *range(27, 37), *range(45, 48), *ra
 _NOT_DATE_PARTS = re.compile(r'"[^"]*"|\\.|_.|\*.|\[[^\]]*\]')
 _DATE_LETTERS = re.compile(r"[dmyhsDMYHS]")
 _COORDINATE = re.compile(r"^\$?([A-Za-z]{1,3})\$?(\d+)$")
+# A number as a formula writes it: ASCII digits, at most one point, an optional exponent (a sign
+# before it is an operator). The one spelling the mechanism language's expressions may use for a
+# number (language.expressions) and verify's reference reads there (check.reference.expressions):
+# no 1_000, 0x10, full-width or Arabic-Indic digits.
+NUMBER_LITERAL = r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
 # xsd:decimal / xsd:double without INF and NaN (LibreOffice reads those, and overflowing
 # exponents, as infinities no formula can use), around XML white space (ASCII only: \s would
 # take Unicode spaces too). LibreOffice reads the digits before a stray character ('3_5' as 3,
 # '0x10' as 0): a book that needs that reading is refused.
-_NUMBER = re.compile(r"[ \t\r\n]*[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
-                     r"[ \t\r\n]*")
+_NUMBER = re.compile(rf"[ \t\r\n]*[+-]?{NUMBER_LITERAL}[ \t\r\n]*")
 _INDEX = re.compile(r"[ \t\r\n]*[0-9]+[ \t\r\n]*")
 # Excel's limits (Microsoft's "Excel specifications and limits"): 8,192 characters of formula
 # contents, 64 levels of nested functions (counted here as brackets of any kind, so a formula

@@ -7,7 +7,9 @@ from __future__ import annotations
 import ast
 import math
 import operator
+import re
 
+from ..base.xlsx import NUMBER_LITERAL
 from .excel import ATOM, COMPARISON, NEGATION, OUTSIDE_DOMAIN, POWER, PRODUCT, SUM, Expr, \
     in_domain_or_na, number
 from .model import DescriptionError
@@ -39,11 +41,32 @@ def expression(field: str, raw: object, symbols: set[str]) -> Expr:
         raise DescriptionError(field, f"must be a number or an expression (got {raw!r})")
     if not isinstance(raw, str):
         return _finite(field, raw)
+    source = raw.replace("^", "**")
     try:
-        tree = ast.parse(raw.replace("^", "**"), mode="eval")
+        tree = ast.parse(source, mode="eval")
     except SyntaxError:
         raise DescriptionError(field, f"is not an expression: {raw!r}") from None
+    _check_spelling(field, source, tree)
     return _emit(field, tree.body, symbols)
+
+
+_NUMBER_LITERAL = re.compile(NUMBER_LITERAL)
+
+
+def _check_spelling(field: str, source: str, tree: ast.AST) -> None:
+    """Numbers and symbols spelt as verify's reference reads them: Python also reads 1_000,
+    0x10 and (by NFKC) a full-width symbol, which the reference refuses or reads otherwise."""
+    for node in ast.walk(tree):
+        if not isinstance(node, (ast.Constant, ast.Name)):
+            continue
+        text = ast.get_source_segment(source, node)
+        if isinstance(node, ast.Name) and text != node.id:
+            raise DescriptionError(field, f"{text!r} is not a symbol: ASCII letters, digits and "
+                                          "_ only")
+        if isinstance(node, ast.Constant) and type(node.value) in (int, float, complex) \
+                and not _NUMBER_LITERAL.fullmatch(text or ""):
+            raise DescriptionError(field, f"{text!r} is not a number as a formula writes one "
+                                          "(digits, one point, an exponent: 1000, 0.5, 2.5e3)")
 
 
 _BINARY = {ast.Add: ("+", SUM), ast.Sub: ("-", SUM), ast.Mult: ("*", PRODUCT),
