@@ -158,6 +158,19 @@ TOML_CASES = [
      "p_length: '0x10' is not a number as a formula writes one"),
     ("a full-width symbol", FOURBAR_TOML.replace('p_length = "a3"', 'p_length = "ａ3"'),
      "p_length: 'ａ3' is not a symbol: ASCII letters, digits and _ only"),
+    # formulas within Excel's limits (base.xlsx.formula_problem, as verify checks a book)
+    ("120 loads on one point", FOURBAR_TOML + '\n[[mechanism.loads]]\nat = "C"\nforce = [1, 2]\n'
+     * 120, "mine.toml: mechanism.loads: the formula of F34x would be one of 11,953 characters; "
+     "Excel's limit is 8,192"),
+    ("a load nested 70 functions deep", FOURBAR_TOML.replace(
+        'torque = "T4"', 'torque = "' + "ABS(" * 70 + "T4" + ")" * 70 + '"'),
+     "mine.toml: mechanism.loads: the formula of F34x would be one nested 75 brackets deep; "
+     "Excel's limit is 64 levels"),
+    ("a step's length too long for a cell", FOURBAR_TOML.replace(
+        'p_length = "a3"', 'p_length = "a3' + " + a3" * 150 + '"').replace(
+        'value = 62.3 }', 'value = 62.3, name = "coupler_' + "x" * 60 + '" }'),
+     "mine.toml: mechanism.steps[2] (point C): the formula of gamma would be one of 31,346 "
+     "characters"),      # (the point's angle reads that length: the first cell written over)
     ("parameter not a table", FOURBAR_TOML.replace(
         'a1 = { label = "ground link |A0B0|", unit = "mm", value = 70.0 }', "a1 = 70"), "a1"),
 ]

@@ -349,15 +349,22 @@ def _check_formula(text: str, part: str, title: str, address: str) -> None:
     """Refuse a formula Excel would not hold, before anything parses it: parsing costs grow
     with its length, and deep nesting crashes LibreOffice. (Called where the formula is long
     or has many brackets: a cheap test in the loop over cells keeps the call off most.)"""
+    problem = formula_problem(text)
+    if problem:
+        raise Refused(f"{part}: cell {title}!{address} has a formula {problem}")
+
+
+def formula_problem(text: str) -> str | None:
+    """How a formula's text is beyond Excel's limits ("of 9,000 characters; Excel's limit is
+    8,192"), or None: what verify refuses in a book, and build before it writes one."""
     if len(text) > FORMULA_LENGTH_LIMIT:
-        raise Refused(f"{part}: cell {title}!{address} has a formula of {len(text):,} "
-                      f"characters; Excel's limit is {FORMULA_LENGTH_LIMIT:,}")
+        return f"of {len(text):,} characters; Excel's limit is {FORMULA_LENGTH_LIMIT:,}"
     if text.count("(") <= FORMULA_NESTING_LIMIT:
-        return
+        return None
     deepest = _nesting(text)
     if deepest > FORMULA_NESTING_LIMIT:
-        raise Refused(f"{part}: cell {title}!{address} has a formula nested {deepest} brackets "
-                      f"deep; Excel's limit is {FORMULA_NESTING_LIMIT} levels")
+        return f"nested {deepest} brackets deep; Excel's limit is {FORMULA_NESTING_LIMIT} levels"
+    return None
 
 
 _ASCII_BUT_BRACKETS = {i: None for i in range(128) if chr(i) not in "()"}

@@ -208,6 +208,7 @@ class Compiler:
     def run(self) -> Model:
         d = self.data
         check_keys(self.field, d, *MECHANISM_KEYS)
+        self.model.where = self.field
         self.read_input(d["input"])
         self.read_ground(d["ground"])
         steps = d["steps"]
@@ -216,6 +217,7 @@ class Compiler:
         for i, step in enumerate(steps):
             self.read_step(i, step)
         steps_keys = {q.key for q in self.model.quantities}   # what an expression step may name
+        self.model.where = self.field
         Presentation(self).read(d)
         motion = MotionWriter(self)
         motion.run()
@@ -281,6 +283,7 @@ class Compiler:
         label = step.get("point") or step.get("key")
         field = f"{self.field}.steps[{i}] ({kind} {label})" if isinstance(label, str) else field
         self.step_name = f"{kind} {label}"
+        self.model.where = field
         required, optional = STEPS[kind].keys
         check_keys(field, step, required, optional | COMMON_KEYS)
         if "point" in step:

@@ -64,6 +64,8 @@ class ForceWriter(BodiesAndLoads):
     def run(self) -> None:
         from .steps import STEPS
         self.bodies = self._bodies()
+        # what grows a force's formula without bound is the loads on one link
+        self.model.where = f"{self.field}.{'loads' if self.loads else 'bodies'}"
         self.pairs = len(self.bodies) + GROUND >= 10
         self._masses()
         self._loads()
