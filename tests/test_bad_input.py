@@ -171,6 +171,23 @@ TOML_CASES = [
         'value = 62.3 }', 'value = 62.3, name = "coupler_' + "x" * 60 + '" }'),
      "mine.toml: mechanism.steps[2] (point C): the formula of gamma would be one of 31,346 "
      "characters"),      # (the point's angle reads that length: the first cell written over)
+    # loads that are numbers on some row, TRUE or FALSE on none, angles within ±360°
+    ("a load of NA()", FOURBAR_TOML.replace('torque = "T4"', 'torque = "NA()"'),
+     "mine.toml: mechanism.loads[0].torque: 'NA()' is an error (#N/A, #DIV/0!, #NUM!) on every "
+     "row with these parameters"),
+    ("a load of 1/0", FOURBAR_TOML.replace('torque = "T4"', 'torque = "T4 + 1/0"'),
+     "mine.toml: mechanism.loads[0].torque: 'T4 + 1/0' is an error"),
+    ("a load of a column over 0", FOURBAR_TOML.replace(
+        'torque = "T4"', 'torque = "IF(a2 > 1, xB/0, NA())"'),
+     "mine.toml: mechanism.loads[0].torque: 'IF(a2 > 1, xB/0, NA())' is an error"),
+    ("a mass of NA()", FOURBAR_TOML.replace('mass = "m2"', 'mass = "m2*NA()"'),
+     "mine.toml: mechanism.bodies[0].mass: 'm2*NA()' is an error"),
+    ("a load that is a comparison", FOURBAR_TOML.replace('torque = "T4"', 'torque = "T4==T4"'),
+     "mine.toml: mechanism.loads[0].torque: 'T4==T4' is a comparison, TRUE or FALSE"),
+    ("a load's angle of 1e300", FOURBAR_TOML.replace(
+        'torque = "T4"', 'at = "B"\nforce = { magnitude = "T4", angle = 1e300 }'),
+     "mine.toml: mechanism.loads[0].force.angle: must be an angle from -360 to 360 degrees "
+     "(got 1e+300)"),
     ("parameter not a table", FOURBAR_TOML.replace(
         'a1 = { label = "ground link |A0B0|", unit = "mm", value = 70.0 }', "a1 = 70"), "a1"),
 ]

@@ -47,6 +47,7 @@ class Compiler:
         self.swept: set[str] = set()     # the input key, where it is a length expressions use
         self.records: list[dict] = []    # per step what it placed, for its rates (motion.py)
         self.lengths: list[tuple[str, object]] = []   # (field, expression) of every length
+        self.loads: list[tuple[str, object]] = []     # ... of every value of the force analysis
         self.traced = ""
         self.field = f"{origin}: mechanism"
         self.data = as_table(self.field, data)
@@ -353,4 +354,5 @@ def compile_mechanism(name: str, data: dict, kinds: dict[str, str], origin: str,
         if out not in {q.key for q in model.of_role(COLUMN)}:
             raise DescriptionError(f"{origin}: grid.output", f"{out!r} is not a shown column")
     return Mechanism(name, dict(c.kinds), c.input_key, c.input_symbol, lambda: model, grid,
-                     description=data, input_kind=c.input_kind, lengths=tuple(c.lengths))
+                     description=data, input_kind=c.input_kind, lengths=tuple(c.lengths),
+                     loads=tuple(c.loads))

@@ -135,6 +135,53 @@ def value_of(raw: object, values: dict[str, float]) -> float | None:
         return None
 
 
+def always_an_error(raw: object, values: dict[str, float]) -> bool:
+    """Whether an expression is an error value (#N/A, #DIV/0!, #NUM!) with these parameter
+    values whatever the columns it names hold: on every row of the book (NA(), 1/0, a2*NA(),
+    xA/0)."""
+    if not isinstance(raw, str):
+        return False
+    return _always(ast.parse(raw.replace("^", "**"), mode="eval").body, values)
+
+
+def _always(node: ast.AST, values: dict[str, float]) -> bool:
+    try:
+        _value(node, values)
+        return False
+    except _NotANumber:
+        return True
+    except KeyError:        # it names a column: an error only where a part is one regardless
+        pass
+    if isinstance(node, ast.Call):
+        name, args = node.func.id.upper(), node.args
+        if name == "IFERROR":
+            return _always(args[0], values) and _always(args[1], values)
+        if name == "IF":
+            return _always(args[0], values) or all(_always(a, values) for a in args[1:])
+        return any(_always(a, values) for a in args)
+    if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Div) and _zero(node.right, values):
+        return True
+    parts = [node.operand] if isinstance(node, ast.UnaryOp) else \
+        [node.left, node.right] if isinstance(node, ast.BinOp) else \
+        [node.left, *node.comparators] if isinstance(node, ast.Compare) else []
+    return any(_always(p, values) for p in parts)
+
+
+def _zero(node: ast.AST, values: dict[str, float]) -> bool:
+    try:
+        return _value(node, values) == 0
+    except (_NotANumber, KeyError):
+        return False
+
+
+def is_comparison(raw: object) -> bool:
+    """Whether an expression's value is TRUE or FALSE (a comparison outside any function),
+    which the book's sums would read otherwise than the reference."""
+    if not isinstance(raw, str):
+        return False
+    return isinstance(ast.parse(raw.replace("^", "**"), mode="eval").body, ast.Compare)
+
+
 def _value(node: ast.AST, values: dict[str, float]) -> float:
     if isinstance(node, ast.Constant):
         return float(node.value)

@@ -53,6 +53,8 @@ class Mechanism:
     input_kind: str = ANGLE_KIND          # a crank's angle, or a linear actuator's length
     # (field, expression) of every length a step takes: each must come out positive
     lengths: tuple[tuple[str, object], ...] = ()
+    # (field, expression) of every mass, inertia, load and gravity: none an error on every row
+    loads: tuple[tuple[str, object], ...] = ()
 
     def book_names(self) -> dict[str, str]:
         """{defined name: what it names} of the cells the book names itself (beside the
