@@ -132,6 +132,62 @@ TOML_CASES = [
      "(got 2.2e-308)"),
     ("gravity misspelt", FOURBAR_TOML.replace('gravity = { g = "g" }', 'gravity = { G = "g" }'),
      "mine.toml: mechanism.dynamics.gravity: unknown key 'G'; known: angle, g"),
+    # the defined names the book gives cells of its own (one cell per name, whatever the case)
+    ("a parameter named as the current position", FOURBAR_TOML.replace(
+        'name = "Branch"', 'name = "theta12_now"'),
+     "mine.toml: parameters.branch.name: 'theta12_now' is the book's own name 'theta12_now' "
+     "(the current position)"),
+    ("a parameter named as metres per unit, in capitals", FOURBAR_TOML.replace(
+        'name = "Branch"', 'name = "TO_Metres"'),
+     "mine.toml: parameters.branch.name: 'TO_Metres' is the book's own name 'to_metres'"),
+    ("a parameter named as Cs", FOURBAR_TOML.replace('name = "Branch"',
+                                                     'name = "speed_fluctuation"'),
+     "mine.toml: parameters.branch.name: 'speed_fluctuation' is the book's own name"),
+    ("a parameter's symbol a derived constant's name", FOURBAR_TOML.replace(
+        "a1 = {", 'k_rpm_in = { label = "x", unit = "mm", value = 1.0 }\na1 = {'),
+     "mine.toml: parameters.k_rpm_in: 'k_rpm_in' is the book's own name 'k_rpm_in'"),
+    ("a parameter's symbol the placeholder of metres per unit", FOURBAR_TOML.replace(
+        "a1 = {", 'to_metres = { label = "x", unit = "mm", value = 1.0, name = "tm" }\na1 = {'),
+     "mine.toml: parameters.to_metres: 'to_metres' is the book's own name 'to_metres'"),
+    # numbers and symbols spelt as verify's reference reads them (base.xlsx.NUMBER_LITERAL)
+    ("a load's number with an underscore", FOURBAR_TOML.replace('torque = "T4"',
+                                                                'torque = "-1_000"'),
+     "mine.toml: mechanism.loads[0].torque: '1_000' is not a number as a formula writes one"),
+    ("a hexadecimal number in a length", FOURBAR_TOML.replace('p_length = "a3"',
+                                                              'p_length = "a3 + 0x10"'),
+     "p_length: '0x10' is not a number as a formula writes one"),
+    ("a full-width symbol", FOURBAR_TOML.replace('p_length = "a3"', 'p_length = "ａ3"'),
+     "p_length: 'ａ3' is not a symbol: ASCII letters, digits and _ only"),
+    # formulas within Excel's limits (base.xlsx.formula_problem, as verify checks a book)
+    ("120 loads on one point", FOURBAR_TOML + '\n[[mechanism.loads]]\nat = "C"\nforce = [1, 2]\n'
+     * 120, "mine.toml: mechanism.loads: the formula of F34x would be one of 11,953 characters; "
+     "Excel's limit is 8,192"),
+    ("a load nested 70 functions deep", FOURBAR_TOML.replace(
+        'torque = "T4"', 'torque = "' + "ABS(" * 70 + "T4" + ")" * 70 + '"'),
+     "mine.toml: mechanism.loads: the formula of F34x would be one nested 75 brackets deep; "
+     "Excel's limit is 64 levels"),
+    ("a step's length too long for a cell", FOURBAR_TOML.replace(
+        'p_length = "a3"', 'p_length = "a3' + " + a3" * 150 + '"').replace(
+        'value = 62.3 }', 'value = 62.3, name = "coupler_' + "x" * 60 + '" }'),
+     "mine.toml: mechanism.steps[2] (point C): the formula of gamma would be one of 31,346 "
+     "characters"),      # (the point's angle reads that length: the first cell written over)
+    # loads that are numbers on some row, TRUE or FALSE on none, angles within ±360°
+    ("a load of NA()", FOURBAR_TOML.replace('torque = "T4"', 'torque = "NA()"'),
+     "mine.toml: mechanism.loads[0].torque: 'NA()' is an error (#N/A, #DIV/0!, #NUM!) on every "
+     "row with these parameters"),
+    ("a load of 1/0", FOURBAR_TOML.replace('torque = "T4"', 'torque = "T4 + 1/0"'),
+     "mine.toml: mechanism.loads[0].torque: 'T4 + 1/0' is an error"),
+    ("a load of a column over 0", FOURBAR_TOML.replace(
+        'torque = "T4"', 'torque = "IF(a2 > 1, xB/0, NA())"'),
+     "mine.toml: mechanism.loads[0].torque: 'IF(a2 > 1, xB/0, NA())' is an error"),
+    ("a mass of NA()", FOURBAR_TOML.replace('mass = "m2"', 'mass = "m2*NA()"'),
+     "mine.toml: mechanism.bodies[0].mass: 'm2*NA()' is an error"),
+    ("a load that is a comparison", FOURBAR_TOML.replace('torque = "T4"', 'torque = "T4==T4"'),
+     "mine.toml: mechanism.loads[0].torque: 'T4==T4' is a comparison, TRUE or FALSE"),
+    ("a load's angle of 1e300", FOURBAR_TOML.replace(
+        'torque = "T4"', 'at = "B"\nforce = { magnitude = "T4", angle = 1e300 }'),
+     "mine.toml: mechanism.loads[0].force.angle: must be an angle from -360 to 360 degrees "
+     "(got 1e+300)"),
     ("parameter not a table", FOURBAR_TOML.replace(
         'a1 = { label = "ground link |A0B0|", unit = "mm", value = 70.0 }', "a1 = 70"), "a1"),
 ]

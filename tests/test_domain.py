@@ -7,6 +7,7 @@ import time
 import zipfile
 from pathlib import Path
 
+import openpyxl
 import pytest
 
 from conftest import ROOT, template
@@ -145,3 +146,22 @@ def test_a_written_book_verify_would_refuse_is_not_placed(tmp_path, monkeypatch)
         builder.build_file(template("fourbar"), path)
     assert path.read_bytes() == b"the earlier file"
     assert [p.name for p in tmp_path.iterdir()] == ["fourbar.xlsx"]
+
+
+# ---------------------------------------------------------------- text in an input cell
+@pytest.mark.parametrize("name,text", [
+    ("a_2", "1_0"), ("a_2", "１０"), ("m_3", "١٠"), ("m_3", "10"), ("Branch", "1")],
+    ids=["underscore", "full-width", "Arabic-Indic", "plain digits", "branch"])
+def test_text_in_an_input_cell_is_refused_with_the_cell_named(tmp_path, capsys, name, text):
+    """Text where a number belongs is #VALUE! in LibreOffice and Gnumeric, whatever its digits;
+    Python's float() would read every one of these as a number."""
+    code, err = _run(tmp_path, ["build", "fourbar", "-o", "fb.xlsx"], capsys)
+    assert code == 0, err
+    wb = openpyxl.load_workbook(tmp_path / "fb.xlsx")
+    cell = wb.defined_names[name].attr_text.split("!")[1].replace("$", "")
+    wb["Mechanism"][cell].value = text          # openpyxl stores a str as text
+    wb.save(tmp_path / "fb.xlsx")
+    code, err = _run(tmp_path, ["verify", "fb.xlsx"], capsys)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1, err
+    assert f"(cell {cell}): must be a number, not text (got {text!r})" in lines[0], lines[0]

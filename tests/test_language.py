@@ -289,7 +289,7 @@ def test_a_grid_formula_excel_could_not_open_is_refused():
                "q_length": "k", "branch": 1}]
     with pytest.raises(InputError) as caught:
         builder.make(templates.from_data("deep", _jansen_with_grid("yH", deeper)))
-    assert "grid.output" in str(caught.value) and "Excel allows 8,192" in str(caught.value)
+    assert "grid.output" in str(caught.value) and "Excel's limit is 8,192" in str(caught.value)
 
 
 # Every option of every step type at least once, with values no bundled template has: a crank

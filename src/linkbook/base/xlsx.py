@@ -43,12 +43,16 @@ DATE_FORMAT_IDS = frozenset([*range(14, 23), *range(27, 37), *range(45, 48), *ra
 _NOT_DATE_PARTS = re.compile(r'"[^"]*"|\\.|_.|\*.|\[[^\]]*\]')
 _DATE_LETTERS = re.compile(r"[dmyhsDMYHS]")
 _COORDINATE = re.compile(r"^\$?([A-Za-z]{1,3})\$?(\d+)$")
+# A number as a formula writes it: ASCII digits, at most one point, an optional exponent (a sign
+# before it is an operator). The one spelling the mechanism language's expressions may use for a
+# number (language.expressions) and verify's reference reads there (check.reference.expressions):
+# no 1_000, 0x10, full-width or Arabic-Indic digits.
+NUMBER_LITERAL = r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
 # xsd:decimal / xsd:double without INF and NaN (LibreOffice reads those, and overflowing
 # exponents, as infinities no formula can use), around XML white space (ASCII only: \s would
 # take Unicode spaces too). LibreOffice reads the digits before a stray character ('3_5' as 3,
 # '0x10' as 0): a book that needs that reading is refused.
-_NUMBER = re.compile(r"[ \t\r\n]*[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
-                     r"[ \t\r\n]*")
+_NUMBER = re.compile(rf"[ \t\r\n]*[+-]?{NUMBER_LITERAL}[ \t\r\n]*")
 _INDEX = re.compile(r"[ \t\r\n]*[0-9]+[ \t\r\n]*")
 # Excel's limits (Microsoft's "Excel specifications and limits"): 8,192 characters of formula
 # contents, 64 levels of nested functions (counted here as brackets of any kind, so a formula
@@ -382,15 +386,22 @@ def _check_formula(text: str, part: str, title: str, address: str) -> None:
     """Refuse a formula Excel would not hold, before anything parses it: parsing costs grow
     with its length, and deep nesting crashes LibreOffice. (Called where the formula is long
     or has many brackets: a cheap test in the loop over cells keeps the call off most.)"""
+    problem = formula_problem(text)
+    if problem:
+        raise Refused(f"{part}: cell {title}!{address} has a formula {problem}")
+
+
+def formula_problem(text: str) -> str | None:
+    """How a formula's text is beyond Excel's limits ("of 9,000 characters; Excel's limit is
+    8,192"), or None: what verify refuses in a book, and build before it writes one."""
     if len(text) > FORMULA_LENGTH_LIMIT:
-        raise Refused(f"{part}: cell {title}!{address} has a formula of {len(text):,} "
-                      f"characters; Excel's limit is {FORMULA_LENGTH_LIMIT:,}")
+        return f"of {len(text):,} characters; Excel's limit is {FORMULA_LENGTH_LIMIT:,}"
     if text.count("(") <= FORMULA_NESTING_LIMIT:
-        return
+        return None
     deepest = _nesting(text)
     if deepest > FORMULA_NESTING_LIMIT:
-        raise Refused(f"{part}: cell {title}!{address} has a formula nested {deepest} brackets "
-                      f"deep; Excel's limit is {FORMULA_NESTING_LIMIT} levels")
+        return f"nested {deepest} brackets deep; Excel's limit is {FORMULA_NESTING_LIMIT} levels"
+    return None
 
 
 _ASCII_BUT_BRACKETS = {i: None for i in range(128) if chr(i) not in "()"}

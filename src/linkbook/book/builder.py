@@ -195,7 +195,7 @@ def _refuse_beyond_verify(path: Path) -> None:
 # ---------------------------------------------------------------- how big a book will be
 # A book of at most this many sweep rows and grid cells stays inside the budget whatever its
 # mechanism (300 formula cells a row would be 1.5 million cells; a grid cell holds at most about
-# 8 kB, grid.EXCEL_FORMULA_CHARS), so its size is not estimated: every bundled template.
+# 8 kB, base.xlsx.FORMULA_LENGTH_LIMIT), so its size is not estimated: every bundled template.
 SMALL_BOOK = 5_000
 SMALL_ROWS = 3            # sweep rows of the small books a size is measured on
 OTHER_PARTS = 2 * 2**20   # charts, drawings, styles, controls: bytes, generously

@@ -15,7 +15,8 @@ from openpyxl.utils import column_index_from_string, get_column_letter
 
 from ..base.sheets import FORCES_SHEET, MOTION_SHEET, SWEEP
 from ..language.excel import in_domain_or_na
-from ..language.forces import FORCE, TO_METRES
+from ..language.forces import FORCE
+from ..language.mechanisms import SPEED_FLUCTUATION, TO_METRES
 from ..language.model import NEWTON, Model
 from ..language.domain import LENGTH_UNITS
 from ..language.templates import Template
@@ -24,7 +25,6 @@ from .style import (BOLD, DERIVED_FILL, FORMATS, INPUT_FILL, NOTE, define_name, 
                     number_format, put_head, put_text, set_formula)
 
 METRES_CELL = "A3"
-SPEED_FLUCTUATION = "speed_fluctuation"    # the defined name of Cs
 CS_DEFAULT = 0.02     # a common design value for general machinery (Cs = (ωmax − ωmin)/ω)
 FORCE_FORMAT, ENERGY_FORMAT = FORMATS[NEWTON], "0.0000"
 

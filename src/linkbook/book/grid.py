@@ -63,7 +63,8 @@ def fill_grid(ws, t: Template, model: Model, names: dict, param_row: int, rows: 
     """One self-contained formula per cell: the row's angle in $A, the column's value in
     `param_row`; the same text with the row and column put in."""
     param, out = t.mechanism.grid
-    text = _grid_formula(model, names, t.mechanism.input_column, param, out, param_row)
+    text = _grid_formula(model, names, t.mechanism.input_column, param, out, param_row,
+                         max(str(rows[-1]), cols[-1], key=len))
     style = table_style(ws, number_format(LENGTH, t.length_unit))
     at = {letter: column_index_from_string(letter) for letter in cols}
     for i in rows:
@@ -73,23 +74,13 @@ def fill_grid(ws, t: Template, model: Model, names: dict, param_row: int, rows: 
     ws.freeze_panes = ws.cell(rows.start, 2)
 
 
-EXCEL_FORMULA_CHARS, EXCEL_NESTING = 8192, 64
-
-
-def _grid_formula(model, names, input_column, param, out, param_row) -> str:
+def _grid_formula(model, names, input_column, param, out, param_row, place: str) -> str:
     """The self-contained grid formula, refused (before any file is written) where Excel could
-    not open it: over 8,192 characters or 64 levels of nested functions."""
+    not open it (Resolver.formula: Excel's limits)."""
     cells = {input_column: f"$A{ROW}", param: f"{COL}${param_row}"}
-    text = Resolver(model, names, cells).formula(out)
-    depth = deepest = 0
-    for ch in text:
-        depth += (ch == "(") - (ch == ")")
-        deepest = max(deepest, depth)
-    # The cell's own text is a little longer (row and column put in): keep a margin.
-    if len(text) > EXCEL_FORMULA_CHARS - 200 or deepest > EXCEL_NESTING:
-        raise InputError("grid.output", f"the self-contained formula of {out} in each grid cell "
-                                        f"would have {len(text):,} characters and {deepest} "
-                                        f"nested parentheses; Excel allows "
-                                        f"{EXCEL_FORMULA_CHARS:,} and {EXCEL_NESTING}: grid an "
-                                        "earlier column, or leave out the [grid]")
-    return text
+    try:
+        return Resolver(model, names, cells, field="grid.output", place=place).formula(out)
+    except InputError as exc:
+        raise InputError(exc.field, f"{str(exc)[len(exc.field) + 2:]}, in each grid cell (all "
+                                    "of it inlined there): grid an earlier column, or leave "
+                                    "out the [grid]") from None

@@ -13,7 +13,7 @@ from openpyxl.worksheet.datavalidation import DataValidation
 
 from ..base.sheets import MECH, MOTION_SHEET
 from ..language.domain import INPUT_ANGLE_LIMIT
-from ..language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND
+from ..language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, constant_name, position_name
 from ..language.model import CONSTANT, DEG, Model
 from .resolve import Resolver
 from ..language.templates import Template
@@ -66,7 +66,7 @@ def inputs_block(wb, ws, t: Template, model: Model):
         row += 1
         resolve = Resolver(model, names, {})
         for q in derived:
-            name = f"k_{q.key}"
+            name = constant_name(q.key)
             put_text(ws, f"A{row}", q.label)
             wrap_in(ws, f"A{row}")
             put_text(ws, f"B{row}", q.symbol)
@@ -88,7 +88,7 @@ def position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) -> 
     mech = t.mechanism
     block_head(ws, "G", "Current position",
                (("Quantity", 37), ("Symbol", 8), ("Value", 13), ("Unit", 7)))
-    input_name = f"{mech.input_key}_now"
+    input_name = position_name(mech.input_key)
     put_text(ws, "G7", f"input {mech.input_word}: change it, all follows")
     wrap_in(ws, "G7")
     put_text(ws, "H7", mech.input_symbol)

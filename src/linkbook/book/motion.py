@@ -65,8 +65,9 @@ def row_table(ws, t: Template, model: Model, names: dict, qs: list, sweep: dict,
         in_sweep.update({k: f"{other}!{v}{ROW}" for k, v in table["columns"].items()})
         in_position.update({k: f"{other}!{v}{table['current_row']}"
                             for k, v in table["columns"].items()})
-    at_sweep = Resolver(model, names, {**in_sweep, **own})
-    at_current = Resolver(model, names, {**in_position, **own})
+    at_sweep = Resolver(model, names, {**in_sweep, **own},
+                        place=str(sweep["rows"][1] + MOTION_OFFSET))
+    at_current = Resolver(model, names, {**in_position, **own}, place=str(current))
     formats = {q.key: number_format(q.unit, t.length_unit) for q in qs}
     set_formula(ws.cell(current, 1), f"={position['input_name']}").number_format = \
         number_format(mech.input_unit, t.length_unit)

@@ -73,7 +73,8 @@ def sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
                        f"{mech.input_word}s where the loop cannot close.", NOTE)
     head_row, first = 4, SWEEP_FIRST_ROW
     formulas: dict[str, str] = {}
-    resolve = Resolver(model, names, {k: f"{letters[k]}{ROW}" for k, _ in columns})
+    resolve = Resolver(model, names, {k: f"{letters[k]}{ROW}" for k, _ in columns},
+                       place=str(first + len(angles)))
     for i, (key, q) in enumerate(columns, start=1):
         ws.column_dimensions[letters[key]].width = 12
         if q is None:

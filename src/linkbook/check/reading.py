@@ -65,8 +65,14 @@ def inputs_of(wb, record: BuildRecord) -> dict[str, float]:
     values = {}
     for symbol, info in record.inputs.items():
         raw = ws[info.cell].value
+        field = f"input {symbol} (cell {info.cell})"
+        if isinstance(raw, str):
+            # Text is never a number here, whatever its digits ('1_0', full-width or
+            # Arabic-Indic ones): the applications show #VALUE! where Python would read 10.
+            raise UnusableFile(f"{field}: must be a number, not text (got {raw!r}); type the "
+                               "number without quotes or a leading apostrophe")
         try:
-            values[symbol] = check_value(f"input {symbol} (cell {info.cell})", info.kind, raw)
+            values[symbol] = check_value(field, info.kind, raw)
         except InputError as exc:
             raise UnusableFile(str(exc)) from None
     try:

@@ -11,10 +11,11 @@ from .excel import (PRODUCT, SUM, ZERO, Expr, angle_of_triangle_or_na, lin, minu
                     radians, sq, turned)
 from .expressions import expression
 from .fields import as_table
+from .mechanisms import TO_METRES
 from .model import ACCEL, LENGTH, DescriptionError
 
 GROUND = 1
-METRES = "to_metres"          # the named cell of metres per length unit (forces.TO_METRES)
+METRES = TO_METRES           # the named cell of metres per length unit
 METRES_REF = f"{{{METRES}}}"    # the placeholder of that cell in a formula
 
 

@@ -47,6 +47,7 @@ class Compiler:
         self.swept: set[str] = set()     # the input key, where it is a length expressions use
         self.records: list[dict] = []    # per step what it placed, for its rates (motion.py)
         self.lengths: list[tuple[str, object]] = []   # (field, expression) of every length
+        self.loads: list[tuple[str, object]] = []     # ... of every value of the force analysis
         self.traced = ""
         self.field = f"{origin}: mechanism"
         self.data = as_table(self.field, data)
@@ -208,6 +209,7 @@ class Compiler:
     def run(self) -> Model:
         d = self.data
         check_keys(self.field, d, *MECHANISM_KEYS)
+        self.model.where = self.field
         self.read_input(d["input"])
         self.read_ground(d["ground"])
         steps = d["steps"]
@@ -216,6 +218,7 @@ class Compiler:
         for i, step in enumerate(steps):
             self.read_step(i, step)
         steps_keys = {q.key for q in self.model.quantities}   # what an expression step may name
+        self.model.where = self.field
         Presentation(self).read(d)
         motion = MotionWriter(self)
         motion.run()
@@ -281,6 +284,7 @@ class Compiler:
         label = step.get("point") or step.get("key")
         field = f"{self.field}.steps[{i}] ({kind} {label})" if isinstance(label, str) else field
         self.step_name = f"{kind} {label}"
+        self.model.where = field
         required, optional = STEPS[kind].keys
         check_keys(field, step, required, optional | COMMON_KEYS)
         if "point" in step:
@@ -350,4 +354,5 @@ def compile_mechanism(name: str, data: dict, kinds: dict[str, str], origin: str,
         if out not in {q.key for q in model.of_role(COLUMN)}:
             raise DescriptionError(f"{origin}: grid.output", f"{out!r} is not a shown column")
     return Mechanism(name, dict(c.kinds), c.input_key, c.input_symbol, lambda: model, grid,
-                     description=data, input_kind=c.input_kind, lengths=tuple(c.lengths))
+                     description=data, input_kind=c.input_kind, lengths=tuple(c.lengths),
+                     loads=tuple(c.loads))

@@ -12,8 +12,8 @@ from __future__ import annotations
 from ..base.errors import InputError
 from .bodies import METRES
 from .domain import check_value
-from .expressions import expression
-from .mechanisms import BRANCH_KIND
+from .expressions import expression, is_comparison
+from .mechanisms import ANGLE_KIND, BRANCH_KIND
 from .model import DescriptionError
 from .schema import mechanism_key_problem
 
@@ -40,8 +40,8 @@ def check_dynamics(c, data: dict, steps_keys: set[str]) -> None:
     if gravity is not None:
         for k in ("g", "angle"):
             if k in gravity:
-                _value(f"{field}.dynamics.gravity.{k}", gravity[k], constant,
-                       "acceleration" if k == "g" else None)
+                _value(c, f"{field}.dynamics.gravity.{k}", gravity[k], constant,
+                       "acceleration" if k == "g" else ANGLE_KIND)
     for i, body in enumerate(data.get("bodies") or []):
         _check_body(c, f"{field}.bodies[{i}]", body, known)
     for i, load in enumerate(data.get("loads") or []):
@@ -89,7 +89,7 @@ def _check_body(c, field: str, body: dict, known: set[str]) -> None:
                                                       "centre")
     for k in ("mass", "inertia"):
         if k in body:
-            _value(f"{field}.{k}", body[k], known, k)
+            _value(c, f"{field}.{k}", body[k], known, k)
     if "centre" in body:
         _check_centre(c, f"{field}.centre", body["centre"], joints, set(c.symbols) | {METRES})
 
@@ -111,7 +111,7 @@ def _check_centre(c, field: str, centre: dict, joints: list[str], known: set[str
         expression(f"{field}.{forms[0]}" + (f"[{i}]" if isinstance(values, list) else ""),
                    value, known)
     if "angle" in centre:
-        expression(f"{field}.angle", centre["angle"], known)
+        _value(c, f"{field}.angle", centre["angle"], known, ANGLE_KIND)
     side = centre.get("side", 1)
     if isinstance(side, str) and c.kinds.get(side) != BRANCH_KIND:
         raise DescriptionError(f"{field}.side", f"must be 1, -1 or a branch parameter "
@@ -129,22 +129,27 @@ def _check_load(c, field: str, load: dict, known: set[str]) -> None:
     force = load.get("force")
     if isinstance(force, list):
         for i, value in enumerate(force):
-            _value(f"{field}.force[{i}]", value, known, "force")
+            _value(c, f"{field}.force[{i}]", value, known, "force")
     elif isinstance(force, dict):
         for k in ("magnitude", "angle"):
             if k in force:
-                _value(f"{field}.force.{k}", force[k], known, "force" if k == "magnitude"
-                       else None)
+                _value(c, f"{field}.force.{k}", force[k], known, "force" if k == "magnitude"
+                       else ANGLE_KIND)
     if "torque" in load:
-        _value(f"{field}.torque", load["torque"], known, "torque")
+        _value(c, f"{field}.torque", load["torque"], known, "torque")
 
 
-def _value(field: str, raw: object, known: set[str], kind: str | None) -> None:
-    """An expression of what `known` names; a number written as it is in the domain of its
-    kind, as a parameter's value is (domain.check_value: a load near the least double is
-    refused)."""
+def _value(c, field: str, raw: object, known: set[str], kind: str) -> None:
+    """An expression of what `known` names, a number and not TRUE or FALSE; a number written as
+    it is in the domain of its kind, as a parameter's value is (domain.check_value: a load near
+    the least double is refused, an angle beyond ±360°). Kept in `c.loads`: with the template's
+    values none may be an error on every row (templates.check_loads)."""
     expression(field, raw, known)
-    if kind is not None and isinstance(raw, (int, float)) and not isinstance(raw, bool):
+    if is_comparison(raw):
+        raise DescriptionError(field, f"{raw!r} is a comparison, TRUE or FALSE: a load must be "
+                                      "a number (IF(c, a, b) chooses one)")
+    c.loads.append((field, raw))
+    if isinstance(raw, (int, float)) and not isinstance(raw, bool):
         try:
             check_value(field, kind, raw)
         except InputError as exc:

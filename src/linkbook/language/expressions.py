@@ -7,7 +7,9 @@ from __future__ import annotations
 import ast
 import math
 import operator
+import re
 
+from ..base.xlsx import NUMBER_LITERAL
 from .excel import ATOM, COMPARISON, NEGATION, OUTSIDE_DOMAIN, POWER, PRODUCT, SUM, Expr, \
     in_domain_or_na, number
 from .model import DescriptionError
@@ -39,11 +41,32 @@ def expression(field: str, raw: object, symbols: set[str]) -> Expr:
         raise DescriptionError(field, f"must be a number or an expression (got {raw!r})")
     if not isinstance(raw, str):
         return _finite(field, raw)
+    source = raw.replace("^", "**")
     try:
-        tree = ast.parse(raw.replace("^", "**"), mode="eval")
+        tree = ast.parse(source, mode="eval")
     except SyntaxError:
         raise DescriptionError(field, f"is not an expression: {raw!r}") from None
+    _check_spelling(field, source, tree)
     return _emit(field, tree.body, symbols)
+
+
+_NUMBER_LITERAL = re.compile(NUMBER_LITERAL)
+
+
+def _check_spelling(field: str, source: str, tree: ast.AST) -> None:
+    """Numbers and symbols spelt as verify's reference reads them: Python also reads 1_000,
+    0x10 and (by NFKC) a full-width symbol, which the reference refuses or reads otherwise."""
+    for node in ast.walk(tree):
+        if not isinstance(node, (ast.Constant, ast.Name)):
+            continue
+        text = ast.get_source_segment(source, node)
+        if isinstance(node, ast.Name) and text != node.id:
+            raise DescriptionError(field, f"{text!r} is not a symbol: ASCII letters, digits and "
+                                          "_ only")
+        if isinstance(node, ast.Constant) and type(node.value) in (int, float, complex) \
+                and not _NUMBER_LITERAL.fullmatch(text or ""):
+            raise DescriptionError(field, f"{text!r} is not a number as a formula writes one "
+                                          "(digits, one point, an exponent: 1000, 0.5, 2.5e3)")
 
 
 _BINARY = {ast.Add: ("+", SUM), ast.Sub: ("-", SUM), ast.Mult: ("*", PRODUCT),
@@ -110,6 +133,53 @@ def value_of(raw: object, values: dict[str, float]) -> float | None:
         return math.nan
     except KeyError:
         return None
+
+
+def always_an_error(raw: object, values: dict[str, float]) -> bool:
+    """Whether an expression is an error value (#N/A, #DIV/0!, #NUM!) with these parameter
+    values whatever the columns it names hold: on every row of the book (NA(), 1/0, a2*NA(),
+    xA/0)."""
+    if not isinstance(raw, str):
+        return False
+    return _always(ast.parse(raw.replace("^", "**"), mode="eval").body, values)
+
+
+def _always(node: ast.AST, values: dict[str, float]) -> bool:
+    try:
+        _value(node, values)
+        return False
+    except _NotANumber:
+        return True
+    except KeyError:        # it names a column: an error only where a part is one regardless
+        pass
+    if isinstance(node, ast.Call):
+        name, args = node.func.id.upper(), node.args
+        if name == "IFERROR":
+            return _always(args[0], values) and _always(args[1], values)
+        if name == "IF":
+            return _always(args[0], values) or all(_always(a, values) for a in args[1:])
+        return any(_always(a, values) for a in args)
+    if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Div) and _zero(node.right, values):
+        return True
+    parts = [node.operand] if isinstance(node, ast.UnaryOp) else \
+        [node.left, node.right] if isinstance(node, ast.BinOp) else \
+        [node.left, *node.comparators] if isinstance(node, ast.Compare) else []
+    return any(_always(p, values) for p in parts)
+
+
+def _zero(node: ast.AST, values: dict[str, float]) -> bool:
+    try:
+        return _value(node, values) == 0
+    except (_NotANumber, KeyError):
+        return False
+
+
+def is_comparison(raw: object) -> bool:
+    """Whether an expression's value is TRUE or FALSE (a comparison outside any function),
+    which the book's sums would read otherwise than the reference."""
+    if not isinstance(raw, str):
+        return False
+    return isinstance(ast.parse(raw.replace("^", "**"), mode="eval").body, ast.Compare)
 
 
 def _value(node: ast.AST, values: dict[str, float]) -> float:

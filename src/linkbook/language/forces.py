@@ -32,10 +32,10 @@ from __future__ import annotations
 from .bodies import GROUND, METRES, METRES_REF, Body, BodiesAndLoads
 from .excel import ZERO, cross, guard, lin, mul, sq
 from .fields import as_table
+from .mechanisms import FORCE_ROLE, TO_METRES
 from .model import NEWTON, NEWTON_METRE, DescriptionError, Quantity
 
-FORCE = "force"              # the model's role of a force column (sheet Forces)
-TO_METRES = METRES           # the named cell: metres per length unit
+FORCE = FORCE_ROLE           # the model's role of a force column (sheet Forces)
 
 
 class ForceWriter(BodiesAndLoads):
@@ -64,6 +64,8 @@ class ForceWriter(BodiesAndLoads):
     def run(self) -> None:
         from .steps import STEPS
         self.bodies = self._bodies()
+        # what grows a force's formula without bound is the loads on one link
+        self.model.where = f"{self.field}.{'loads' if self.loads else 'bodies'}"
         self.pairs = len(self.bodies) + GROUND >= 10
         self._masses()
         self._loads()

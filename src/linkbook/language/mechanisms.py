@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from .model import Model
+from .model import CONSTANT, Model
 
 # Kinds of parameter, each with its own check (domain.check_value) and input validation.
 LENGTH_KIND, OFFSET_KIND, ANGLE_KIND, BRANCH_KIND = "length", "offset", "angle", "branch"
@@ -24,6 +24,22 @@ NOT_NEGATIVE_KINDS = ("mass", "inertia")
 # acceleration.
 MOTION_SYMBOLS = {ANGLE_KIND: ("omega_in", "alpha_in"), LENGTH_KIND: ("v_in", "a_in")}
 
+# The defined names a book gives cells of its own, beside its parameters' names: the one place
+# they are spelt (book_names). A parameter may take none of them.
+TO_METRES = "to_metres"                    # metres per length unit (the Forces sheet's A3)
+SPEED_FLUCTUATION = "speed_fluctuation"    # the coefficient of speed fluctuation Cs
+FORCE_ROLE = "force"                       # the model's role of a Forces sheet column
+
+
+def position_name(input_key: str) -> str:
+    """The defined name of the current position's input cell: theta12_now."""
+    return f"{input_key}_now"
+
+
+def constant_name(key: str) -> str:
+    """The defined name of a quantity derived from the inputs alone: k_gamma."""
+    return f"k_{key}"
+
 
 @dataclass(frozen=True)
 class Mechanism:
@@ -37,6 +53,22 @@ class Mechanism:
     input_kind: str = ANGLE_KIND          # a crank's angle, or a linear actuator's length
     # (field, expression) of every length a step takes: each must come out positive
     lengths: tuple[tuple[str, object], ...] = ()
+    # (field, expression) of every mass, inertia, load and gravity: none an error on every row
+    loads: tuple[tuple[str, object], ...] = ()
+
+    def book_names(self) -> dict[str, str]:
+        """{defined name: what it names} of the cells the book names itself (beside the
+        parameters): what a parameter's name may not be, as Excel compares names without case,
+        nor its symbol, which the formulas' placeholders share."""
+        model = self.build()
+        names = {position_name(self.input_key): "the current position"}
+        names.update({constant_name(q.key): f"the derived {q.key}"
+                      for q in model.of_role(CONSTANT)})
+        if model.of_role(FORCE_ROLE):
+            names[TO_METRES] = "metres per length unit"
+            if self.input_is_angle:
+                names[SPEED_FLUCTUATION] = "the coefficient of speed fluctuation"
+        return names
 
     @property
     def input_is_angle(self) -> bool:

@@ -13,7 +13,7 @@ stands for another quantity or a parameter. Where a formula lands decides what `
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 
 # Roles a quantity can play.
@@ -40,6 +40,7 @@ class Quantity:
     label: str = ""     # a few words for a reader: "rocker angle, B0→B"
     in_degrees: bool = False   # an output angle: also shown in degrees at the table's right
     wrap_360: bool = False     # show that degree value in [0, 360)
+    made_by: str = ""   # the template's field that made it (Model.add: where), for messages
 
 
 @dataclass(frozen=True)
@@ -115,6 +116,7 @@ class Model:
     fourbars: tuple[FourBarLoop, ...] = ()  # four-bar loops on the ground (Grashof, limit angles)
     guides: list[Guide] = field(default_factory=list)    # drawn under the links
     blocks: list[Block] = field(default_factory=list)
+    where: str = ""           # the template's field being compiled: what Model.add stamps
 
     def add(self, *quantities: Quantity) -> None:
         known = {q.key for q in self.quantities}
@@ -122,7 +124,7 @@ class Model:
             if q.key in known:
                 raise ValueError(f"quantity {q.key!r} defined twice")
             known.add(q.key)
-            self.quantities.append(q)
+            self.quantities.append(q if q.made_by else replace(q, made_by=self.where))
 
     def get(self, key: str) -> Quantity:
         for q in self.quantities:

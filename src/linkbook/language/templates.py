@@ -15,7 +15,7 @@ from .domain import (BRANCH_WORDS, LENGTH_UNITS, InputError, check_input,
                      check_lengths_together, check_value, check_written_lengths, parse_number)
 from .bundled import TEMPLATE_DIR, bundled, bundled_template_data
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
-from .expressions import value_of
+from .expressions import always_an_error, value_of
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism)
 
@@ -226,6 +226,7 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
                  check_value(f"{field}.value", kind, entry["value"]))
         params.append(Parameter(symbol, kind, label, unit, excel_name, value))
     _check_unique_names(params, origin)
+    _check_own_names(params, mech, origin)
     sweep_data = _need(data, "sweep", origin, dict)
     sweep = Sweep(*(parse_number(f"{origin}: sweep.{k}", _need(sweep_data, k, f"{origin}: sweep",
                                                                (int, float)))
@@ -367,6 +368,19 @@ def _check_unique_names(params: list[Parameter], origin: str) -> None:
                              f"{p.name!r} is already the name of {other}")
 
 
+def _check_own_names(params: list[Parameter], mech: Mechanism, origin: str) -> None:
+    """No parameter named as a cell the book names itself: two cells of one name, or a
+    placeholder standing for two cells, leave formulas reading the wrong one."""
+    own = {name.upper(): (name, what) for name, what in mech.book_names().items()}
+    for p in params:
+        for field, name in ((f"parameters.{p.symbol}", p.symbol),
+                            (f"parameters.{p.symbol}.name", p.name)):
+            if name.upper() in own:
+                taken, what = own[name.upper()]
+                raise InputError(f"{origin}: {field}", f"{name!r} is the book's own name "
+                                                       f"{taken!r} ({what}); choose another")
+
+
 def check_step_lengths(t: Template) -> None:
     """Every length a step takes (a side, a rod, a crank), evaluated with the book's values,
     must be positive: the loop cannot be assembled with a zero or negative one, and a book
@@ -382,12 +396,24 @@ def check_step_lengths(t: Template) -> None:
                                 "positive")
 
 
+def check_loads(t: Template) -> None:
+    """No mass, inertia, load or gravity an error on every row with the book's values (NA(),
+    1/0): a book of forces that are all errors, which the reference reads as #N/A where the
+    book shows #DIV/0!, or as numbers where the loads were meant to be."""
+    values = t.values()
+    for field, raw in t.mechanism.loads:
+        if always_an_error(raw, values):
+            raise InputError(field, f"{raw!r} is an error (#N/A, #DIV/0!, #NUM!) on every row "
+                                    "with these parameters; it must be a number")
+
+
 def check_sweep(t: Template, origin: str = "", step_field: str = "sweep.step") -> None:
     """Positive step, start < stop, the sweep and the current position within the inputs a book
     supports, and tables inside Excel's limits — before any work; and lengths that fit one book
     (check_lengths_together, with the lengths the description writes as numbers), each step's
-    length positive (check_step_lengths). Called after every change to a template. `origin` names
-    the template file, `step_field` where the step came from (the file's sweep.step, --step)."""
+    length positive (check_step_lengths), no load an error throughout (check_loads). Called after
+    every change to a template. `origin` names the template file, `step_field` where the step
+    came from (the file's sweep.step, --step)."""
     values = t.values()
     if t.mechanism.grid:
         values = {**values, **{f"{t.mechanism.grid[0]}[{i}]": v
@@ -400,6 +426,7 @@ def check_sweep(t: Template, origin: str = "", step_field: str = "sweep.step") -
     written = check_written_lengths(t.mechanism.description or {}, where)
     check_lengths_together(values, kinds, f"{where}parameters.", written)
     check_step_lengths(t)
+    check_loads(t)
     s = t.sweep
     for field, value in (("sweep.start", s.start), ("sweep.stop", s.stop),
                          ("sweep.position", t.position)):

@@ -14,8 +14,10 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
+from ...base.xlsx import NUMBER_LITERAL
+
 _TOKEN = re.compile(
-    r"\s*(?:(?P<num>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
+    rf"\s*(?:(?P<num>{NUMBER_LITERAL})"
     r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
     r"|(?P<op>\*\*|>=|<=|<>|==|!=|[-+*/^(),<>=]))"
 )
