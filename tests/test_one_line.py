@@ -65,7 +65,11 @@ real = module.{function}
 
 def stall(*args, **kwargs):      # mid-work: say so, then wait for the signal
     print("ready", flush=True)
-    time.sleep(120)
+    try:
+        time.sleep(120)
+    except BaseException:
+        if not {swallow}:
+            raise                    # else as a __del__ or a weakref callback would: dropped
     return real(*args, **kwargs)
 
 module.{function} = stall
@@ -74,11 +78,14 @@ cli.run()
 """
 
 
-def _stopped_midway(tmp_path: Path, module: str, function: str, argv: list[str], signum):
+def _stopped_midway(tmp_path: Path, module: str, function: str, argv: list[str], signum,
+                    swallow: bool = False):
     """Run the command in a process of its own, stalled inside `module.function` (the build:
     while the temporary file is being finished; verify: at the evaluation), and send `signum`
-    once it says it got there. (exit status, stderr, the hidden files there were mid-way)."""
-    code = STALL.format(module=module, function=function, argv=argv)
+    once it says it got there; with `swallow`, the exception the signal raises there is
+    dropped, as Python drops one raised inside a `__del__`. (exit status, stderr, the hidden
+    files there were mid-way)."""
+    code = STALL.format(module=module, function=function, argv=argv, swallow=swallow)
     env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
     proc = subprocess.Popen([sys.executable, "-c", code], cwd=tmp_path, env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -116,6 +123,21 @@ def test_a_signal_during_verify_ends_in_one_line(tmp_path, book, signum, status)
                                    ["verify", "fourbar.xlsx"], signum)
     assert code == status and len(err.strip().splitlines()) == 1, err
     assert err.startswith("linkbook: stopped by"), err
+
+
+@pytest.mark.parametrize("signum,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+@pytest.mark.parametrize("module,function,argv", [
+    ("book.package", "finish", ["build", "fourbar", "-o", "fourbar.xlsx"]),
+    ("apps.info", "summary", ["info", "fourbar"])])
+def test_a_signal_whose_exception_is_swallowed_still_stops_the_command(
+        tmp_path, signum, status, module, function, argv):
+    """The exception a signal raises can land where Python drops it (a `__del__`, a weakref
+    callback, a library's `except BaseException`): the command must not go on to write its
+    book or exit 0 as if nothing had come."""
+    code, err, _ = _stopped_midway(tmp_path, module, function, argv, signum, swallow=True)
+    assert code == status, err
+    assert len(err.strip().splitlines()) == 1 and err.startswith("linkbook: stopped by"), err
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_sigterm_is_given_back_as_it_was_after_a_command(tmp_path):

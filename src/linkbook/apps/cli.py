@@ -1,7 +1,6 @@
 """The `linkbook` command."""
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import sys
@@ -13,8 +12,11 @@ from pathlib import Path
 # setting wins.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from ..base import __version__
-from ..language.domain import LENGTH_UNITS, InputError  # noqa: E402 (after the setting above)
+# Nothing heavy at the top: what the module imports runs before main() has the signals in hand
+# (a Ctrl-C there ends in Python's traceback); each function imports what it needs.
+from ..base import __version__  # noqa: E402 (after the setting above)
+from ..base import stopping  # noqa: E402
+from ..base.errors import InputError  # noqa: E402
 
 EPILOG = """examples:
   linkbook list
@@ -58,8 +60,10 @@ VERIFY_OUTPUT = """output:
   checks."""
 
 
-def _parser() -> argparse.ArgumentParser:
+def _parser():
+    import argparse
     from .preview import PREVIEW_DPI     # standard library only: cheap to import
+    from ..language.domain import LENGTH_UNITS
     ap = argparse.ArgumentParser(
         prog="linkbook",
         description="Turn a planar mechanism into an Excel workbook of live formulas: named "
@@ -200,6 +204,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def _info_parsers(sub) -> None:
     """`info` and `export`: a book's numbers, as its own formulas compute them."""
+    import argparse
     from textwrap import fill
     i = sub.add_parser("info", help="a summary of a book's (or a template's) numbers",
                        description=fill("Summarise a workbook, or a template built in memory (nothing "
@@ -250,10 +255,22 @@ def run() -> None:
     after a failed save, coverage saves its data), and under a profiler or tracer, which reports
     after we return, the exit is Python's own. Callers of main() (the tests, the API) keep a
     normal return."""
+    with stopping.handled():      # first: from here to the exit a signal ends in one line
+        status = main()
+        if sys.getprofile() is not None or sys.gettrace() is not None:
+            raise SystemExit(status)
+        with stopping.held():     # one that comes now is looked at once, just before the exit
+            _finish()
+            stop = stopping.arrived()
+            if stop is not None and status not in STOPPED_STATUSES:
+                _say_stopped(stop[0])
+                status = stop[1]
+            os._exit(status)
+
+
+def _finish() -> None:
+    """What Python's own exit would do that matters: the exit handlers, the streams flushed."""
     import atexit
-    status = main()
-    if sys.getprofile() is not None or sys.gettrace() is not None:
-        raise SystemExit(status)
     atexit._run_exitfuncs()
     for stream in (sys.stdout, sys.stderr):
         if stream is None:          # started with the stream closed
@@ -264,67 +281,50 @@ def run() -> None:
             _to_devnull(stream)
         except (OSError, ValueError):
             pass
-    os._exit(status)
+
+
+def _say_stopped(what: str) -> None:
+    print(f"linkbook: stopped by {what}; no file is left half-written", file=sys.stderr,
+          flush=True)
+
+
+STOPPED_STATUSES = {status for _, _, status in stopping.STOPS.values()}
 
 
 def _to_devnull(stream) -> None:
     os.dup2(os.open(os.devnull, os.O_WRONLY), stream.fileno())
 
 
-class Terminated(BaseException):
-    """SIGTERM, raised where the process is (as Ctrl-C raises KeyboardInterrupt), so that what
-    is half-done is undone on the way out (a temporary file removed, LibreOffice stopped). A
-    BaseException, as KeyboardInterrupt is: no `except Exception` may swallow it."""
-
-
-STOPPED = {KeyboardInterrupt: ("Ctrl-C (SIGINT)", 130), Terminated: ("SIGTERM", 143)}
-
-
 def main(argv: list[str] | None = None) -> int:
-    import warnings
+    # Everything inside the try, from the first line on: a Ctrl-C that lands while the command
+    # is still being imported ends in the same one line as one that lands mid-work.
     try:
-        with warnings.catch_warnings(), _sigterm_raises():
+        import warnings
+        with stopping.handled(), warnings.catch_warnings():
             # numpy's overflow warnings on extreme inputs would only repeat what the answer
             # says, and no user should see a line of our source code
             warnings.simplefilter("ignore")
-            return _main(argv)
+            status = _main(argv)
+            stopping.stop_if_signalled()     # one whose raise was swallowed where it landed
+            return status
     except BrokenPipeError:
         # The reader stopped early (`linkbook list | head`): not an error. Point stdout at
         # /dev/null so that Python's own flush at exit does not complain either.
         _to_devnull(sys.stdout)
         return 0
-    except (KeyboardInterrupt, Terminated) as exc:
-        # the shell's convention: 128 + the signal's number
-        what, status = STOPPED[type(exc)]
-        print(f"linkbook: stopped by {what}; no file is left half-written", file=sys.stderr)
-        return status
-    except Exception as exc:
+    except BaseException as exc:
+        # a stop, or anything a stop turned into on its way out (a library's own error)
+        stop = stopping.stop_of(exc) or stopping.arrived()
+        if stop is not None:
+            what, status = stop      # the shell's convention: 128 + the signal's number
+            _say_stopped(what)
+            return status
+        if not isinstance(exc, Exception):      # SystemExit: argparse's own exit
+            raise
         # A bug of ours, not the user's input: still one line, never a traceback.
         print(f"linkbook: internal error: {type(exc).__name__}: {_one_line(exc)} (please "
               "report it with the file that caused it)", file=sys.stderr)
         return 2
-
-
-class _sigterm_raises:
-    """SIGTERM raises Terminated while a command runs (from the main thread only, where Python
-    runs signal handlers); the handler before it is put back afterwards."""
-
-    def __enter__(self):
-        import signal
-        import threading
-        self.before = None
-        if threading.current_thread() is threading.main_thread():
-            self.before = signal.signal(signal.SIGTERM, _raise_terminated)
-        return self
-
-    def __exit__(self, *exc) -> None:
-        import signal
-        if self.before is not None:
-            signal.signal(signal.SIGTERM, self.before)
-
-
-def _raise_terminated(signum, frame):
-    raise Terminated()
 
 
 def _main(argv: list[str] | None) -> int:
@@ -483,6 +483,7 @@ def _cannot_judge(report) -> list[str]:
 
 
 def _positive_int(lo: int, hi: int):
+    import argparse
     def parse(text: str) -> int:
         try:
             value = int(text)
@@ -495,6 +496,7 @@ def _positive_int(lo: int, hi: int):
 
 
 def _finite_float(text: str) -> float:
+    import argparse
     try:
         value = float(text)
     except ValueError:
@@ -505,6 +507,7 @@ def _finite_float(text: str) -> float:
 
 
 def _positive_float(text: str) -> float:
+    import argparse
     try:
         value = float(text)
     except ValueError:

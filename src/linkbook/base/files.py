@@ -2,15 +2,14 @@
 a file or folder cannot be written (a full disk, a read-only mount, a folder where a file belongs)."""
 from __future__ import annotations
 
-import contextlib
 import errno
 import os
-import signal
 import tempfile
 from pathlib import Path
 from typing import Callable
 
 from .errors import InputError
+from .stopping import held, stop_if_signalled
 
 # What the environment did, in words: the reason a write failed is the user's to fix, not ours.
 REASONS = {
@@ -73,12 +72,13 @@ def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
     """Let `write` fill a temporary file beside the target, then rename it into place: an
     existing file is never left half-written, whatever happens before the rename, and the
     temporary file is removed whatever ends the write (an error, Ctrl-C, SIGTERM turned into an
-    exception by the command). The file system's refusal is raised as CannotWrite naming the
-    target, never the temporary file."""
+    exception by the command). A signal that came before the rename, even one whose exception
+    was swallowed (see stopping), stops it: the target is left as it was. The file system's
+    refusal is raised as CannotWrite naming the target, never the temporary file."""
     path = Path(path)
     tmp = None
     try:
-        with _signals_held():     # the temporary file exists only once `tmp` names it
+        with held():                       # the temporary file exists only once `tmp` names it
             fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
             tmp = Path(name)
         os.close(fd)
@@ -86,24 +86,11 @@ def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)      # mkstemp makes it private; a workbook is not
-        os.replace(tmp, path)
+        with held():                       # no signal can come between the look and the rename
+            stop_if_signalled()
+            os.replace(tmp, path)
     except OSError as exc:
         raise CannotWrite(path, exc) from None
     finally:
         if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
-
-
-@contextlib.contextmanager
-def _signals_held():
-    """Hold SIGINT and SIGTERM back for a moment: a handler that raises would otherwise be able
-    to interrupt between the making of a file and the line that remembers it."""
-    held = {signal.SIGINT, signal.SIGTERM}
-    if not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    before = signal.pthread_sigmask(signal.SIG_BLOCK, held)
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, before)
