@@ -66,7 +66,11 @@ real = module.{function}
 def stall(*args, **kwargs):      # mid-work: say so, then wait for the signal
     print("ready", flush=True)
     try:
-        time.sleep(120)
+        # Short sleeps, as a program at work runs Python between system calls: the kernel may
+        # hand the signal to another thread (numpy's OpenBLAS server), whose handler then only
+        # marks it for the main thread; one long sleep would not notice that for 120 s.
+        for _ in range(1200):
+            time.sleep(0.1)
     except BaseException:
         if not {swallow}:
             raise                    # else as a __del__ or a weakref callback would: dropped
