@@ -16,8 +16,11 @@ by numpy's lstsq (an orthogonal factorisation, not the normal equations), and th
 three points that it gives the loop closure's solution.
 
 a and c come out signed, as the equations give them (a negative one is reported, not hidden);
-a quantity that does not exist is NaN (the sheet's #N/A): b where b² < 0, everything solved
-where the system is near-singular.
+a quantity that does not exist is NaN (the sheet's #N/A): everything solved where the system
+is near-singular, a or c where its coefficient is 0, b where b² < 0. That last only by round-off
+(b ≈ 0): |d + c·e^{iθ4_j} − a·e^{iθ2_j}|² = b² + 2ac·(residual_j), and the residual sums to zero
+(exactly at three points; by least squares, whose residual is orthogonal to the constant
+column, beyond), so b² is the mean of those squared lengths.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from .fourbar import grashof_class
-from .newton import RES_TOL, newton
+from .newton import RES_TOL, TANGENT, newton
 
 SPACINGS = ("chebyshev", "equal")
 # Near-singular: cond₂ of the system's matrix [cos θ4, −cos θ2, 1] above this. Two correct
@@ -109,16 +112,14 @@ def _first_guesses(theta2: np.ndarray, theta4: np.ndarray) -> list[list[float]]:
     """(a, b, c, θ3_j) for a grid of (a, c), d = 1: the coupler vector A→B each guess implies at
     each point gives θ3_j and b (its mean length); ordered by how far the implied coupler lengths
     spread (the best-fitting guesses first)."""
-    sizes = [s * sign for s in _GUESS_SIZES for sign in (1.0, -1.0)]
-    scored = []
-    for a in sizes:
-        for c in sizes:
-            coupler = 1.0 + c * np.exp(1j * theta4) - a * np.exp(1j * theta2)
-            lengths = np.abs(coupler)
-            spread = float(np.ptp(lengths) / max(float(np.mean(lengths)), 1e-300))
-            scored.append((spread, [a, float(np.mean(lengths)), c] + np.angle(coupler).tolist()))
-    scored.sort(key=lambda item: item[0])
-    return [guess for _, guess in scored]
+    sizes = np.array([s * sign for s in _GUESS_SIZES for sign in (1.0, -1.0)])
+    a, c = (g.ravel()[:, None] for g in np.meshgrid(sizes, sizes, indexing="ij"))
+    coupler = 1.0 + c * np.exp(1j * theta4) - a * np.exp(1j * theta2)   # one row per guess
+    lengths = np.abs(coupler)
+    b = lengths.mean(axis=1)
+    spread = np.ptp(lengths, axis=1) / np.maximum(b, 1e-300)
+    guesses = np.column_stack([a[:, 0], b, c[:, 0], np.angle(coupler)])
+    return guesses[np.argsort(spread, kind="stable")].tolist()
 
 
 def _normalised(u: list[float]) -> list[float]:
@@ -131,15 +132,15 @@ def _normalised(u: list[float]) -> list[float]:
 
 def loop_closure_solution(theta2: np.ndarray, theta4: np.ndarray) -> list[float] | None:
     """(a, b, c, θ3_1..θ3_n) with d = 1 solving the loop closure at n = 3 precision points, by
-    Newton from the first-guess grid; None if no guess converges to a linkage (none is real:
-    b² < 0).
+    Newton from the first-guess grid; None if no guess converges to a linkage.
     The first _AGREE roots found must agree (the three-point system has one solution)."""
     fun = _loop_closure(theta2, theta4)
     n = len(theta2)
-    scales = [1.0, 1.0, 1.0] + [1.0] * n
     roots = []
     for guess in _first_guesses(theta2, theta4):
-        u = newton(fun, guess, scales, RES_TOL, angle_slots=tuple(range(3, 3 + n)))
+        size = max(1.0, *(abs(v) for v in guess[:3]))     # Newton's steps judged against it
+        u = newton(fun, guess, [size] * 3 + [1.0] * n, RES_TOL * size,
+                   angle_slots=tuple(range(3, 3 + n)))
         if u is not None and min(abs(u[0]), abs(u[1]), abs(u[2])) > _DEGENERATE:
             roots.append(_normalised(u))
             if len(roots) == _AGREE:
@@ -170,10 +171,13 @@ def _coefficients(a: float, b: float, c: float, d: float) -> np.ndarray:
 def _branches(a: float, c: float, d: float, theta2: np.ndarray, theta4: np.ndarray
               ) -> np.ndarray:
     """linkbook's dyad branch of the linkage at each point: the sign of cross(B − B0, A − B0)
-    (+1 open, −1 crossed, 0 at a dead centre, where both meet)."""
+    (+1 open, −1 crossed; 0 at a dead centre, where both meet: the cross product below TANGENT
+    of its sides' product, as the position reference takes it)."""
     ax, ay = a * np.cos(theta2), a * np.sin(theta2)
     bx, by = c * np.cos(theta4), c * np.sin(theta4)       # B − B0
-    return np.sign(bx * ay - by * (ax - d))
+    cross = bx * ay - by * (ax - d)
+    flat = np.abs(cross) <= TANGENT * np.hypot(bx, by) * np.hypot(ax - d, ay)
+    return np.where(flat, 0.0, np.sign(cross))
 
 
 def _transmission_at(a: float, b: float, c: float, d: float, theta2) -> np.ndarray:
@@ -221,7 +225,7 @@ def function_generation(theta2: Sequence[float], theta4: Sequence[float], d: flo
     or None; input_range: (start, signed span) of the crank in radians, by default the span of
     the precision points.
 
-    Returns a dict: a, b, c, d (a and c signed; b NaN where b² < 0); K1, K2, K3 and
+    Returns a dict: a, b, c, d (a and c signed; NaN where they do not exist); K1, K2, K3 and
     `coefficients` (the three as an array); `residual`: Freudenstein's residual per point;
     `theta3`: the coupler's angle (A→B) per point; `branch`: the linkage's assembly at each
     point (+1 open, −1 crossed, 0 at a dead centre, NaN where there is no linkage);
@@ -231,7 +235,7 @@ def function_generation(theta2: Sequence[float], theta4: Sequence[float], d: flo
     over a full turn of the crank ((NaN, NaN) where the loop cannot close on the way);
     `singular`: the system is near-singular (cond₂ > SINGULAR_COND: then every solved value is
     NaN); `condition`: that condition number; `solved_by`: "loop closure" (Newton, n = 3) or
-    "least squares" (lstsq: n > 3, or no real linkage at n = 3)."""
+    "least squares" (lstsq: n > 3, or Newton found no root at n = 3, which the tests forbid)."""
     theta2, theta4 = np.asarray(theta2, dtype=float), np.asarray(theta4, dtype=float)
     n = len(theta2)
     if n < 3 or len(theta4) != n:
