@@ -111,6 +111,17 @@ def test_the_lecture_example_exactly(osu):
         assert design[key] == pytest.approx(value, abs=1e-6), key
 
 
+def test_the_lecture_printed_five_matrix_entries_beyond_their_rounding(osu):
+    """The printed system against the cosines of the printed angles: every entry within its
+    last digit's rounding (5e-5) but the five the note names."""
+    theta2, theta4, _ = osu
+    exact = np.column_stack([np.ones(3), np.cos(theta4), -np.cos(theta2),
+                             np.cos(theta2 - theta4)])
+    printed = np.column_stack([np.array(OSU["matrix"]), OSU["rhs"]])
+    off = sorted(zip(*np.nonzero(np.abs(printed - exact) > 5e-5)))
+    assert [(int(i), int(j)) for i, j in off] == [(0, 1), (0, 2), (0, 3), (2, 2), (2, 3)]
+
+
 def test_the_lecture_linkage_is_an_open_crank_rocker(osu):
     """Its lengths 0.398, 4.201, 0.838 on a 4.5 ground: s + l = 4.898 < p + q = 5.039 with the
     crank the shortest (Grashof: crank-rocker); drawn on slide 12 in the open assembly (B above
