@@ -130,6 +130,8 @@ def test_the_lecture_linkage_is_an_open_crank_rocker(osu):
     assert design["grashof"] == "Grashof: crank-rocker"
     assert design["branch"].tolist() == [1, 1, 1]
     assert not design["branch_defect"]
+    assert not function_generation(theta2, theta4, 4.5, branch=1)["wrong_branch"]
+    assert function_generation(theta2, theta4, 4.5, branch=-1)["wrong_branch"]
     gap = angle_gap(placed_theta4(design, theta2, 1), theta4)
     assert np.abs(gap).max() < ROUND_TRIP
     # the other assembly does not pass through them: the branch sign means something
