@@ -23,6 +23,7 @@ The package, by concern:
   analysis      solve() and what is measured over a sweep (extremes, a quick-return ratio)
   drawing       the drawn guides and blocks of the sliders
   fourbar       four-bar loops: Grashof's class, the input's limit angles
+  synthesis     function generation (issue 38): the four-bar through given (θ2, θ4) pairs
 """
 
 from __future__ import annotations

@@ -49,7 +49,14 @@ Fun = Callable[[Sequence[float]], tuple[tuple[float, ...], tuple[tuple[float, ..
 
 
 def linear_solve(jac: Sequence[Sequence[float]], rhs: Sequence[float]) -> list[float] | None:
-    """Solve jac · x = rhs for 1×1 and 2×2 systems; None if singular."""
+    """Solve jac · x = rhs; None if singular. 1×1 and 2×2 systems in scalar arithmetic (the
+    steps' systems, solved row after row); larger ones (synthesis's loop closure) by LAPACK."""
+    if len(rhs) > 2:
+        try:
+            x = np.linalg.solve(np.asarray(jac, dtype=float), np.asarray(rhs, dtype=float))
+        except np.linalg.LinAlgError:
+            return None
+        return x.tolist() if np.isfinite(x).all() else None
     if len(rhs) == 1:
         d = jac[0][0]
         return None if d == 0.0 else [rhs[0] / d]
