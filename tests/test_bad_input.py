@@ -124,6 +124,9 @@ TOML_CASES = [
     ("a mass in grams", FOURBAR_TOML.replace('unit = "kg", value = 0.02198',
                                              'unit = "g", value = 21.98'),
      "mine.toml: parameters.m4.unit: must be kg for a mass parameter in a book of mm (got 'g')"),
+    ("an inertia in a unit of volume", FOURBAR_TOML.replace('unit = "kg·m²"', 'unit = "kg*m^3"'),
+     "mine.toml: parameters.I2.unit: must be kg·m² for an inertia parameter in a book of mm "
+     "(got 'kg*m^3')"),
     ("a negative mass", FOURBAR_TOML.replace('value = 0.02198', 'value = -0.02198'),
      "mine.toml: parameters.m4.value: must be zero or more (got -0.02198)"),
     ("a torque written near the least double", FOURBAR_TOML.replace('torque = "T4"',
@@ -178,6 +181,30 @@ def test_the_older_form_names_a_bundled_mechanism(tmp_path, capsys):
     code, err = _run(tmp_path, ["build", "old.toml", "-o", "old.xlsx", "--set", "a2=30"], capsys)
     assert code == 0, err
     assert (tmp_path / "old.xlsx").is_file()
+
+
+def _mechanism_units(book: Path) -> list:
+    ws = openpyxl.load_workbook(book)["Mechanism"]
+    return [ws.cell(r, 4).value for r in range(1, ws.max_row + 1)]
+
+
+@pytest.mark.parametrize("spelling", [("kg*m^2", "N*m", "m/s^2"), ("kg m^2", "N m", "m/s**2"),
+                                      ("kg.m^2", "N.m", "m / s^2")])
+def test_units_typed_without_dot_and_square_are_the_books(tmp_path, capsys, spelling):
+    """`kg*m^2`, `N*m`, `m/s^2` (a keyboard's spellings) are kg·m², N·m and m/s²: the book is
+    the bundled template's, its units written as the book always shows them."""
+    inertia, torque, acceleration = spelling
+    text = FOURBAR_TOML.replace('unit = "kg·m²"', f'unit = "{inertia}"').replace(
+        'unit = "N·m"', f'unit = "{torque}"').replace('unit = "m/s²"', f'unit = "{acceleration}"')
+    assert "kg·m²" not in text and "N·m" not in text.split("[mechanism]")[0]
+    (tmp_path / "mine.toml").write_text(text, encoding="utf-8")
+    (tmp_path / "bundled.toml").write_text(FOURBAR_TOML, encoding="utf-8")
+    for name in ("mine", "bundled"):
+        code, err = _run(tmp_path, ["build", f"{name}.toml", "-o", f"{name}.xlsx"], capsys)
+        assert code == 0, err
+    units = _mechanism_units(tmp_path / "mine.xlsx")
+    assert units == _mechanism_units(tmp_path / "bundled.xlsx")
+    assert {"kg·m²", "N·m", "m/s²"} <= set(units)
 
 
 def test_at_least_25_kinds_of_bad_input_are_tried():

@@ -17,7 +17,7 @@ from .bundled import TEMPLATE_DIR, bundled, bundled_template_data
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
 from .expressions import value_of
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS, OFFSET_KIND,
-                         RATE_KIND, Mechanism)
+                         RATE_KIND, Mechanism, typed_unit)
 
 EXCEL_MAX_ROWS = 1_048_576
 EXCEL_MAX_COLUMNS = 16_384
@@ -208,12 +208,13 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         if not isinstance(entry, dict):
             raise InputError(field, f"must be a table with label, unit, value (got {entry!r})")
         label = _need(entry, "label", field)
-        unit = _need(entry, "unit", field)
+        typed = _need(entry, "unit", field)
+        unit = typed_unit(typed)
         want = parameter_unit(mech, symbol, kind, length_unit)
         if unit != want:
             raise InputError(f"{field}.unit", f"must be {want} for a{'n' if kind[0] in 'aio' else ''} "
                                               f"{kind} parameter in a book of {length_unit} "
-                                              f"(got {unit!r})")
+                                              f"(got {typed!r})")
         excel_name = entry.get("name", default_name(symbol))
         problem = (excel_name_problem(excel_name) if isinstance(excel_name, str)
                    else "must be text")
