@@ -207,3 +207,34 @@ def test_the_force_summary_follows_an_edited_cs(tmp_path):
 def _info_cell(book, key: str) -> str:
     from linkbook.base.sheets import read_meta
     return read_meta(openpyxl.load_workbook(book))["forces"]["summary"][key]["cell"]
+
+
+def _info_of_toml(tmp_path, name: str, edit) -> tuple[dict, str]:
+    """info (--json and the text) of bundled template `name` as edit(its text) makes it."""
+    from conftest import ROOT
+    text = (ROOT / "templates" / f"{name}.toml").read_text(encoding="utf-8")
+    edited = edit(text)
+    assert edited != text
+    (tmp_path / "mine.toml").write_text(edited, encoding="utf-8")
+    return _info("mine.toml", cwd=tmp_path), run("info", "mine.toml", cwd=tmp_path).stdout
+
+
+def test_the_rate_of_a_symbol_in_bars_is_written_d_dt(tmp_path):
+    """A distance named |P1P4|: its rates d|P1P4|/dt and d²|P1P4|/dt², no dot combined onto a
+    bar (||̇P1P4||); a symbol that starts with a letter keeps its dots (ė, ë)."""
+    data, text = _info_of_toml(tmp_path, "tk-fourbar", lambda t: t.replace(
+        'key = "d"\n', 'key = "d"\nsymbol = "|P1P4|"\n', 1))
+    rates = [p["what"] for p in data["peaks"]]
+    assert {"d|P1P4|/dt", "d²|P1P4|/dt²", "e\u0307", "e\u0308"} <= set(rates), rates
+    for mark in ("\u0307", "\u0308"):
+        assert not any(c in "|()[]" for c in
+                       (text[i - 1] for i, ch in enumerate(text) if ch == mark)), text
+
+
+def test_an_angle_output_is_shown_once(tmp_path):
+    """output = theta14: its range under the output's label, not again as an angle."""
+    data, text = _info_of_toml(tmp_path, "fourbar", lambda t: t.replace(
+        "[mechanism]\n", '[mechanism]\noutput = "theta14"\n', 1))
+    assert [r["what"] for r in data["output"]] == ["θ14 (rocker, angle of B0→B)"]
+    assert [r["what"] for r in data["angles"]] == ["θ13"]
+    assert sum(line.split()[:1] == ["θ14"] for line in text.splitlines()) == 1

@@ -230,9 +230,11 @@ def _force_summary(book: Book) -> list[dict]:
 
 def summary(book: Book) -> dict:
     """Everything `linkbook info` prints, as data."""
-    transmissions = _ranges_of(book, "mu")
-    # a transmission angle's degree view repeats the transmission block's numbers
-    shown_there = {r["what"].split()[-1] for r in transmissions}
+    transmissions, output = _ranges_of(book, "mu"), _ranges_of(book, "output")
+    # the degree view of a transmission angle or of an angle output repeats those numbers
+    # ("transmission angle μ", "θ14 (rocker, angle of B0→B)")
+    shown_there = {r["what"].split()[-1] for r in transmissions} | {
+        r["what"].split(" (")[0] for r in output}
     angles = [r for r in _angle_ranges(book) if r["what"] not in shown_there]
     input_head = _header(book, layout.SWEEP, book.record.sweep.rows[0] - 1, "A")
     not_closing = _summary_row(book, "not_closing")
@@ -241,7 +243,7 @@ def summary(book: Book) -> dict:
         "title": book.record.title,
         "input": dict(zip(("symbol", "unit"), split_header(input_head))),
         "inputs": _inputs(book), "fourbar_loops": _loops(book),
-        "output": _ranges_of(book, "output"), "angles": angles,
+        "output": output, "angles": angles,
         "transmission_angles": transmissions,
         "not_closing": number(not_closing[1]) if not_closing else 0,
         "gaps": _gaps(book), "peaks": _peaks(book), "force_peaks": _force_peaks(book),
