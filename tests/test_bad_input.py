@@ -183,6 +183,25 @@ def test_the_older_form_names_a_bundled_mechanism(tmp_path, capsys):
     assert (tmp_path / "old.xlsx").is_file()
 
 
+LOAD = 'body = ["B0", "B"]\ntorque = "T4"'
+
+
+@pytest.mark.parametrize("load, line", [
+    ('at = "C"\nforce = { magnitude = "T4", angel = 30 }',
+     "mine.toml: mechanism.loads[0].force: unknown key 'angel' (did you mean 'angle'?)"),
+    (LOAD + '\nat = "C"\nforce = ["T4", 0]',
+     "mine.toml: mechanism.loads[0]: must be a table of at and force (body optional), or of "
+     "body and torque (got a table of body, torque, at and force)"),
+], ids=["a polar force's angle misspelt", "a load of a force and a torque"])
+def test_a_load_that_fits_no_form_is_named_in_one_plain_line(tmp_path, capsys, load, line):
+    """The line names the key or the keys, never a Python dict ({'magnitude': ...})."""
+    assert FOURBAR_TOML.count(LOAD) == 1
+    (tmp_path / "mine.toml").write_text(FOURBAR_TOML.replace(LOAD, load), encoding="utf-8")
+    code, err = _run(tmp_path, ["build", "mine.toml", "-o", "mine.xlsx"], capsys)
+    _assert_refused(tmp_path, code, err, line, ["mine.toml"])
+    assert err.strip() == f"linkbook: error: {line}"
+
+
 def _mechanism_units(book: Path) -> list:
     ws = openpyxl.load_workbook(book)["Mechanism"]
     return [ws.cell(r, 4).value for r in range(1, ws.max_row + 1)]
