@@ -25,6 +25,7 @@ COMMAND_LINE = [
     ("negative infinity", ["--set", "a3=-inf"], "finite"),
     ("unknown key", ["--set", "a9=3"], "a9"),
     ("unknown key near a known one", ["--set", "a22=3"], "did you mean a2"),
+    ("a key in capitals", ["--set", "A2=40"], "--set A2: unknown parameter; did you mean a2?"),
     ("no = in --set", ["--set", "a2"], "KEY=VALUE"),
     ("empty key", ["--set", "=4"], "KEY=VALUE"),
     ("branch not ±1", ["--set", "branch=2"], "branch"),
@@ -199,6 +200,21 @@ def test_a_load_that_fits_no_form_is_named_in_one_plain_line(tmp_path, capsys, l
     (tmp_path / "mine.toml").write_text(FOURBAR_TOML.replace(LOAD, load), encoding="utf-8")
     code, err = _run(tmp_path, ["build", "mine.toml", "-o", "mine.xlsx"], capsys)
     _assert_refused(tmp_path, code, err, line, ["mine.toml"])
+    assert err.strip() == f"linkbook: error: {line}"
+
+
+@pytest.mark.parametrize("target, line", [
+    ("../own/x.tml", "template: no such file '../own/x.tml' (a template is a .toml file, not "
+                     ".tml)"),
+    ("own/mine.toml", "template: no such file 'own/mine.toml'"),
+    ("own/fourbar", "template: no such file 'own/fourbar'"),
+])
+def test_a_missing_template_file_is_named_as_a_file(tmp_path, capsys, target, line):
+    """A path (a folder or a suffix in it) is a file the user means, never an unknown bundled
+    template; a suffix other than .toml is named."""
+    (tmp_path / "here").mkdir()
+    code, err = _run(tmp_path / "here", ["build", target], capsys)
+    _assert_refused(tmp_path / "here", code, err, line, [])
     assert err.strip() == f"linkbook: error: {line}"
 
 
