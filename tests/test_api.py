@@ -1,4 +1,5 @@
-"""The documented Python API (README "Python API"): linkbook.build and linkbook.verify."""
+"""The documented Python API (README "Python API"): linkbook.build, linkbook.verify and
+linkbook.tables (its numbers: tests/test_export.py)."""
 from __future__ import annotations
 
 import openpyxl
@@ -78,6 +79,20 @@ def test_the_error_types_are_part_of_the_module():
         assert name in dir(linkbook) and name in linkbook.__all__
         assert issubclass(getattr(linkbook, name), Exception)
     assert issubclass(linkbook.CannotWrite, OSError)
+
+
+def test_tables_is_part_of_the_module_and_loads_nothing_on_import():
+    """`import linkbook` stays light (the command line's start-up): numpy and the readers load
+    when tables is called."""
+    import subprocess
+    import sys
+    code = ("import sys, linkbook\n"
+            "assert 'tables' in dir(linkbook) and 'tables' in linkbook.__all__\n"
+            "assert callable(linkbook.tables)\n"
+            "print(sorted(m for m in ('numpy', 'openpyxl', 'linkbook.apps.export') "
+            "if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0 and done.stdout.strip() == "[]", done.stderr
 
 
 def test_aggregate_is_known_even_when_formulas_made_its_table_first(tmp_path):

@@ -25,6 +25,7 @@ COMMAND_LINE = [
     ("negative infinity", ["--set", "a3=-inf"], "finite"),
     ("unknown key", ["--set", "a9=3"], "a9"),
     ("unknown key near a known one", ["--set", "a22=3"], "did you mean a2"),
+    ("a key in capitals", ["--set", "A2=40"], "--set A2: unknown parameter; did you mean a2?"),
     ("no = in --set", ["--set", "a2"], "KEY=VALUE"),
     ("empty key", ["--set", "=4"], "KEY=VALUE"),
     ("branch not ±1", ["--set", "branch=2"], "branch"),
@@ -124,6 +125,9 @@ TOML_CASES = [
     ("a mass in grams", FOURBAR_TOML.replace('unit = "kg", value = 0.02198',
                                              'unit = "g", value = 21.98'),
      "mine.toml: parameters.m4.unit: must be kg for a mass parameter in a book of mm (got 'g')"),
+    ("an inertia in a unit of volume", FOURBAR_TOML.replace('unit = "kg·m²"', 'unit = "kg*m^3"'),
+     "mine.toml: parameters.I2.unit: must be kg·m² for an inertia parameter in a book of mm "
+     "(got 'kg*m^3')"),
     ("a negative mass", FOURBAR_TOML.replace('value = 0.02198', 'value = -0.02198'),
      "mine.toml: parameters.m4.value: must be zero or more (got -0.02198)"),
     ("a torque written near the least double", FOURBAR_TOML.replace('torque = "T4"',
@@ -234,6 +238,68 @@ def test_the_older_form_names_a_bundled_mechanism(tmp_path, capsys):
     code, err = _run(tmp_path, ["build", "old.toml", "-o", "old.xlsx", "--set", "a2=30"], capsys)
     assert code == 0, err
     assert (tmp_path / "old.xlsx").is_file()
+
+
+LOAD = 'body = ["B0", "B"]\ntorque = "T4"'
+
+
+@pytest.mark.parametrize("load, line", [
+    ('at = "C"\nforce = { magnitude = "T4", angel = 30 }',
+     "mine.toml: mechanism.loads[0].force: unknown key 'angel' (did you mean 'angle'?)"),
+    (LOAD + '\nat = "C"\nforce = ["T4", 0]',
+     "mine.toml: mechanism.loads[0]: must be a table of at and force (body optional), or of "
+     "body and torque (got a table of body, torque, at and force)"),
+], ids=["a polar force's angle misspelt", "a load of a force and a torque"])
+def test_a_load_that_fits_no_form_is_named_in_one_plain_line(tmp_path, capsys, load, line):
+    """The line names the key or the keys, never a Python dict ({'magnitude': ...})."""
+    assert FOURBAR_TOML.count(LOAD) == 1
+    (tmp_path / "mine.toml").write_text(FOURBAR_TOML.replace(LOAD, load), encoding="utf-8")
+    code, err = _run(tmp_path, ["build", "mine.toml", "-o", "mine.xlsx"], capsys)
+    _assert_refused(tmp_path, code, err, line, ["mine.toml"])
+    assert err.strip() == f"linkbook: error: {line}"
+
+
+# the issue's `../own/x.tml`, run in a folder of tmp_path (its parent is tmp_path), written in
+# parts: a quoted parent-folder literal is how test_standalone finds a path leaving the repo
+UP = str(Path("..") / "own" / "x.tml")
+
+
+@pytest.mark.parametrize("target, line", [
+    (UP, f"template: no such file {UP!r} (a template is a .toml file, not .tml)"),
+    ("own/mine.toml", "template: no such file 'own/mine.toml'"),
+    ("own/fourbar", "template: no such file 'own/fourbar'"),
+])
+def test_a_missing_template_file_is_named_as_a_file(tmp_path, capsys, target, line):
+    """A path (a folder or a suffix in it) is a file the user means, never an unknown bundled
+    template; a suffix other than .toml is named."""
+    (tmp_path / "here").mkdir()
+    code, err = _run(tmp_path / "here", ["build", target], capsys)
+    _assert_refused(tmp_path / "here", code, err, line, [])
+    assert err.strip() == f"linkbook: error: {line}"
+
+
+def _mechanism_units(book: Path) -> list:
+    ws = openpyxl.load_workbook(book)["Mechanism"]
+    return [ws.cell(r, 4).value for r in range(1, ws.max_row + 1)]
+
+
+@pytest.mark.parametrize("spelling", [("kg*m^2", "N*m", "m/s^2"), ("kg m^2", "N m", "m/s**2"),
+                                      ("kg.m^2", "N.m", "m / s^2")])
+def test_units_typed_without_dot_and_square_are_the_books(tmp_path, capsys, spelling):
+    """`kg*m^2`, `N*m`, `m/s^2` (a keyboard's spellings) are kg·m², N·m and m/s²: the book is
+    the bundled template's, its units written as the book always shows them."""
+    inertia, torque, acceleration = spelling
+    text = FOURBAR_TOML.replace('unit = "kg·m²"', f'unit = "{inertia}"').replace(
+        'unit = "N·m"', f'unit = "{torque}"').replace('unit = "m/s²"', f'unit = "{acceleration}"')
+    assert "kg·m²" not in text and "N·m" not in text.split("[mechanism]")[0]
+    (tmp_path / "mine.toml").write_text(text, encoding="utf-8")
+    (tmp_path / "bundled.toml").write_text(FOURBAR_TOML, encoding="utf-8")
+    for name in ("mine", "bundled"):
+        code, err = _run(tmp_path, ["build", f"{name}.toml", "-o", f"{name}.xlsx"], capsys)
+        assert code == 0, err
+    units = _mechanism_units(tmp_path / "mine.xlsx")
+    assert units == _mechanism_units(tmp_path / "bundled.xlsx")
+    assert {"kg·m²", "N·m", "m/s²"} <= set(units)
 
 
 def test_at_least_25_kinds_of_bad_input_are_tried():

@@ -1,16 +1,21 @@
 """`linkbook export`: a book's tables as CSV, each field the engine's value of the book's cell
-and the value openpyxl reads stored in a --values book; text guarded against formula injection."""
+and the value openpyxl reads stored in a --values book; text guarded against formula injection.
+`linkbook.tables`: the same tables as arrays, equal to the CSVs."""
 from __future__ import annotations
 
 import csv
+import math
 
+import numpy as np
 import openpyxl
 import pytest
 
+import linkbook
 from conftest import built
 from test_cli import run
 
 from linkbook.engine import evaluator as engine
+from linkbook.language.bundled import bundled
 from linkbook.apps.export import tables, table_text
 from linkbook.apps.info import Book
 from linkbook.base.sheets import read_meta, write_meta_json
@@ -151,3 +156,68 @@ def test_a_record_that_does_not_match_the_book_is_one_line(tmp_path):
         assert len(done.stderr.splitlines()) == 1
         assert "the build record (sheet linkbook) does not match the workbook" in done.stderr
     assert not (tmp_path / "csv").exists()
+
+
+def _csv_number(text: str) -> float:
+    """A CSV field as the number it shows: NaN for #N/A, a text or an empty field."""
+    try:
+        return float(text)
+    except ValueError:
+        return math.nan
+
+
+def _same_as_the_csvs(book, outdir, heads=None) -> int:
+    """linkbook.tables(book) against `linkbook export`'s files: the sheets, each header (the
+    CSV's last header row) and every number (NaN where the CSV has no number). How many NaN."""
+    found = linkbook.tables(book)
+    files = _export(book, outdir)
+    assert sorted(path.name for path in files) == sorted(
+        f"{book.stem}-{sheet.replace(' ', '-')}.csv" for sheet in found)
+    nan = 0
+    for sheet, columns in found.items():
+        rows = _rows(outdir / f"{book.stem}-{sheet.replace(' ', '-')}.csv")
+        head = (heads or {}).get(sheet, 1)
+        assert list(columns) == rows[head - 1], sheet
+        for i, (header, values) in enumerate(columns.items()):
+            expected = np.array([_csv_number(row[i]) for row in rows[head:]])
+            assert np.array_equal(values, expected, equal_nan=True), (sheet, header)
+            nan += int(np.isnan(expected).sum())
+    return nan
+
+
+def test_tables_are_the_csvs_with_na_as_nan(gappy_book, tmp_path):
+    assert _same_as_the_csvs(gappy_book, tmp_path / "csv") > 0
+    found = linkbook.tables(gappy_book)
+    computed = engine.evaluate_file(gappy_book)
+    meta = read_meta(openpyxl.load_workbook(gappy_book))
+    first, last = meta["forces"]["rows"]
+    letter = meta["forces"]["columns"]["T12"]
+    t12 = [computed[("Forces", f"{letter}{r}")] for r in range(first, last + 1)]
+    assert any(engine.is_error(v) for v in t12)     # the book shows #N/A where the gap is
+    assert np.array_equal(found["Forces"]["T12 [N·m]"],
+                          [math.nan if engine.is_error(v) else v for v in t12], equal_nan=True)
+
+
+def test_tables_give_an_edited_books_numbers(tmp_path):
+    """a2 typed over in the saved book: the sweep's crank tip moves with it."""
+    book = tmp_path / "fourbar.xlsx"
+    assert run("build", "fourbar", "-o", str(book)).returncode == 0
+    before = linkbook.tables(book)["Sweep"]
+    wb = openpyxl.load_workbook(book)
+    wb["Mechanism"]["C8"] = 2 * wb["Mechanism"]["C8"].value         # a2, the crank
+    wb.save(book)
+    after = linkbook.tables(book)["Sweep"]
+    assert np.allclose(after["xA [mm]"], 2 * before["xA [mm]"], rtol=1e-12, atol=1e-9)
+    assert np.ptp(after["xA [mm]"]) > 0
+
+
+def test_tables_of_a_missing_book_raise_one_line(tmp_path):
+    with pytest.raises(linkbook.UnusableFile, match="no such file"):
+        linkbook.tables(tmp_path / "missing.xlsx")
+
+
+@pytest.mark.slow       # every bundled template built, exported and read
+@pytest.mark.parametrize("name", [path.stem for path in bundled()])
+def test_tables_equal_the_csvs_of_every_bundled_book(name, tmp_path):
+    book = linkbook.build(name, tmp_path / f"{name}.xlsx")
+    _same_as_the_csvs(book, tmp_path / "csv", heads={"Grid": 2})

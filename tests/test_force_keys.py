@@ -223,10 +223,10 @@ def test_a_book_record_with_such_a_key_is_refused_too(what, keys, message):
      "parameters.m9.value: must be 0 or from 1e-30 to 1e+30 either way (got 2.22"),
     ("force", "N", -3e30, "parameters.m9.value: must be 0 or from 1e-30 to 1e+30 either way"),
     ("mass", "g", 1.0, "parameters.m9.unit: must be kg for a mass parameter"),
-    ("inertia", "kg*m^2", 1.0, "must be kg·m² for an inertia parameter"),
+    ("inertia", "kg*m^3", 1.0, "must be kg·m² for an inertia parameter"),
     ("force", "kN", 1.0, "must be N for a force parameter"),
     ("torque", "Nm", 1.0, "must be N·m for a torque parameter"),
-    ("acceleration", "m/s^2", 1.0, "must be m/s² for an acceleration parameter"),
+    ("acceleration", "ft/s^2", 1.0, "must be m/s² for an acceleration parameter"),
     ("weight", "N", 1.0, "parameters.m9.kind: must be one of length, offset, angle, branch, "
                          "mass, inertia, force, torque, acceleration"),
 ])

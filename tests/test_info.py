@@ -1,5 +1,6 @@
 """`linkbook info`: a book's numbers at the terminal, each one equal to the independent
-reference's (check/reference/), also after the book is edited; a template summarised in memory."""
+reference's (check/reference/), also after the book is edited; a template summarised in memory;
+the Forces sheet's summary, each number its cell's."""
 from __future__ import annotations
 
 import json
@@ -146,3 +147,94 @@ def test_bad_input_is_one_line(tmp_path, target, says):
     assert done.stdout == ""
     assert len(done.stderr.splitlines()) == 1 and says in done.stderr
     assert done.stderr.startswith("linkbook: error: ")
+
+
+FORCE_SUMMARY = {
+    "effort_mean": "N·m", "effort_rms": "N·m", "effort_largest": "N·m",
+    "effort_largest_at": "deg", "effort_smallest": "N·m", "effort_smallest_at": "deg",
+    "energy_fluctuation": "J", "speed_fluctuation": "-", "flywheel": "kg·m²"}
+
+
+def _force_cells(book) -> dict:
+    """{key: the engine's value} of every cell of the Forces sheet's summary, where the build
+    record says it is."""
+    from linkbook.base.sheets import read_meta
+    from linkbook.engine import evaluator as engine
+    values = engine.evaluate_file(book)
+    cells = read_meta(openpyxl.load_workbook(book))["forces"]["summary"]
+    return {key: values[("Forces", c["cell"])] for key, c in cells.items()
+            if not key.startswith("mean_line")}
+
+
+@pytest.mark.parametrize("name, pins", [("fourbar", ["F12", "F23", "F34", "F14"]),
+                                        ("slider-crank", ["F12", "F23", "F34", "F14"])])
+def test_the_force_summary_is_the_forces_sheets(tmp_path, name, pins):
+    """Every number of the Forces summary (mean effort, RMS, extremes and where, each pin's
+    peak, energy fluctuation, Cs, flywheel inertia), as the engine computes its cell, with its
+    unit, in --json and in the text."""
+    book = tmp_path / f"{name}.xlsx"
+    assert run("build", name, "-o", str(book)).returncode == 0
+    shown = {r["key"]: r for r in _info(book)["force_summary"]}
+    cells = _force_cells(book)
+    expected_units = {**FORCE_SUMMARY, **{f"peak_{pin}": "N" for pin in pins}}
+    assert set(shown) == set(cells) == set(expected_units)
+    for key, value in cells.items():
+        assert isinstance(value, float) and shown[key]["value"] == value, key
+        assert shown[key]["unit"] == expected_units[key], key
+    assert shown["flywheel"]["what"] == "flywheel inertia ΔE / (Cs·ω²)"
+    text = run("info", str(book)).stdout.splitlines()
+    block = text[text.index("Forces: summary over the θ12 sweep") + 1:]
+    assert len(block) == len(cells)
+    for line, r in zip(block, _info(book)["force_summary"]):
+        assert line.split()[-2:] == [f"{r['value']:.6g}", r["unit"]], line
+        assert line.strip().startswith(r["what"])
+
+
+def test_the_force_summary_follows_an_edited_cs(tmp_path):
+    """Cs typed over in the book (an input of the Forces sheet): twice Cs, half the flywheel."""
+    book = tmp_path / "slider-crank.xlsx"
+    assert run("build", "slider-crank", "-o", str(book)).returncode == 0
+    before = {r["key"]: r["value"] for r in _info(book)["force_summary"]}
+    cell = _info_cell(book, "speed_fluctuation")
+    wb = openpyxl.load_workbook(book)
+    wb["Forces"][cell] = 2 * before["speed_fluctuation"]
+    wb.save(book)
+    after = {r["key"]: r["value"] for r in _info(book)["force_summary"]}
+    assert after["speed_fluctuation"] == 2 * before["speed_fluctuation"]
+    assert after["flywheel"] == pytest.approx(before["flywheel"] / 2, rel=1e-12)
+
+
+def _info_cell(book, key: str) -> str:
+    from linkbook.base.sheets import read_meta
+    return read_meta(openpyxl.load_workbook(book))["forces"]["summary"][key]["cell"]
+
+
+def _info_of_toml(tmp_path, name: str, edit) -> tuple[dict, str]:
+    """info (--json and the text) of bundled template `name` as edit(its text) makes it."""
+    from conftest import ROOT
+    text = (ROOT / "templates" / f"{name}.toml").read_text(encoding="utf-8")
+    edited = edit(text)
+    assert edited != text
+    (tmp_path / "mine.toml").write_text(edited, encoding="utf-8")
+    return _info("mine.toml", cwd=tmp_path), run("info", "mine.toml", cwd=tmp_path).stdout
+
+
+def test_the_rate_of_a_symbol_in_bars_is_written_d_dt(tmp_path):
+    """A distance named |P1P4|: its rates d|P1P4|/dt and d²|P1P4|/dt², no dot combined onto a
+    bar (||̇P1P4||); a symbol that starts with a letter keeps its dots (ė, ë)."""
+    data, text = _info_of_toml(tmp_path, "tk-fourbar", lambda t: t.replace(
+        'key = "d"\n', 'key = "d"\nsymbol = "|P1P4|"\n', 1))
+    rates = [p["what"] for p in data["peaks"]]
+    assert {"d|P1P4|/dt", "d²|P1P4|/dt²", "e\u0307", "e\u0308"} <= set(rates), rates
+    for mark in ("\u0307", "\u0308"):
+        assert not any(c in "|()[]" for c in
+                       (text[i - 1] for i, ch in enumerate(text) if ch == mark)), text
+
+
+def test_an_angle_output_is_shown_once(tmp_path):
+    """output = theta14: its range under the output's label, not again as an angle."""
+    data, text = _info_of_toml(tmp_path, "fourbar", lambda t: t.replace(
+        "[mechanism]\n", '[mechanism]\noutput = "theta14"\n', 1))
+    assert [r["what"] for r in data["output"]] == ["θ14 (rocker, angle of B0→B)"]
+    assert [r["what"] for r in data["angles"]] == ["θ13"]
+    assert sum(line.split()[:1] == ["θ14"] for line in text.splitlines()) == 1

@@ -580,3 +580,31 @@ def test_an_angle_output_gives_its_range_and_swing_in_degrees(b0):
     assert (got["min"] - rocker.min()) % 360 == pytest.approx(0, abs=1e-9)
     assert got["max"] - got["min"] == pytest.approx(np.ptp(rocker), abs=1e-9)
     assert not [m for c in checks_of(b, values) for m in c.mismatches]
+
+
+def _zero_terms(wb) -> list[str]:
+    """Formula cells holding a term multiplied by a literal zero (-0*SIN(…), +0*COS(…))."""
+    import re
+    zero_term = re.compile(r"(?<![\w.$])0\*")
+    return [f"{ws}!{cell}" for ws, cell in formula_cells(wb)
+            if zero_term.search(wb[ws][cell].value)]
+
+
+@pytest.mark.parametrize("local", [('"u"', "0"), ("0", '"u"')])
+def test_a_zero_local_coordinate_writes_no_zero_term(local):
+    """hoeken's coupler point P (local = [u, 0]) and its coupler's centre (local = [u/2, 0]),
+    and the same with the coordinates swapped: x of P is A's x plus u·COS(angle), nothing
+    times zero, and the book still agrees with the reference."""
+    text = (ROOT / "templates" / "hoeken.toml").read_text(encoding="utf-8")
+    assert 'local = ["u", 0]' in text and 'local = ["u/2", 0]' in text
+    u, v = local
+    text = text.replace('local = ["u", 0]', f"local = [{u}, {v}]").replace(
+        'local = ["u/2", 0]', f"local = [{u.replace('u', 'u/2')}, {v.replace('u', 'u/2')}]")
+    t = templates.from_data("hoeken", tomllib.loads(text), origin="hoeken.toml")
+    b, values = builder.make(t)
+    assert _zero_terms(b.workbook) == []
+    xp = b.workbook["Sweep"][f"{b.meta['sweep']['columns']['xP']}5"].value
+    xa = b.meta["sweep"]["columns"]["xA"]
+    angle = "COS" if u != "0" else "SIN"
+    assert xp.startswith(f"={xa}5") and xp.count("u*") == 1 and f"*{angle}(" in xp, xp
+    assert all(c.ok for c in checks_of(b, values))

@@ -1,6 +1,6 @@
 """linkbook: planar mechanisms as living Excel workbooks (live formulas, charts, verification).
 
-The Python API is these two calls (the command line does the same)::
+The Python API is these three calls (the command line does the same)::
 
     import linkbook
 
@@ -8,18 +8,20 @@ The Python API is these two calls (the command line does the same)::
     report = linkbook.verify(path)
     report.status        # 0 every formula cell agrees, 1 a cell differs, 2 some cannot be judged
     report.differing, report.causes, report.cells, report.formula_cells, report.inputs
+    data = linkbook.tables(path)     # {"Forces": {"T12 [N·m]": array([...]), ...}, ...}
 
 Bad input to build raises `linkbook.InputError` (a one-line message naming the argument: `sets`,
 `step`, `output`, ...), a file system that refuses the write `linkbook.CannotWrite` (an OSError).
 verify never raises for the book it is given: one it cannot verify at all (not a workbook,
 damaged, not linkbook's) gives a report of status 2 whose `error` is the one-line reason.
+tables raises `linkbook.UnusableFile` (one line) for a book it cannot read.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
 from .base import __version__
-__all__ = ["build", "verify", "InputError", "UnusableFile", "CannotWrite", "__version__"]
+__all__ = ["build", "verify", "tables", "InputError", "UnusableFile", "CannotWrite", "__version__"]
 
 
 def build(template: str | Path, output: str | Path | None = None, *, sets=(), step=None,
@@ -54,6 +56,18 @@ def verify(path: str | Path, engine: str = "vector"):
     `error` (the line the command prints), so that a status is always there to act on."""
     from .check.verifier import report_of
     return report_of(path, engine)
+
+
+def tables(path: str | Path) -> dict:
+    """Every table sheet of the book at `path` (Sweep, Motion, Forces, Grid, Stroke sweep: those
+    it has) as {sheet: {header: numpy array of floats}}: each column under its header as the
+    book prints it ("T12 [N·m]"), NaN where the book shows #N/A (or a text). The numbers are
+    computed by linkbook's engine from the book's own formulas, so an edited book gives its
+    edited numbers; they are the numbers `linkbook export` writes. Raises UnusableFile (one
+    line) for a book it cannot read."""
+    from .apps.export import arrays
+    from .apps.info import open_book, read_record
+    return read_record(open_book(Path(path)), arrays)
 
 
 def __dir__() -> list[str]:

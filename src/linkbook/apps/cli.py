@@ -30,7 +30,7 @@ EPILOG = """examples:
   linkbook build --all --outdir output          # every bundled template
   linkbook verify fourbar.xlsx                  # every formula against the reference
   linkbook animate fourbar.xlsx                 # fourbar.gif: the mechanism moving
-  linkbook info fourbar.xlsx                    # its numbers: ranges, Grashof class, peaks
+  linkbook info fourbar.xlsx                    # its numbers: ranges, peaks, forces
   linkbook export fourbar.xlsx -o tables/       # its tables as CSV files
 
 KEY in --set is the parameter's symbol as `linkbook list -v` shows it (a2, gamma3, ...).
@@ -211,8 +211,11 @@ def _info_parsers(sub) -> None:
                                    "is written): its inputs with units, the Grashof class of "
                                    "each four-bar loop, the range of the output and of each "
                                    "angle over the sweep, each transmission angle's range, the "
-                                   "gaps where the loop cannot close, and the largest |ω|, |α|, "
-                                   "speed and acceleration of the Motion sheet. Every number is "
+                                   "gaps where the loop cannot close, the largest |ω|, |α|, "
+                                   "speed and acceleration of the Motion sheet and, with forces, "
+                                   "the largest efforts and pin loads and the Forces sheet's "
+                                   "summary (mean effort, RMS, extremes and where, each pin's "
+                                   "peak, energy fluctuation, flywheel inertia). Every number is "
                                    "computed by linkbook's engine from the book's own formulas, "
                                    "so a book edited in Excel reports its edited values.", 79),
                        epilog="examples:\n  linkbook info fourbar.xlsx\n  linkbook info "
@@ -220,8 +223,9 @@ def _info_parsers(sub) -> None:
                               + fill("--json prints one object: book, mechanism, title, input "
                                      "(symbol, unit), inputs, fourbar_loops, output, angles, "
                                      "transmission_angles (each: what, unit, min, max), "
-                                     "not_closing, gaps (from, to), peaks (what, unit, peak, "
-                                     "at).", 79),
+                                     "not_closing, gaps (from, to), peaks and force_peaks "
+                                     "(what, unit, peak, at), force_summary (key, what, unit, "
+                                     "value).", 79),
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     i.add_argument("book", metavar="BOOK.xlsx|NAME_OR_TOML",
                    help="a workbook, a bundled template name or a .toml file")

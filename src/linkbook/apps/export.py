@@ -1,8 +1,9 @@
-"""`linkbook export`: the tables of a built book as CSV, one file per table sheet.
+"""`linkbook export`: the tables of a built book as CSV, one file per table sheet; and the same
+tables as arrays (`linkbook.tables`).
 
 The values are the engine's, computed from the book's formulas, so a book saved without stored
 values exports numbers too. Where each table's header and rows are comes from the build
-record (sheets.py)."""
+record (sheets.py); both the CSV and the arrays come from one reading of them (table_cells)."""
 from __future__ import annotations
 
 import csv
@@ -23,6 +24,7 @@ class Table:
     sheet: str
     rows: list[int]     # the header rows as in the book, then the data rows
     width: int | None = None    # its last column, where a block beside it is no part of it
+    heads: int = 1      # how many of `rows` are header rows (the Grid's: its quantity, then s1)
 
 
 def tables(book: Book) -> list[Table]:
@@ -47,8 +49,9 @@ def tables(book: Book) -> list[Table]:
     if record.stroke:
         s = record.stroke
         found[s.sheet] = [s.param_row, *range(s.rows[0], s.rows[1] + 1)]
-    return [Table(name, found[name], widths.get(name)) for name in book.wb.sheetnames
-            if name in found]
+    heads = {record.grid.sheet: 2} if record.grid else {}
+    return [Table(name, found[name], widths.get(name), heads.get(name, 1))
+            for name in book.wb.sheetnames if name in found]
 
 
 def field(value) -> str:
@@ -82,16 +85,44 @@ def _last_column(book: Book, table: Table) -> int:
     return last
 
 
-def table_text(book: Book, table: Table) -> str:
+def table_cells(book: Book, table: Table) -> list[list]:
+    """The table's values, row by row (its header rows first), each row as wide as the table:
+    the one reading of a table that the CSV and the arrays share."""
     from ..base.xlsx import column_letter
     width = table.width or _last_column(book, table)
     letters = [column_letter(c) for c in range(1, width + 1)]
+    return [[book.values.get((table.sheet, f"{letter}{row}")) for letter in letters]
+            for row in table.rows]
+
+
+def table_text(book: Book, table: Table) -> str:
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\r\n")
-    for row in table.rows:
-        writer.writerow([field(book.values.get((table.sheet, f"{letter}{row}")))
-                         for letter in letters])
+    for row in table_cells(book, table):
+        writer.writerow([field(value) for value in row])
     return out.getvalue()
+
+
+def _float(value) -> float:
+    """A cell's value as a float: NaN for #N/A, any other error, a text or an empty cell."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value)
+    return math.nan
+
+
+def table_arrays(book: Book, table: Table) -> dict:
+    """{header: numpy array} of one table: each column under the text its last header row
+    shows (as the CSV writes it), the data rows as floats."""
+    import numpy as np
+    cells = table_cells(book, table)
+    heads, data = cells[table.heads - 1], cells[table.heads:]
+    return {field(head): np.array([_float(row[i]) for row in data])
+            for i, head in enumerate(heads)}
+
+
+def arrays(book: Book) -> dict[str, dict]:
+    """{sheet: {header: numpy array}} of every table, in the book's tab order."""
+    return {table.sheet: table_arrays(book, table) for table in tables(book)}
 
 
 def file_name(book_stem: str, sheet: str) -> str:

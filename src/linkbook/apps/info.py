@@ -11,11 +11,13 @@ from pathlib import Path
 
 from ..base import sheets as layout
 from ..base.record import BuildRecord
-from ..base.xlsx import coordinate_to_tuple
+from ..base.xlsx import column_letter, coordinate_to_tuple
 
 # Motion columns whose largest magnitude the summary reports: angular velocities and
 # accelerations, the sliders' speeds and accelerations, the traced point's speed and acceleration
 PEAK_PREFIXES = ("omega_", "alpha_", "v_", "acc_", "vmag_", "amag_")
+# Forces summary cells that are no summary: the two points of the chart's mean line
+CHART_POINTS = "mean_line_"
 WIDTH = 79      # a terminal's 80 columns, the last left free
 
 
@@ -207,11 +209,32 @@ def _force_peaks(book: Book) -> list[dict]:
     return _peaks(book, book.record.forces, wanted) if book.record.forces else []
 
 
+def _force_summary(book: Book) -> list[dict]:
+    """The Forces sheet's summary of the sweep in the book's order (the driving effort's mean,
+    RMS, extremes and where, each pin's peak, for a crank the energy fluctuation, Cs and the
+    flywheel inertia): each value with the label left of it and the unit right of it."""
+    forces = book.record.forces
+    if not forces:
+        return []
+    found = []
+    for key, info in sorted(forces.summary.items(), key=lambda kv: _row_of(kv[1].cell)):
+        if key.startswith(CHART_POINTS):
+            continue
+        row, col = coordinate_to_tuple(info.cell)
+        label, unit = (_text(book, forces.sheet, f"{column_letter(col + d)}{row}")
+                       for d in (-1, 1))
+        found.append({"key": key, "what": label, "unit": unit,
+                      "value": _plain(book.values.get((forces.sheet, info.cell)))})
+    return found
+
+
 def summary(book: Book) -> dict:
     """Everything `linkbook info` prints, as data."""
-    transmissions = _ranges_of(book, "mu")
-    # a transmission angle's degree view repeats the transmission block's numbers
-    shown_there = {r["what"].split()[-1] for r in transmissions}
+    transmissions, output = _ranges_of(book, "mu"), _ranges_of(book, "output")
+    # the degree view of a transmission angle or of an angle output repeats those numbers
+    # ("transmission angle μ", "θ14 (rocker, angle of B0→B)")
+    shown_there = {r["what"].split()[-1] for r in transmissions} | {
+        r["what"].split(" (")[0] for r in output}
     angles = [r for r in _angle_ranges(book) if r["what"] not in shown_there]
     input_head = _header(book, layout.SWEEP, book.record.sweep.rows[0] - 1, "A")
     not_closing = _summary_row(book, "not_closing")
@@ -220,10 +243,11 @@ def summary(book: Book) -> dict:
         "title": book.record.title,
         "input": dict(zip(("symbol", "unit"), split_header(input_head))),
         "inputs": _inputs(book), "fourbar_loops": _loops(book),
-        "output": _ranges_of(book, "output"), "angles": angles,
+        "output": output, "angles": angles,
         "transmission_angles": transmissions,
         "not_closing": number(not_closing[1]) if not_closing else 0,
-        "gaps": _gaps(book), "peaks": _peaks(book), "force_peaks": _force_peaks(book)}
+        "gaps": _gaps(book), "peaks": _peaks(book), "force_peaks": _force_peaks(book),
+        "force_summary": _force_summary(book)}
 
 
 def _g(x) -> str:
@@ -274,4 +298,9 @@ def lines(data: dict) -> list[str]:
         for p in data["force_peaks"]:
             out += _fit(f"  {'|' + p['what'] + '|':12} {_g(p['peak']):>12} {p['unit']:9} at "
                         f"{_g(p['at'])} {inp['unit']}")
+    if data.get("force_summary"):
+        out += ["", f"Forces: summary over the {inp['symbol']} sweep"]
+        for r in data["force_summary"]:
+            value = _g(r["value"]) if number(r["value"]) is not None else str(r["value"])
+            out += _fit(f"  {r['what']:44} {value:>12} {r['unit']}")
     return out

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .excel import (PRODUCT, SUM, ZERO, Expr, angle_of_triangle_or_na, lin, minus, mul, plus,
-                    radians, sq, turned)
+from .excel import (PRODUCT, SUM, ZERO, Expr, angle_of_triangle_or_na, lin, local_point, minus,
+                    mul, plus, radians, sq, turned)
 from .expressions import expression
 from .fields import as_table
 from .mechanisms import TO_METRES
@@ -232,10 +232,8 @@ class BodiesAndLoads:
         (axp, ayp) = self.c.points[a]
         if "local" in spec:
             u, v = (self.expression(f"{where}.centre.local[{i}]", spec["local"][i], True)
-                    .at_least(PRODUCT) for i in (0, 1))
-            t = theta.text
-            x = plus(axp, f"{u}*COS({t})-{v}*SIN({t})")
-            y = plus(ayp, f"{u}*SIN({t})+{v}*COS({t})")
+                    for i in (0, 1))
+            x, y = local_point((axp, ayp), u, v, theta.text)
         elif "distances" in spec:
             x, y = self._by_distances(where, spec, name, a, b, theta)
         else:

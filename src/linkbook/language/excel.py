@@ -104,6 +104,17 @@ def plus(a: Expr, term: str) -> str:
     return f"{a.at_least(SUM)}{term}" if term.startswith("-") else f"{a.at_least(SUM)}+{term}"
 
 
+def local_point(origin: tuple[Expr, Expr], u: Expr, v: Expr, angle: str) -> tuple[str, str]:
+    """x, y of origin + u·ê + v·ê⊥, ê the unit vector at `angle` (radians, Excel text) and ê⊥
+    it turned +90°: a point by local coordinates [u, v]. A coordinate that is zero by
+    construction drops its terms (local = [u, 0] gives A + u·COS, no -0*SIN)."""
+    uu, vv = u.at_least(PRODUCT), v.at_least(PRODUCT)
+    x = ("" if u.zero else f"{uu}*COS({angle})") + ("" if v.zero else f"-{vv}*SIN({angle})")
+    y = ("" if u.zero else f"{uu}*SIN({angle})") + ("" if v.zero else f"+{vv}*COS({angle})")
+    return tuple(plus(a, term.removeprefix("+")) if term else a.text
+                 for a, term in zip(origin, (x, y)))
+
+
 def minus(a: Expr, b: Expr) -> Expr:
     if b.zero:
         return a

@@ -5,6 +5,7 @@ the bundled ones are templates/*.toml. Nothing here touches openpyxl.
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Callable
 
@@ -18,6 +19,18 @@ RATE_KIND = "rate"     # the input's speed or acceleration: any number
 LOAD_UNITS = {"mass": "kg", "inertia": "kg·m²", "force": "N", "torque": "N·m",
               "acceleration": "m/s²"}
 NOT_NEGATIVE_KINDS = ("mass", "inertia")
+# How a unit is typed on a keyboard without · and ²: kg*m^2, kg m^2, N.m, m/s**2, m / s^2
+PRODUCT_SIGNS = re.compile(r"\s*[*.·⋅]\s*|(?<=[A-Za-z])\s+(?=[A-Za-z])")
+POWERS = re.compile(r"(?:\^|\*\*)([23])")
+
+
+def typed_unit(text: str) -> str:
+    """A unit as typed, in the spelling the book shows: `kg*m^2` and `kg m^2` are kg·m², `N*m`
+    N·m, `m/s^2` m/s²; any other text as it is (then refused as the wrong unit, if it is)."""
+    if not isinstance(text, str):
+        return text
+    squared = POWERS.sub(lambda m: "²³"[int(m.group(1)) - 2], text.strip())
+    return PRODUCT_SIGNS.sub("·", re.sub(r"\s*/\s*", "/", squared))
 
 # The input's speed and acceleration, parameters every mechanism has (the data format's names,
 # which the reference reads too): a crank's ω and α, a linear actuator's velocity and

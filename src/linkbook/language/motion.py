@@ -26,9 +26,13 @@ from .steps import STEPS
 
 
 def rate_symbol(symbol: str, order: int, angle: bool) -> str:
-    """θ13 → ω13, α13; another symbol gets one or two dots (ṡ14, s̈14)."""
+    """θ13 → ω13, α13; another symbol gets one or two dots over its first letter (ṡ14, s̈14);
+    one that starts with no letter (|BA|, (AB)) d/dt: a dot combined onto a bar or a bracket
+    would sit on no letter (||̇BA||)."""
     if angle and symbol.startswith("θ"):
         return ("ω", "α")[order - 1] + symbol[1:]
+    if not symbol[:1].isalpha():
+        return (f"d{symbol}/dt", f"d²{symbol}/dt²")[order - 1]
     return symbol[0] + ("\u0307", "\u0308")[order - 1] + symbol[1:]
 
 

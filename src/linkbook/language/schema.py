@@ -211,7 +211,36 @@ def mechanism_key_problem(key: str, value: object) -> tuple[str, str] | None:
     return joined, message
 
 
+def _one_alternative(error):
+    """Of an anyOf's or oneOf's failure on a table, the error of the one alternative that is a
+    table (a polar force's, not the [Fx, Fy] list): what went wrong inside it, such as a
+    misspelt key; None when no single alternative is meant (a list keeps the description of
+    every alternative)."""
+    if error.validator not in ("anyOf", "oneOf") or not error.context or \
+            not isinstance(error.instance, dict):
+        return None
+    wrong_type = {e.relative_schema_path[0] for e in error.context
+                  if e.validator == "type" and not e.relative_path}
+    meant = [e for e in error.context if e.relative_schema_path[0] not in wrong_type]
+    if len({e.relative_schema_path[0] for e in meant}) != 1:
+        return None
+    return min(meant, key=lambda e: e.validator == "required")
+
+
+def _shown(value) -> str:
+    """A value as a message quotes it: a table by its keys, never as a Python dict."""
+    if isinstance(value, dict):
+        keys = [str(k) for k in value]
+        return ("an empty table" if not keys else
+                f"a table of {', '.join(keys[:-1])} and {keys[-1]}" if len(keys) > 1 else
+                f"a table of {keys[0]}")
+    return repr(value)
+
+
 def _describe(error, data: dict) -> tuple[str, str]:
+    inner = _one_alternative(error)
+    if inner is not None:
+        return _describe(inner, data)
     path = list(error.absolute_path)
     field = field_name(path, data)
     kind, want, got = error.validator, error.validator_value, error.instance
@@ -244,7 +273,7 @@ def _describe(error, data: dict) -> tuple[str, str]:
     if kind == "minItems" and not described:
         return field, f"must have at least {want} {'entry' if want == 1 else 'entries'} (got {got!r})"
     if described:
-        return field, f"must be {described} (got {got!r})"
+        return field, f"must be {described} (got {_shown(got)})"
     return field, error.message
 
 

@@ -17,7 +17,7 @@ from .bundled import TEMPLATE_DIR, bundled, bundled_template_data
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
 from .expressions import always_an_error, value_of
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS, OFFSET_KIND,
-                         RATE_KIND, Mechanism)
+                         RATE_KIND, Mechanism, typed_unit)
 
 EXCEL_MAX_ROWS = 1_048_576
 EXCEL_MAX_COLUMNS = 16_384
@@ -99,9 +99,11 @@ def parse_list(field: str, kind: str, text: object) -> tuple[float, ...]:
 # ---------------------------------------------------------------- loading
 def find(name_or_path: str) -> Path:
     path = Path(name_or_path)
-    if path.suffix == ".toml" or path.exists():
+    # a folder or a suffix says a file is meant (`../own/x.tml`), never a bundled name
+    if path.suffix or path.exists() or len(path.parts) > 1:
         if not path.is_file():
-            raise InputError("template", f"no such file {name_or_path!r}{_bundled_hint(path)}")
+            raise InputError("template", f"no such file {name_or_path!r}{_suffix_hint(path)}"
+                                         f"{_bundled_hint(path)}")
         return path
     candidate = TEMPLATE_DIR / f"{name_or_path}.toml"
     if candidate.is_file():
@@ -113,9 +115,15 @@ def find(name_or_path: str) -> Path:
     raise InputError("template", f"unknown template {name_or_path!r}{more}")
 
 
+def _suffix_hint(path: Path) -> str:
+    if path.suffix.lower() in ("", ".toml"):
+        return ""
+    return f" (a template is a .toml file, not {path.suffix})"
+
+
 def _bundled_hint(path: Path) -> str:
     """A missing file named like a bundled template: the name alone builds that one."""
-    if (TEMPLATE_DIR / f"{path.stem}.toml").is_file():
+    if path.suffix == ".toml" and (TEMPLATE_DIR / f"{path.stem}.toml").is_file():
         return (f"; the bundled template is `{path.stem}` (no .toml), and `linkbook new "
                 f"{path.stem} {path.name}` copies it here to edit")
     return ""
@@ -208,12 +216,13 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         if not isinstance(entry, dict):
             raise InputError(field, f"must be a table with label, unit, value (got {entry!r})")
         label = _need(entry, "label", field)
-        unit = _need(entry, "unit", field)
+        typed = _need(entry, "unit", field)
+        unit = typed_unit(typed)
         want = parameter_unit(mech, symbol, kind, length_unit)
         if unit != want:
             raise InputError(f"{field}.unit", f"must be {want} for a{'n' if kind[0] in 'aio' else ''} "
                                               f"{kind} parameter in a book of {length_unit} "
-                                              f"(got {unit!r})")
+                                              f"(got {typed!r})")
         excel_name = entry.get("name", default_name(symbol))
         problem = (excel_name_problem(excel_name) if isinstance(excel_name, str)
                    else "must be text")
@@ -478,7 +487,9 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
         key, raw = parse_assignment(text, names["set"])
         if key not in values:
             import difflib
-            hint = difflib.get_close_matches(key, list(values), n=1)
+            # symbols are case-sensitive (I2 is an inertia, a2 a length); A2 means a2
+            hint = [s for s in values if s.lower() == key.lower()] or \
+                difflib.get_close_matches(key, list(values), n=1)
             more = f"; did you mean {hint[0]}?" if hint else f"; known: {', '.join(values)}"
             raise InputError(f"{names['set']} {key}", f"unknown parameter{more}")
         p = values[key]

@@ -4,7 +4,8 @@
 from __future__ import annotations
 
 from ..columns import Column
-from ..excel import PRODUCT, SUM, angle_of_triangle_or_na, key, plus, radians
+from ..excel import (PRODUCT, SUM, angle_of_triangle_or_na, key, local_point, plus,
+                     radians)
 from ..model import LENGTH, RAD, DescriptionError, Quantity
 from .step_type import StepType, fixed, schema_keys
 
@@ -37,11 +38,8 @@ def place(c, field: str, s: dict) -> None:
         pair = s["local"]
         if not isinstance(pair, list) or len(pair) != 2:
             raise DescriptionError(f"{field}.local", f"must be [u, v] (got {pair!r})")
-        u = c.expr(f"{field}.local[0]", pair[0]).at_least(PRODUCT)
-        v = c.expr(f"{field}.local[1]", pair[1]).at_least(PRODUCT)
-        t = base.text
-        x = plus(ax, f"{u}*COS({t})-{v}*SIN({t})")
-        y = plus(ay, f"{u}*SIN({t})+{v}*COS({t})")
+        u, v = (c.expr(f"{field}.local[{i}]", pair[i]) for i in (0, 1))
+        x, y = local_point((ax, ay), u, v, base.text)
     else:
         if form == "distances":
             pair = s["distances"]
