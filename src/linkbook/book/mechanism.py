@@ -7,6 +7,8 @@ joints.py's and summary.py's.
 """
 from __future__ import annotations
 
+import math
+
 from openpyxl.styles import Alignment
 from openpyxl.utils import quote_sheetname
 from openpyxl.worksheet.datavalidation import DataValidation
@@ -33,7 +35,8 @@ def inputs_block(wb, ws, t: Template, model: Model):
     put_text(ws, "A3", "Yellow cells are inputs: change them and every formula, table and "
                        "chart follows.", NOTE)
     symbols = [p.symbol for p in t.parameters] + [q.symbol for q in model.of_role(CONSTANT)]
-    block_head(ws, "A", "Inputs", (("Quantity", 43),
+    labels = [p.label for p in t.parameters] + [q.label for q in model.of_role(CONSTANT)]
+    block_head(ws, "A", "Inputs", (("Quantity", _label_width(labels)),
                                    ("Symbol", max([9] + [text_width(s) for s in symbols])),
                                    ("Value", 12), ("Unit", 8), ("Excel name", 14)))
     names: dict[str, str] = {}
@@ -81,6 +84,17 @@ def inputs_block(wb, ws, t: Template, model: Model):
             constants[q.key] = {"cell": f"C{row}", "name": name, "unit": q.unit}
             row += 1
     return names, inputs, constants, row
+
+
+# The inputs' label column: wide enough for a usual label on one line (a label wrapped into a
+# second line that Calibri or Carlito draws on one leaves a half-empty row), within a width that
+# keeps the sheet's blocks on one landscape page; a longer label wraps.
+LABEL_WIDTH = (43, 58)
+
+
+def _label_width(labels: list[str]) -> float:
+    lo, hi = LABEL_WIDTH
+    return math.ceil(min(max([lo] + [text_width(label) for label in labels]), hi) * 10) / 10
 
 
 def position_block(wb, ws, t: Template, model: Model, names: dict[str, str]) -> dict:

@@ -40,9 +40,9 @@ def apply_print_setup(wb, fit_to_width: tuple[str, ...] = ()) -> None:
             sheet = _SheetShape.of(ws)
             orientation, scale, col_breaks, row_breaks = sheet.best_layout()
         if fit:
-            orientation, scale, col_breaks = "landscape", None, []
+            orientation, scale, col_breaks, row_breaks = "landscape", None, [], []
             ws.sheet_properties.pageSetUpPr.fitToPage = True
-            ws.page_setup.fitToWidth, ws.page_setup.fitToHeight = 1, 0
+            ws.page_setup.fitToWidth, ws.page_setup.fitToHeight = 1, 1
         ws.page_setup.orientation = orientation
         ws.page_setup.scale = scale
         _set_breaks(ws, col_breaks, row_breaks)
