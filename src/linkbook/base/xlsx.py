@@ -409,6 +409,11 @@ def _nesting(text: str) -> int:
     return _bracket_depth(brackets)
 
 
+def bracket_depth(text: str) -> int:
+    """How deep the brackets of a formula or expression nest (see _nesting)."""
+    return _nesting(text) if "(" in text else 0
+
+
 @functools.lru_cache(maxsize=512)       # a grid's formulas share their brackets' pattern
 def _bracket_depth(brackets: str) -> int:
     passes = 0
