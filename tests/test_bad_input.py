@@ -3,6 +3,7 @@ and an existing workbook never left half-written."""
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import openpyxl
@@ -194,6 +195,31 @@ TOML_CASES = [
      "(got 1e+300)"),
     ("parameter not a table", FOURBAR_TOML.replace(
         'a1 = { label = "ground link |A0B0|", unit = "mm", value = 70.0 }', "a1 = 70"), "a1"),
+    # deep nesting and long expressions: refused before anything recurses once per level
+    ("a table header nested 2,000 deep", FOURBAR_TOML + "\n[" + ".".join(["a"] * 2000) + "]\n",
+     "mine.toml: " + ".".join(["a"] * 33) + ": tables and lists nest more than 32 deep"),
+    ("a step's column nested 2,000 deep", FOURBAR_TOML.replace(
+        'columns.x.label = "crank pin A"', "columns.x." + ".".join(["a"] * 2000) + ' = "A"'),
+     "mine.toml: mechanism.steps[0].columns.x." + ".".join(["a"] * 28) + ": tables and lists "
+     "nest more than 32 deep"),
+    ("5,000 leading minus signs in a length", FOURBAR_TOML.replace(
+        'p_length = "a3"', 'p_length = "' + "-" * 5000 + 'a3"'),
+     "mine.toml: mechanism.steps[1] (dyad B).p_length: is 5,002 characters long; an "
+     "expression may have at most 1,000"),
+    ("5,000 leading minus signs in a load", FOURBAR_TOML.replace(
+        'torque = "T4"', 'torque = "' + "-" * 5000 + 'T4"'),
+     "mine.toml: mechanism.loads[0].torque: is 5,002 characters long"),
+    ("20,000 terms", FOURBAR_TOML.replace('p_length = "a3"', 'p_length = "' + "+".join(
+        ["a3"] * 20_000) + '"'), "(dyad B).p_length: is 59,999 characters long"),
+    ("998 minus signs, within the length", FOURBAR_TOML.replace(
+        'p_length = "a3"', 'p_length = "' + "-" * 998 + 'a3"'),
+     "(dyad B).p_length: nests 999 operations inside each other (a sign, a term of a sum or a "
+     "bracket is one level); at most 64"),
+    ("a sum of 65 terms", FOURBAR_TOML.replace('p_length = "a3"', 'p_length = "' + "+".join(
+        ["a3"] * 65) + '"'), "(dyad B).p_length: nests 65 operations inside each other"),
+    ("65 brackets deep", FOURBAR_TOML.replace(
+        'p_length = "a3"', 'p_length = "' + "(" * 65 + "a3" + ")" * 65 + '"'),
+     "(dyad B).p_length: nests 65 brackets inside each other"),
 ]
 
 
@@ -348,3 +374,112 @@ def test_write_atomic_never_exposes_a_partial_file(tmp_path):
         build_module.write_atomic(target, write)
     assert target.read_bytes() == b"old"
     assert [p.name for p in tmp_path.iterdir()] == ["book.xlsx"]
+
+
+# ---------------------------------------------------------------- deep and long, quickly
+def test_deep_and_long_input_is_refused_before_the_work_that_recurses(tmp_path, capsys,
+                                                                       monkeypatch):
+    """Refused before the steps whose cost grows with the depth: the schema's check (which
+    recursed in jsonschema) and Python's parser (which recursed once per sign)."""
+    import ast
+
+    from linkbook.language import expressions, schema
+
+    def never(*args, **kwargs):
+        raise AssertionError("reached the work the limit guards")
+
+    monkeypatch.setattr(schema, "problem", never)
+    (tmp_path / "mine.toml").write_text(FOURBAR_TOML.replace(
+        'columns.x.label = "crank pin A"', "columns.x." + ".".join(["a"] * 2000) + ' = "A"'),
+        encoding="utf-8")
+    code, err = _run(tmp_path, ["check", "mine.toml"], capsys)
+    assert code == 2 and "nest more than 32 deep" in err, err
+    monkeypatch.undo()
+
+    class ParserOfShortTexts:       # the language's `ast`, whose parse refuses a long text
+        def __getattr__(self, name):
+            return getattr(ast, name)
+
+        @staticmethod
+        def parse(text, *args, **kwargs):
+            if len(text) > expressions.LENGTH_LIMIT:
+                never()
+            return ast.parse(text, *args, **kwargs)
+
+    monkeypatch.setattr(expressions, "ast", ParserOfShortTexts())
+    (tmp_path / "mine.toml").write_text(FOURBAR_TOML.replace(
+        'p_length = "a3"', 'p_length = "' + "-" * 5000 + 'a3"'), encoding="utf-8")
+    code, err = _run(tmp_path, ["check", "mine.toml"], capsys)
+    assert code == 2 and "is 5,002 characters long" in err, err
+
+
+# At the limit (64 levels, 64 brackets), the language writes the expression and the reference
+# reads it; the values are the algebra's.
+AT_THE_LIMIT = [("-" * 63 + "a", -2.0), ("+".join(["a"] * 64), 128.0),
+                ("(" * 64 + "a" + ")" * 64, 2.0), ("a" + "^1" * 63, 2.0)]
+
+
+@pytest.mark.parametrize("text,value", AT_THE_LIMIT, ids=["signs", "terms", "brackets", "powers"])
+def test_an_expression_at_the_limit_is_written_and_read(text, value):
+    from linkbook.check.reference.expressions import evaluate
+    from linkbook.language.expressions import expression, value_of
+    expression("f", text, {"a"})
+    assert value_of(text, {"a": 2.0}) == value
+    assert evaluate(text, {"a": 2.0}) == value
+
+
+@pytest.mark.parametrize("text,message", [
+    ("-" * 5000 + "a", "an expression of 5,001 characters (at most 1,000)"),
+    ("+".join(["a"] * 20_000), "an expression of 39,999 characters"),
+    ("-" * 999 + "a", "more than 128 signs, brackets and powers nested"),
+    ("+".join(["a"] * 400), "more than 128 operations nested"),
+    ("a" + "^a" * 400, "more than 128 signs, brackets and powers nested"),
+    ("(" * 65 + "a" + ")" * 65, "brackets nested more than 64 deep"),
+], ids=["5,000 signs", "20,000 terms", "999 signs", "400 terms", "400 powers", "65 brackets"])
+def test_the_reference_refuses_what_would_exhaust_its_stack(text, message):
+    """The reference reads a book's recorded expressions with a reader of its own: a hostile
+    record is refused there too, in one line, not with RecursionError."""
+    from linkbook.check.reference.expressions import evaluate
+    with pytest.raises(ValueError, match=re.escape(message)):
+        evaluate(text, {"a": 2.0})
+
+
+def _edited_book(tmp_path: Path, part: str, old: str, new: str) -> Path:
+    """The bundled four-bar with one text of one part replaced."""
+    import zipfile
+    built = tmp_path / "built.xlsx"
+    assert main(["build", "fourbar", "-o", str(built)]) == 0
+    path = tmp_path / "fourbar.xlsx"
+    with zipfile.ZipFile(built) as src, zipfile.ZipFile(path, "w") as dst:
+        for info in src.infolist():
+            data = src.read(info)
+            if info.filename == part:
+                assert old.encode() in data
+                data = data.replace(old.encode(), new.encode(), 1)
+            dst.writestr(info, data)
+    built.unlink()
+    return path
+
+
+def test_a_recorded_expression_of_5000_signs_is_refused_by_verify(tmp_path, capsys):
+    path = _edited_book(tmp_path, "xl/sharedStrings.xml", '"p_length": "a3"',
+                        '"p_length": "' + "-" * 5000 + 'a3"')
+    capsys.readouterr()
+    assert main(["verify", str(path)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].endswith(
+        "mechanism.steps[1] (dyad B).p_length: is 5,002 characters long; an expression may "
+        "have at most 1,000"), lines
+
+
+@pytest.mark.parametrize("signs,code", [(5000, 0), (5001, 1)])
+def test_a_formula_of_5000_signs_is_one_operator_to_the_engine(tmp_path, capsys, signs, code):
+    """A run of signs is one operator for the engine's grammar (no recursion per sign): an even
+    run leaves the cell's value as it was, an odd one negates it, and verify says so."""
+    cell = '<c r="N8" s="8"><f>I17</f>'
+    path = _edited_book(tmp_path, "xl/worksheets/sheet1.xml", cell,
+                        cell.replace("I17", "-" * signs + "I17"))
+    capsys.readouterr()
+    assert main(["verify", str(path)]) == code
+    out = capsys.readouterr().out
+    assert ("likely cause Mechanism!N8" in out) == (code == 1), out

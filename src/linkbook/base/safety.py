@@ -46,20 +46,22 @@ def check_zip(path: Path) -> None:
                                  "possible zip bomb")
             if "[Content_Types].xml" not in zf.namelist():
                 raise UnsafeFile(f"{path}: not an .xlsx workbook (no [Content_Types].xml)")
-            for info in infos:
-                _check_part(zf, info, path)
+            bracketed = [info.filename for info in infos if _check_part(zf, info, path)]
+            _check_external(zf, bracketed, path)
     except zipfile.BadZipFile as exc:
         raise UnsafeFile(f"{path}: damaged or truncated workbook ({exc})") from None
 
 
-def _check_part(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> None:
+def _check_part(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> bool:
     """Refuse a part that holds a DTD or entity declaration anywhere. A DTD belongs before
     the root element, but a reader may meet one after any length of comments, and a part is
     XML by its content type, not its name: every part is scanned whole, a chunk at a time (a
-    chunk keeps the tail of the one before, so a marker split between two is found)."""
-    tail = b""
+    chunk keeps the tail of the one before, so a marker split between two is found). Whether
+    the part holds a '[' (which a formula naming another workbook has): the scan tells."""
+    tail, bracket = b"", False
     with zf.open(info) as f:
         while chunk := f.read(_CHUNK):
+            bracket = bracket or b"[" in chunk
             window = tail + chunk
             # every marker starts '<!' (UTF-8) or '<\0!' (UTF-16): two fast finds rule most
             # chunks out before the regex, which is four times slower
@@ -67,6 +69,17 @@ def _check_part(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> None:
                 raise UnsafeFile(f"{path}: part {info.filename} declares a DTD or XML "
                                  "entities; refusing")
             tail = chunk[-_LONGEST_MARKER:]
+    return bracket
+
+
+def _check_external(zf: zipfile.ZipFile, bracketed: list[str], path: Path) -> None:
+    """Refuse a book that names another file for its formulas to read (an external link):
+    no engine and no application may open a file the book names outside itself. Refused
+    here, where every reader of a book starts, before any engine or application sees it."""
+    from . import xlsx
+    found = xlsx.external_reference(zf, bracketed)
+    if found:
+        raise UnsafeFile(f"{path}: {found}; linkbook reads no file but the book")
 
 
 def load_workbook_safely(path: Path, data_only: bool = False):

@@ -420,6 +420,11 @@ def _nesting(text: str) -> int:
     return _bracket_depth(brackets)
 
 
+def bracket_depth(text: str) -> int:
+    """How deep the brackets of a formula or expression nest (see _nesting)."""
+    return _nesting(text) if "(" in text else 0
+
+
 @functools.lru_cache(maxsize=512)       # a grid's formulas share their brackets' pattern
 def _bracket_depth(brackets: str) -> int:
     passes = 0
@@ -427,6 +432,70 @@ def _bracket_depth(brackets: str) -> int:
         brackets = brackets.replace("()", "")
         passes += 1
     return passes + brackets.count("(")
+
+
+# ---------------------------------------------------------------- external references
+EXTERNAL_LINKS = "xl/externalLinks/"      # the parts of the workbooks a book links to
+# A formula reads another workbook through [n], the index of its external link, before a sheet
+# or a name ('[1]Sheet1!A1', '[1]!total'); text in double quotes is no reference.
+_EXTERNAL = re.compile(r"\[\d+\]")
+_STRING = re.compile(r'"(?:[^"]|"")*"')
+
+
+def external_reference(zf: zipfile.ZipFile, bracketed: list[str]) -> str | None:
+    """Where the book reads another file: the first formula of a sheet part in `bracketed`
+    (the parts that hold a '[') with an external reference, else the first external-link
+    part, with the file it names; None when the book names none. Nothing is opened but the
+    book's own parts."""
+    links = sorted(n for n in zf.namelist() if n.startswith(EXTERNAL_LINKS)
+                   and not n.endswith(".rels"))
+    sheets = [p for p in bracketed if p.startswith("xl/worksheets/")]
+    if sheets:
+        titles = _sheet_titles(zf)
+        for part in sheets:
+            found = _external_formula(zf, part, titles.get(part, part))
+            if found:
+                return found
+    if links:
+        return f"part {links[0]} is an external reference{_link_target(zf, links[0])}"
+    return None
+
+
+def _external_formula(zf: zipfile.ZipFile, part: str, title: str) -> str | None:
+    address = "?"
+    with zf.open(part) as f:
+        for event, el in iterparse(f, events=("start", "end")):
+            if event == "start":
+                if el.tag == f"{MAIN}c":
+                    address = el.get("r") or "?"
+            elif el.tag == f"{MAIN}f" and el.text \
+                    and _EXTERNAL.search(_STRING.sub("", el.text)):
+                return f"cell {title}!{address} has an external reference ({_shown(el.text)})"
+            elif el.tag == f"{MAIN}row":
+                el.clear()
+    return None
+
+
+def _sheet_titles(zf: zipfile.ZipFile) -> dict[str, str]:
+    """{sheet part: title}, or {} where the workbook's parts do not say."""
+    try:
+        sheets, _ = _workbook(zf, [], [])
+    except Exception:       # a damaged workbook part: the refusal names the sheet part
+        return {}
+    return {part: title for title, part in sheets}
+
+
+def _link_target(zf: zipfile.ZipFile, link: str) -> str:
+    """' to <the file it names>', as its relationship says, or ''."""
+    folder, name = link.rsplit("/", 1)
+    rels = f"{folder}/_rels/{name}.rels"
+    if rels not in zf.namelist():
+        return ""
+    with zf.open(rels) as f:
+        for _, el in iterparse(f):
+            if el.tag == f"{PKG_REL}Relationship" and el.get("Target"):
+                return f" to {_shown(el.get('Target'), 80)}"
+    return ""
 
 
 def coordinate_to_tuple(coordinate: str) -> tuple[int, int]:

@@ -9,7 +9,7 @@ import math
 import operator
 import re
 
-from ..base.xlsx import NUMBER_LITERAL
+from ..base.xlsx import NUMBER_LITERAL, bracket_depth
 from .excel import ATOM, COMPARISON, NEGATION, OUTSIDE_DOMAIN, POWER, PRODUCT, SUM, Expr, \
     in_domain_or_na, number
 from .model import DescriptionError
@@ -19,6 +19,12 @@ FUNCTIONS = {"SQRT": 1, "ABS": 1, "SIN": 1, "COS": 1, "TAN": 1, "ASIN": 1, "ACOS
              "ATAN2": 2, "RADIANS": 1, "DEGREES": 1, "PI": 0, "MIN": None, "MAX": None,
              "IF": 3, "IFERROR": 2, "NA": 0}
 _COMPARE = {ast.Gt: ">", ast.GtE: ">=", ast.Lt: "<", ast.LtE: "<=", ast.Eq: "=", ast.NotEq: "<>"}
+# What an expression may be (docs/language.md): the readers of an expression — Python's parser,
+# the writer here, the reference's reader — recurse once per level, so a text of thousands of
+# signs or terms would exhaust the stack. The bundled templates' longest is 191 characters and
+# 10 levels deep.
+LENGTH_LIMIT = 1000
+DEPTH_LIMIT = 64        # levels: brackets inside brackets, or operations inside operations
 
 
 def _finite(field: str, value: int | float) -> Expr:
@@ -41,13 +47,46 @@ def expression(field: str, raw: object, symbols: set[str]) -> Expr:
         raise DescriptionError(field, f"must be a number or an expression (got {raw!r})")
     if not isinstance(raw, str):
         return _finite(field, raw)
-    source = raw.replace("^", "**")
+    tree = parsed(field, raw)
+    _check_spelling(field, raw.replace("^", "**"), tree)
+    return _emit(field, tree, symbols)
+
+
+def parsed(field: str, text: str) -> ast.expr:
+    """The syntax tree of an expression's text, once it is known to be within LENGTH_LIMIT
+    and DEPTH_LIMIT (its brackets, and its operations, each nested at most so deep)."""
+    if len(text) > LENGTH_LIMIT:
+        raise DescriptionError(field, f"is {len(text):,} characters long; an expression may "
+                                      f"have at most {LENGTH_LIMIT:,}")
+    brackets = bracket_depth(text)
+    if brackets > DEPTH_LIMIT:
+        raise _too_deep(field, f"{brackets} brackets")
     try:
-        tree = ast.parse(source, mode="eval")
+        tree = ast.parse(text.replace("^", "**"), mode="eval").body
     except SyntaxError:
-        raise DescriptionError(field, f"is not an expression: {raw!r}") from None
-    _check_spelling(field, source, tree)
-    return _emit(field, tree.body, symbols)
+        raise DescriptionError(field, f"is not an expression: {text!r}") from None
+    except (RecursionError, MemoryError):     # Python's own parser, on thousands of levels
+        raise _too_deep(field, "thousands of operations") from None
+    depth = _depth(tree)
+    if depth > DEPTH_LIMIT:
+        raise _too_deep(field, f"{depth} operations")
+    return tree
+
+
+def _too_deep(field: str, what: str) -> DescriptionError:
+    return DescriptionError(field, f"nests {what} inside each other (a sign, a term of a sum "
+                                   f"or a bracket is one level); at most {DEPTH_LIMIT}")
+
+
+def _depth(tree: ast.expr) -> int:
+    """How many operations deep the tree goes (a name or a number is 1), without recursion."""
+    deepest, todo = 0, [(tree, 1)]
+    while todo:
+        node, depth = todo.pop()
+        deepest = max(deepest, depth)
+        todo.extend((child, depth + 1) for child in ast.iter_child_nodes(node)
+                    if isinstance(child, ast.expr))
+    return deepest
 
 
 _NUMBER_LITERAL = re.compile(NUMBER_LITERAL)
@@ -128,7 +167,7 @@ def value_of(raw: object, values: dict[str, float]) -> float | None:
     if not isinstance(raw, str):
         return float(raw)
     try:
-        return _value(ast.parse(raw.replace("^", "**"), mode="eval").body, values)
+        return _value(parsed("expression", raw), values)
     except _NotANumber:
         return math.nan
     except KeyError:
@@ -141,7 +180,7 @@ def always_an_error(raw: object, values: dict[str, float]) -> bool:
     xA/0)."""
     if not isinstance(raw, str):
         return False
-    return _always(ast.parse(raw.replace("^", "**"), mode="eval").body, values)
+    return _always(parsed("expression", raw), values)
 
 
 def _always(node: ast.AST, values: dict[str, float]) -> bool:

@@ -16,6 +16,7 @@ from .domain import (BRANCH_WORDS, LENGTH_UNITS, InputError, check_input,
 from .bundled import TEMPLATE_DIR, bundled, bundled_template_data
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
 from .expressions import always_an_error, value_of
+from .fields import check_nesting
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism, typed_unit)
 
@@ -199,6 +200,10 @@ def check_text(field: str, text: str) -> str:
 
 
 def from_data(name: str, data: dict, origin: str = "template") -> Template:
+    try:
+        check_nesting("", data)
+    except DescriptionError as exc:
+        raise InputError(f"{origin}: {exc.field}", exc.message) from None
     check_schema(data, origin)
     mech = _mechanism(name, data, origin)
     length_unit = check_length_unit(f"{origin}: length_unit", _need(data, "length_unit", origin))

@@ -22,6 +22,12 @@ _TOKEN = re.compile(
     r"|(?P<op>\*\*|>=|<=|<>|==|!=|[-+*/^(),<>=]))"
 )
 _COMPARE_OPS = {">", ">=", "<", "<=", "=", "==", "<>", "!="}
+# The reader recurses once per level (up to six calls for a bracket) and the evaluator once per
+# operation: a text of thousands of signs or terms is refused before it exhausts the stack. The
+# mechanism language allows 1,000 characters and 64 levels; these limits are no tighter.
+_LONGEST = 1000
+_DEEPEST_BRACKETS = 64
+_DEEPEST = 128
 
 
 def _clean(v):
@@ -109,16 +115,22 @@ class _Parser:
     The tree: ('num', v) | ('name', n) | ('neg', t) | ('bin', op, l, r) | ('call', NAME, args)."""
 
     def __init__(self, text: str):
+        if len(text) > _LONGEST:
+            raise ValueError(f"an expression of {len(text):,} characters (at most {_LONGEST:,})")
         self.text = text
         self.tokens: list[tuple[str, str]] = []
-        pos, end = 0, len(text.rstrip())
+        pos, end, brackets = 0, len(text.rstrip()), 0
         while pos < end:
             m = _TOKEN.match(text, pos)
             if m is None or m.end() == pos:
                 raise ValueError(f"expression {text!r}: unexpected character at {pos + 1}")
             self.tokens.append((m.lastgroup, m.group(m.lastgroup)))
+            brackets += {"(": 1, ")": -1}.get(m.group(m.lastgroup), 0)
+            if brackets > _DEEPEST_BRACKETS:
+                raise self.error(f"brackets nested more than {_DEEPEST_BRACKETS} deep")
             pos = m.end()
         self.k = 0
+        self.level = 0          # how many unary() calls are open: every recursion passes one
 
     def error(self, what: str) -> ValueError:
         return ValueError(f"expression {self.text!r}: {what}")
@@ -143,6 +155,8 @@ class _Parser:
         tree = self.compare()
         if self.peek() is not None:
             raise self.error(f"unexpected {self.peek()[1]!r}")
+        if _depth(tree) > _DEEPEST:         # a sum of many terms: deep, read without recursion
+            raise self.error(f"more than {_DEEPEST} operations nested")
         return tree
 
     def compare(self) -> tuple:
@@ -169,13 +183,19 @@ class _Parser:
         return tree
 
     def unary(self) -> tuple:
-        if self.is_op("-"):
-            self.take()
-            return ("neg", self.unary())
-        if self.is_op("+"):
-            self.take()
-            return self.unary()
-        return self.power()
+        self.level += 1
+        if self.level > _DEEPEST:
+            raise self.error(f"more than {_DEEPEST} signs, brackets and powers nested")
+        try:
+            if self.is_op("-"):
+                self.take()
+                return ("neg", self.unary())
+            if self.is_op("+"):
+                self.take()
+                return self.unary()
+            return self.power()
+        finally:
+            self.level -= 1
 
     def power(self) -> tuple:
         tree = self.atom()
@@ -212,6 +232,19 @@ class _Parser:
             raise self.error(f"{text.upper()} takes {count if count is not None else 'one or more'}"
                              f" argument(s), got {len(args)}")
         return ("call", text.upper(), tuple(args))
+
+
+def _depth(tree: tuple) -> int:
+    """How many operations deep a tree goes (a number or a name is 1), without recursion."""
+    deepest, todo = 0, [(tree, 1)]
+    while todo:
+        node, depth = todo.pop()
+        deepest = max(deepest, depth)
+        kind = node[0]
+        children = (node[1:] if kind == "neg" else node[2:] if kind == "bin"
+                    else node[2] if kind == "call" else ())
+        todo.extend((child, depth + 1) for child in children)
+    return deepest
 
 
 def _lookup(env: Mapping[str, object], name: str, text: str):
