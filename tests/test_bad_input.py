@@ -15,6 +15,15 @@ from linkbook.apps.cli import main
 
 FOURBAR_TOML = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")
 
+
+def _balanced_sum(term: str, levels: int) -> str:
+    """2**levels copies of `term` summed as a balanced tree: a long text, nested only `levels`
+    deep (an expression may nest 64 levels)."""
+    text = term
+    for _ in range(levels):
+        text = f"({text} + {text})"
+    return text
+
 # (what is tried, command-line arguments, TOML text or None, text the one-line message must hold)
 COMMAND_LINE = [
     ("negative length", ["--set", "a2=-5"], "a2"),
@@ -169,12 +178,16 @@ TOML_CASES = [
      "Excel's limit is 8,192"),
     ("a load nested 70 functions deep", FOURBAR_TOML.replace(
         'torque = "T4"', 'torque = "' + "ABS(" * 70 + "T4" + ")" * 70 + '"'),
-     "mine.toml: mechanism.loads: the formula of F34x would be one nested 75 brackets deep; "
+     "mine.toml: mechanism.loads[0].torque: nests 70 brackets inside each other (a sign, a term "
+     "of a sum or a bracket is one level); at most 64"),
+    ("a load whose formula nests beyond Excel's limit", FOURBAR_TOML.replace(
+        'torque = "T4"', 'torque = "' + "ABS(" * 62 + "T4" + ")" * 62 + '"'),
+     "mine.toml: mechanism.loads: the formula of F34x would be one nested 67 brackets deep; "
      "Excel's limit is 64 levels"),
     ("a step's length too long for a cell", FOURBAR_TOML.replace(
-        'p_length = "a3"', 'p_length = "a3' + " + a3" * 150 + '"').replace(
+        'p_length = "a3"', 'p_length = "' + _balanced_sum("a3", 7) + '"').replace(
         'value = 62.3 }', 'value = 62.3, name = "coupler_' + "x" * 60 + '" }'),
-     "mine.toml: mechanism.steps[2] (point C): the formula of gamma would be one of 31,346 "
+     "mine.toml: mechanism.steps[2] (point C): the formula of gamma would be one of 26,585 "
      "characters"),      # (the point's angle reads that length: the first cell written over)
     # loads that are numbers on some row, TRUE or FALSE on none, angles within ±360°
     ("a load of NA()", FOURBAR_TOML.replace('torque = "T4"', 'torque = "NA()"'),
