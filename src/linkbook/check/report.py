@@ -25,10 +25,14 @@ class Report:
     # cells the build record holds formulas in that are empty or on a sheet deleted (each
     # differs: it has no value)
     absent: list[tuple[str, str]] = field(default_factory=list)
+    # the seed the other input sets were drawn from (None: the book's own inputs only) and
+    # those sets, each with its checks (input_sets.py)
+    seed: int | None = None
+    input_sets: list = field(default_factory=list)
 
     @property
     def disagrees(self) -> bool:
-        return any(not c.ok for c in self.checks)
+        return any(not c.ok for c in self.checks) or any(not s.ok for s in self.input_sets)
 
     @property
     def ok(self) -> bool:
@@ -57,8 +61,12 @@ class Report:
 
     @property
     def differing(self) -> int:
-        """Cells that differ from the reference (each counted once)."""
-        return len({(m.sheet, m.cell) for c in self.checks for m in c.mismatches})
+        """Cells that differ from the reference, at any input set (each counted once)."""
+        return len(self.differing_cells().union(*(s.differing() for s in self.input_sets)))
+
+    def differing_cells(self) -> set[tuple[str, str]]:
+        """The cells that differ at the book's own inputs."""
+        return {(m.sheet, m.cell) for c in self.checks for m in c.mismatches}
 
     @property
     def max_abs(self) -> float:

@@ -15,9 +15,10 @@ from pathlib import Path
 from ..base.pause import gc_paused
 from .checks import ABS_TOL, PER, TOLERANCE_RULE, Check, Mismatch, Rules
 from .context import Reference
+from .input_sets import DEFAULT_SEED, InputSet, other_sets, write_inputs
 from .judge import check_book, judge_book
-from .reading import (RECORD_ERRORS, UnusableFile, cell_order, formula_cells, inputs_of,
-                      mechanism_size, read_book, record_mismatch, stored_values)
+from .reading import (RECORD_ERRORS, UnusableFile, cell_order, formula_cells, input_column,
+                      inputs_of, mechanism_size, read_book, record_mismatch, stored_values)
 from .report import Report, cell_ranges, cell_runs, likely_causes
 from .stored import check_replaced, check_stored, not_formulas
 
@@ -28,9 +29,10 @@ __all__ = ["ABS_TOL", "PER", "TOLERANCE_RULE", "Check", "Mismatch", "Reference",
 
 
 @gc_paused
-def verify(path: Path, engine: str = "vector") -> Report:
-    """Every formula cell of the book at `path` compared with the independent reference.
-    Raises UnusableFile with one line when the file cannot be verified."""
+def verify(path: Path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Report:
+    """Every formula cell of the book at `path` compared with the independent reference, at
+    the book's own inputs and (with the vector engine) at other input sets drawn from `seed`
+    (input_sets.py). Raises UnusableFile with one line when the file cannot be verified."""
     wb, record = read_book(path)
     try:
         params = inputs_of(wb, record)    # first: an input no number holds is named, not computed
@@ -38,9 +40,11 @@ def verify(path: Path, engine: str = "vector") -> Report:
         raise UnusableFile(record_mismatch(path, exc)) from None
     from ..engine import evaluator as engines
     rules = Rules(engines.is_error, engines.error_code)
+    evaluation = None           # the engine that can evaluate the book at other inputs
     try:
         if engine == "vector":
-            values = engines.evaluate(wb)
+            evaluation = engines.Engine(wb)
+            values = evaluation.run()
         elif engine == "formulas":
             # ExcelModel rounds number constants to 15 decimals (engine.evaluate's
             # excel_model_constants): judged with the relative bound, as LibreOffice is
@@ -65,22 +69,52 @@ def verify(path: Path, engine: str = "vector") -> Report:
         stored = stored_values(wb, path, formulas & judged)
         if stored:
             checks.append(check_stored(wb, record, values, stored, rules))
+        sets = [] if evaluation is None else _judge_other_sets(
+            wb, record, evaluation, values, rules, params, seed, formulas & judged)
         return Report(str(path), record.mechanism, engine, checks, len(formulas),
                       sorted(formulas - judged, key=cell_order), params,
-                      mechanism_size(record, params), likely_causes(wb, checks),
-                      sheets=list(wb.sheetnames), replaced=replaced, absent=absent)
+                      mechanism_size(record, params),
+                      likely_causes(wb, checks + [c for s in sets for c in s.checks]),
+                      sheets=list(wb.sheetnames), replaced=replaced, absent=absent,
+                      seed=seed if evaluation is not None else None, input_sets=sets)
     except RECORD_ERRORS as exc:
         raise UnusableFile(record_mismatch(path, exc)) from None
 
 
-def report_of(path, engine: str = "vector") -> Report:
+def _judge_other_sets(wb, record, evaluation, values: dict, rules: Rules, params: dict,
+                      seed: int, cells: set) -> list[InputSet]:
+    """The other input sets of `seed`, each evaluated by the engine that evaluated the book
+    (only what moves with the inputs again) and judged with the book's input cells holding it;
+    the cells restored after. `cells`: the formula cells judged at the book's own inputs."""
+    from ..base import sheets as layout
+    solver = Reference(record)
+    sweep = record.sweep
+    angles = input_column(wb[sweep.sheet], "A", sweep.rows, solver.mechanism.input_is_angle)
+    sets = other_sets(solver, record, params, angles, seed)
+    judged = [s for s in sets if s.skipped is None]
+    if not judged:
+        return sets
+    changed = sorted({symbol for s in judged for symbol in s.changed})
+    inputs = {(layout.MECH, record.inputs[symbol].cell): [s.inputs[symbol] for s in judged]
+              for symbol in changed}
+    read = sorted(cells) + list(inputs)
+    for input_set, varied in zip(judged, evaluation.vary_together(inputs, read)):
+        held = write_inputs(wb, record, {k: input_set.inputs[k] for k in changed})
+        try:
+            input_set.checks = judge_book(wb, record, {**values, **varied}, rules)
+        finally:
+            write_inputs(wb, record, held)
+    return sets
+
+
+def report_of(path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Report:
     """verify(), with a book that cannot be verified at all given as a Report of status 2 whose
     `error` is the one line that says why (the command prints it; the API returns it), so
     that a status is always there to act on."""
     from ..base.safety import UnsafeFile
     from ..engine.office import OfficeFailed, OfficeUnavailable
     try:
-        return verify(Path(path), engine)
+        return verify(Path(path), engine, seed)
     except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:
         said = " ".join(str(exc).split())
         if not said.startswith(f"{path}: "):    # among many books, each line names its own
