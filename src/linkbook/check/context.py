@@ -92,6 +92,7 @@ class Judging:
     slopes: dict = field(default_factory=dict)
     angle: float = 0.0
     one: dict | None = None
+    own_inputs: bool = True        # False: one of verify's other input sets (input_sets.py)
 
     @property
     def mechanism(self):

@@ -70,7 +70,7 @@ def verify(path: Path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Repo
         if stored:
             checks.append(check_stored(wb, record, values, stored, rules))
         sets = [] if evaluation is None else _judge_other_sets(
-            wb, record, evaluation, values, rules, params, seed, formulas & judged)
+            wb, record, evaluation, rules, params, seed)
         return Report(str(path), record.mechanism, engine, checks, len(formulas),
                       sorted(formulas - judged, key=cell_order), params,
                       mechanism_size(record, params),
@@ -81,27 +81,24 @@ def verify(path: Path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Repo
         raise UnusableFile(record_mismatch(path, exc)) from None
 
 
-def _judge_other_sets(wb, record, evaluation, values: dict, rules: Rules, params: dict,
-                      seed: int, cells: set) -> list[InputSet]:
+def _judge_other_sets(wb, record, evaluation, rules: Rules, params: dict, seed: int
+                      ) -> list[InputSet]:
     """The other input sets of `seed`, each evaluated by the engine that evaluated the book
-    (only what moves with the inputs again) and judged with the book's input cells holding it;
-    the cells restored after. `cells`: the formula cells judged at the book's own inputs."""
+    (only what moves with the inputs and is judged, again: engine/rerun.py) and judged with
+    the book's input cells holding it; the cells restored after."""
     from ..base import sheets as layout
+    from ..engine.rerun import rerun
     solver = Reference(record)
     sweep = record.sweep
     angles = input_column(wb[sweep.sheet], "A", sweep.rows, solver.mechanism.input_is_angle)
     sets = other_sets(solver, record, params, angles, seed)
-    judged = [s for s in sets if s.skipped is None]
-    if not judged:
-        return sets
-    changed = sorted({symbol for s in judged for symbol in s.changed})
-    inputs = {(layout.MECH, record.inputs[symbol].cell): [s.inputs[symbol] for s in judged]
-              for symbol in changed}
-    read = sorted(cells) + list(inputs)
-    for input_set, varied in zip(judged, evaluation.vary_together(inputs, read)):
-        held = write_inputs(wb, record, {k: input_set.inputs[k] for k in changed})
+    for input_set in (s for s in sets if s.skipped is None):
+        changed = {k: input_set.inputs[k] for k in input_set.changed}
+        held = write_inputs(wb, record, changed)
         try:
-            input_set.checks = judge_book(wb, record, {**values, **varied}, rules)
+            with rerun(evaluation, {(layout.MECH, record.inputs[k].cell): v
+                                    for k, v in changed.items()}) as varied:
+                input_set.checks = judge_book(wb, record, varied, rules, own_inputs=False)
         finally:
             write_inputs(wb, record, held)
     return sets

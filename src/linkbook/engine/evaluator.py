@@ -79,7 +79,7 @@ from .adapter import (call, cell_result, empty_as_zero, evaluate_formulas_model,
                       tokenize)
 from .errors import CircularReferenceError, EngineError, UnsupportedFormulaError
 from .groups import Group, Grouper, Member
-from .order import cell_order, closure, found_in, group_deps, untangled_components
+from .order import cell_order, closure, downstream, group_deps, untangled_components
 from .plan import Planner
 from .running import running_sum_input
 from .references import (RefDesc, References, cell_name, cells_read, formula_shape,
@@ -229,24 +229,16 @@ class Engine:
 
     def vary(self, sheet: str, cell: str, inputs, read) -> Iterator[dict]:
         """For each value of `inputs` put into the constant cell (sheet, cell), the values of
-        the cells `read` ((sheet, 'B7') each; None for a cell outside every sheet)."""
-        return self.vary_together({(sheet, cell): list(inputs)}, read)
+        the cells `read` ((sheet, 'B7') each; None for a cell outside every sheet).
 
-    def vary_together(self, inputs: dict[tuple[str, str], list], read) -> Iterator[dict]:
-        """For each set k of input values (`inputs`: constant cell (sheet, 'I7') -> its values,
-        the k-th of each list put in together), the values of the cells `read` ((sheet, 'B7')
-        each; None for a cell outside every sheet).
-
-        Only what the read cells need is evaluated: once what does not move with the inputs
-        (nothing more after run(): it evaluated all), then what does, once for all the sets
-        together: the sets are one more batch dimension of the compiled vector functions (a
-        group that cannot take it is evaluated set by set, cell by cell). Groups count whole,
-        so a little more than needed may be evaluated, never less."""
-        ran = bool(self.groups or self.constants)
-        if not ran:
-            self._prepare()
+        Only what the read cells need is evaluated: once what does not move with the input,
+        then what does, once for all the input values together: the input values are one more
+        batch dimension of the compiled vector functions (a group that cannot take it is
+        evaluated value by value, cell by cell). Groups count whole, so a little more than
+        needed may be evaluated, never less."""
+        self._prepare()
         read = list(read)
-        places = {key: self._input_place(*key) for key in inputs}
+        place = self._input_place(sheet, cell)
         targets = []
         for s, a1 in read:
             r, c = coordinate_to_tuple(a1)
@@ -254,34 +246,22 @@ class Engine:
                 targets.append((s, a1, r, c))
         deps = {g.gid: group_deps(g, self.owner) for g in self.groups}
         needed = closure({int(self.owner[s][r, c]) for s, _, r, c in targets} - {-1}, deps)
-        if not ran:
-            with np.errstate(all="ignore"):
-                for component in self.order:          # what the read cells need, once
-                    if needed.intersection(component):
-                        self._evaluate_component(component)
-        sizes = {len(values) for values in inputs.values()}
-        if len(sizes) > 1:
-            raise EngineError("every input cell needs as many values as the others")
-        n = sizes.pop() if sizes else 0
-        varying = {places[key]: np.array(values, dtype=object) for key, values in inputs.items()}
-        readers: dict[int, set[int]] = {}
-        for gid, ds in deps.items():
-            for d in ds:
-                readers.setdefault(d, set()).add(gid)
-        marks = {s: np.zeros(g.shape, dtype=np.int8) for s, g in self.grid.items()}
-        for sheet, row, col in varying:
-            marks[sheet][row, col] = 1
-        first = {gid for gid in needed if 1 in found_in(self.groups[gid], marks)}
-        reached = closure(first, readers) & needed
         with np.errstate(all="ignore"):
-            for component in self.order:          # then what moves with the inputs, per set
+            for component in self.order:          # what the read cells need, once
+                if needed.intersection(component):
+                    self._evaluate_component(component)
+        inputs = list(inputs)
+        varying = {place: np.array(inputs, dtype=object)}
+        reached = downstream(self.groups, self.grid, [place], deps) & needed
+        with np.errstate(all="ignore"):
+            for component in self.order:          # then what moves with the input, per value
                 if not reached.intersection(component):
                     continue
                 if len(component) == 1 and component[0] not in self.self_reading \
-                        and self._vary_vector(self.groups[component[0]], varying, n):
+                        and self._vary_vector(self.groups[component[0]], varying, len(inputs)):
                     continue
-                self._vary_cells(component, varying, n)
-        for f in range(n):
+                self._vary_cells(component, varying, len(inputs))
+        for f in range(len(inputs)):
             out = dict.fromkeys(read)
             for s, a1, r, c in targets:
                 value = varying[(s, r, c)][f] if (s, r, c) in varying else self.grid[s][r, c]
@@ -289,7 +269,7 @@ class Engine:
             yield out
 
     def _input_place(self, sheet: str, cell: str) -> tuple[str, int, int]:
-        """(sheet, row, col) of a constant cell the evaluation may vary."""
+        """(sheet, row, col) of a constant cell that may take other values."""
         row, col = coordinate_to_tuple(cell)
         grid = self.grid.get(sheet)
         if grid is None or row >= grid.shape[0] or col >= grid.shape[1]:
@@ -329,16 +309,12 @@ class Engine:
         cells = [(self.groups[gid].sheet, m.row, m.col)
                  for gid in component for m in self.groups[gid].members]
         results = {key: np.empty(n, dtype=object) for key in cells}
-        # the grid keeps the values without the varied inputs (a later vary starts from them)
-        kept = {key: self.grid[key[0]][key[1], key[2]] for key in [*varying, *cells]}
         for f in range(n):
             for (s, r, c), values in varying.items():
                 self.grid[s][r, c] = values[f]
             self._evaluate_component(component)
             for key in cells:
                 results[key][f] = self.grid[key[0]][key[1], key[2]]
-        for (s, r, c), value in kept.items():
-            self.grid[s][r, c] = value
         varying.update(results)
 
     # ---- evaluation
