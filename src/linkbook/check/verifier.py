@@ -23,9 +23,9 @@ from .report import Report, cell_ranges, cell_runs, likely_causes
 from .stored import check_replaced, check_stored, not_formulas
 
 # what the command, the package's face and the tests take from here
-__all__ = ["ABS_TOL", "PER", "TOLERANCE_RULE", "Check", "Mismatch", "Reference", "Report",
-           "UnusableFile", "cell_ranges", "cell_runs", "check_book", "inputs_of", "read_book",
-           "record_mismatch", "verify", "report_of"]
+__all__ = ["ABS_TOL", "DEFAULT_SEED", "PER", "TOLERANCE_RULE", "Check", "Mismatch", "Reference",
+           "Report", "UnusableFile", "cell_ranges", "cell_runs", "check_book", "inputs_of",
+           "read_book", "record_mismatch", "verify", "report_of"]
 
 
 @gc_paused
