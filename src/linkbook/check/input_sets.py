@@ -8,8 +8,9 @@ little from the book's value (within ±SPREAD, an angle within ±ANGLE_SPREAD de
 zero that may be otherwise (a rate, an offset, an angle, a mass, an inertia, a load, gravity)
 made a value of its kind's natural scale. The points come from a seed, so a verdict can be
 repeated. A set is kept only where the reference assembles the mechanism at the same sweep rows
-as at the book's own inputs, and within the domain (domain.py); else its geometric moves are
-halved, up to SHRINKS times, and then it is given up and said so.
+as at the book's own inputs, and within the domain (domain.py); else its geometric moves (the
+lengths, offsets and angles) are halved, up to SHRINKS times, and then left out: the book's own
+geometry with its rates and loads moved.
 """
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ from ..language.domain import LENGTH_UNITS, InputError, check_lengths_together, 
 from ..language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
                                    OFFSET_KIND, RATE_KIND)
 from .checks import Check
+from .reading import mechanism_size, written_in
 
 DEFAULT_SEED = 1
 OTHER_SETS = 1          # input sets judged besides the book's own
@@ -68,17 +70,17 @@ def other_sets(solver, record: BuildRecord, params: dict[str, float], angles: np
     sets = []
     for k in range(count):
         number = k + 2
-        for shrink in range(SHRINKS + 1):
-            values = draw(record, solver.mechanism.input_kind, params, seed, number,
-                          0.5 ** shrink)
+        # the geometric moves halved SHRINKS times, then none: the book's own geometry (its
+        # zero offsets and angles kept) with its rates and loads moved, which assembles alike
+        for shrink in [0.5 ** i for i in range(SHRINKS + 1)] + [0.0]:
+            values = draw(record, solver.mechanism.input_kind, params, seed, number, shrink)
             if values is not None and np.array_equal(_assembled(solver, values, angles), own):
+                sets.append(InputSet(number, values,
+                                     [s for s in values if values[s] != params[s]]))
                 break
         else:
             sets.append(InputSet(number, dict(params), [], skipped=(
-                f"the reference does not assemble the mechanism at the book's rows at any "
-                f"inputs drawn within {SPREAD * 0.5 ** SHRINKS:.2%} of the book's")))
-            continue
-        sets.append(InputSet(number, values, [s for s in values if values[s] != params[s]]))
+                "no inputs drawn near the book's are within the domain (domain.py)")))
     return sets
 
 
@@ -104,12 +106,12 @@ def draw(record: BuildRecord, input_kind: str, params: dict[str, float], seed: i
                              shrink if kinds[symbol] in GEOMETRIC else 1.0)
     speed, accel = MOTION_SYMBOLS[input_kind]
     if params.get(accel) == 0 and speed in out:     # an acceleration of the speed's scale
-        scale = out[speed] ** 2 / (1.0 if input_kind == ANGLE_KIND else _size(record, out))
-        out[accel] = _round(scale * (1.0 + SPREAD * rng.uniform(-1.0, 1.0)))
+        per = 1.0 if input_kind == ANGLE_KIND else mechanism_size(record, out)
+        out[accel] = _round(out[speed] ** 2 / per * (1.0 + SPREAD * rng.uniform(-1.0, 1.0)))
     try:
         for symbol, value in out.items():
             check_value(symbol, kinds[symbol], value)
-        check_lengths_together(out, kinds)
+        check_lengths_together(out, kinds, "", written_in(record))
     except InputError:
         return None
     return out
@@ -118,7 +120,7 @@ def draw(record: BuildRecord, input_kind: str, params: dict[str, float], seed: i
 def _moved(kind: str, value: float, natural: float | None, u: float, shrink: float) -> float:
     """`value` moved by the draw u in [-1, 1] (`natural`: what a zero becomes, None to keep
     it)."""
-    if kind == BRANCH_KIND:
+    if kind == BRANCH_KIND or shrink == 0:
         return value
     if kind == ANGLE_KIND:
         return _round(value + ANGLE_SPREAD * shrink * u if value else
@@ -136,18 +138,13 @@ def _round(value: float) -> float:
     return float(f"{value:.{DIGITS}g}")
 
 
-def _size(record: BuildRecord, params: dict[str, float]) -> float:
-    from .reading import mechanism_size
-    return mechanism_size(record, params)
-
-
 def _natural_scales(record: BuildRecord, input_kind: str, params: dict[str, float]
                     ) -> dict[str, float]:
     """What each input that is 0 becomes: the typical value of the book's others of its kind
     (their median), or one of the kind's own scale (the weight of the book's typical mass, its
     inertia as a rod the mechanism's size long, a crank's 10 rad/s, gravity)."""
     kinds = record.kinds()
-    size = _size(record, params)
+    size = mechanism_size(record, params)
     metres = size * LENGTH_UNITS[record.length_unit]
 
     def typical(kind: str, otherwise: float) -> float:

@@ -87,6 +87,7 @@ def _judge_other_sets(wb, record, evaluation, rules: Rules, params: dict, seed: 
     (only what moves with the inputs and is judged, again: engine/rerun.py) and judged with
     the book's input cells holding it; the cells restored after."""
     from ..base import sheets as layout
+    from ..engine.errors import EngineError
     from ..engine.rerun import rerun
     solver = Reference(record)
     sweep = record.sweep
@@ -99,6 +100,10 @@ def _judge_other_sets(wb, record, evaluation, rules: Rules, params: dict, seed: 
             with rerun(evaluation, {(layout.MECH, record.inputs[k].cell): v
                                     for k, v in changed.items()}) as varied:
                 input_set.checks = judge_book(wb, record, varied, rules, own_inputs=False)
+        except (UnusableFile, EngineError) as exc:
+            # what the book's own inputs do not meet (a grid's adjustment too small beside
+            # the lengths drawn): that set is said not judged, the verdict is the book's own
+            input_set.checks, input_set.skipped = [], " ".join(str(exc).split())
         finally:
             write_inputs(wb, record, held)
     return sets
