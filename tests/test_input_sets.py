@@ -28,6 +28,9 @@ def _build(folder: Path, name: str, sets=(), step=30.0) -> Path:
     return path
 
 
+EDITED: dict[Path, set] = {}      # an edited book's edited cells
+
+
 def _edited(path: Path, sheet: str, column_of, old: str, new: str) -> Path:
     """The book with `old` replaced by `new` in every formula of one column of `sheet` (the
     column letter from the build record: column_of(meta) -> (letter, (first, last)))."""
@@ -39,6 +42,7 @@ def _edited(path: Path, sheet: str, column_of, old: str, new: str) -> Path:
         cell.value = cell.value.replace(old, new)
     out = path.with_name(f"edited-{path.name}")
     wb.save(out)
+    EDITED[out] = {(sheet, f"{letter}{r}") for r in range(first, last + 1)}
     return out
 
 
@@ -73,6 +77,9 @@ def test_a_term_that_vanishes_at_the_books_inputs_differs_at_another_set(books, 
     assert report.inputs[zero] == 0
     [other] = report.input_sets
     assert other.skipped is None and other.inputs[zero] != 0 and not other.ok
+    # the edited cells themselves (where their wrong term is not 0), named as likely causes
+    edited = EDITED[books[name]] & other.differing()
+    assert edited and edited <= report.causes
     assert report.status == 1 and report.differing == len(other.differing())
     code = cli.main(["verify", str(books[name])])
     lines = capsys.readouterr().out.splitlines()
