@@ -476,21 +476,21 @@ def _print_report(report, verbose: bool = False) -> None:
         print(f"all agree: {compared}, max |Δ| {report.max_abs:.2e}")
 
 
-def _print_checks(shown: list, causes=frozenset(), indent: str = "") -> None:
+def _print_checks(shown: list, causes) -> None:
     """The table of the checks `shown`, then a few differing cells of each: the likely causes
     first (`causes`), then cells downstream of them."""
     if shown:
-        print(f"{indent}{'block':12} {'column':20} {'cells':>6} {'max |Δ|':>10} "
-              f"{'#N/A agree':>11}  verdict")
+        print(f"{'block':12} {'column':20} {'cells':>6} {'max |Δ|':>10} {'#N/A agree':>11}  "
+              "verdict")
     for c in shown:
         verdict = "ok" if c.ok else f"{len(c.mismatches)} DIFFER"
-        print(f"{indent}{c.block:12} {c.name:20} {c.cells:6d} {c.max_abs:10.2e} "
+        print(f"{c.block:12} {c.name:20} {c.cells:6d} {c.max_abs:10.2e} "
               f"{f'{c.na_agree}/{c.na_expected}':>11}  {verdict}")
     for c in shown:
         ordered = sorted(c.mismatches, key=lambda m: (m.sheet, m.cell) not in causes)
         for m in ordered[:5]:
             cause = (m.sheet, m.cell) in causes
-            print(f"{indent}  {m.sheet}!{m.cell}: expected {m.expected}, got {m.got}"
+            print(f"  {m.sheet}!{m.cell}: expected {m.expected}, got {m.got}"
                   + ("   <- likely cause (reads no differing cell)" if cause else ""))
 
 
@@ -498,6 +498,7 @@ def _print_input_sets(report, verbose: bool) -> None:
     """One line per other input set: its verdict, its inputs (those made from a zero first)
     and the cells that differ there but not at the book's own; with `verbose`, or where it
     differs, its checks."""
+    from dataclasses import replace
     from ..check.verifier import cell_ranges
     own = report.differing_cells()
     for s in report.input_sets:
@@ -515,7 +516,10 @@ def _print_input_sets(report, verbose: bool) -> None:
             only = _in_book_order(report, s.differing() - own)
             print(f"differs at {name}: "
                   + (cell_ranges(only) if only else "the cells that differ at the book's own"))
-        _print_checks([c for c in s.checks if verbose or not c.ok], indent="  ")
+        # the checks with cells that differ there only, as the book's own are shown
+        shown = [c if verbose else replace(c, mismatches=[
+            m for m in c.mismatches if (m.sheet, m.cell) not in own]) for c in s.checks]
+        _print_checks([c for c in shown if verbose or not c.ok], report.causes)
 
 
 INPUTS_SHOWN = 4        # of an input set's values, on its line
