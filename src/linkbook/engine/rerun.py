@@ -49,9 +49,14 @@ class Rerun(Mapping):
         self.done: set[int] = set()
 
     def _place(self, key) -> tuple[str, int, int] | None:
-        sheet, cell = key
-        grid = self.engine.grid.get(sheet)
-        row, col = coordinate_to_tuple(cell)
+        """(sheet, row, col) of a cell of the value grid; None for any other key (run()'s
+        dict has no value for it either)."""
+        try:
+            sheet, cell = key
+            row, col = coordinate_to_tuple(cell)
+            grid = self.engine.grid.get(sheet)
+        except (TypeError, ValueError, AttributeError):
+            return None
         if grid is None or row >= grid.shape[0] or col >= grid.shape[1]:
             return None
         return sheet, row, col
