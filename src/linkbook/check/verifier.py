@@ -3,9 +3,11 @@
 The workbook says what it is (its build record: mechanism and layout); its inputs are read from
 its own cells, so a book edited in Excel is verified with its new numbers. Every formula cell is
 evaluated by an engine (or recalculated by an application) and judged against the reference
-(judge.py); the values the book stores are judged too (stored.py). The parts: reading.py (the
-book and its record), checks.py (the bounds and comparisons), judge.py with drawing.py,
-summary.py and grid.py (the blocks), report.py (the verdict).
+(judge.py); the values the book stores are judged too (stored.py). With the vector engine the
+formulas are judged again at another set of inputs drawn from a seed (input_sets.py), where a
+wrong term that vanishes at the book's own inputs shows. The parts: reading.py (the book and
+its record), checks.py (the bounds and comparisons), judge.py with drawing.py, summary.py and
+grid.py (the blocks), input_sets.py (the other inputs), report.py (the verdict).
 """
 from __future__ import annotations
 
