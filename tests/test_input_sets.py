@@ -17,6 +17,7 @@ from conftest import template
 from linkbook.apps import cli
 from linkbook.base.sheets import read_meta, read_record
 from linkbook.book import builder
+from linkbook.language import templates
 from linkbook.check import input_sets, verifier
 from linkbook.engine import evaluator as engine
 from linkbook.engine.rerun import rerun
@@ -177,3 +178,27 @@ def test_rerun_equals_a_full_evaluation_with_those_inputs(books, name):
         assert not bad, bad[:5]
         with rerun(ev, {}) as values:
             assert all(_same(before[k], values[k]) for k in before)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("family", sorted(p.stem for p in templates.bundled()))
+def test_random_books_agree_at_their_other_set(family, tmp_path):
+    """A book of random dimensions, rates and loads (test_properties' draws), untouched,
+    agrees at verify's other input set as at its own (or that set is said not judged)."""
+    from hypothesis import HealthCheck, assume, given, settings
+    from test_properties import EXAMPLES, dimensions, through_a_pivot, with_values
+    base = templates.load(family)
+
+    @settings(max_examples=max(EXAMPLES // 4, 3), deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+    @given(dimensions(base))
+    def check(values):
+        t = with_values(base, values)
+        assume(not through_a_pivot(t))
+        path = tmp_path / f"{family}.xlsx"
+        builder.build_file(t, path)
+        report = verifier.verify(path)
+        [other] = report.input_sets
+        bad = [(c.block, c.name, m) for c in other.checks for m in c.mismatches[:2]]
+        assert report.status == 0 and not bad, (values, other.inputs, bad[:5])
+    check()
