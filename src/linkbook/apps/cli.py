@@ -495,9 +495,9 @@ def _print_checks(shown: list, causes) -> None:
 
 
 def _print_input_sets(report, verbose: bool) -> None:
-    """One line per other input set: its verdict, its inputs (those made from a zero first)
-    and the cells that differ there but not at the book's own; with `verbose`, or where it
-    differs, its checks."""
+    """One line per other input set: its verdict, its inputs (those made from a zero first;
+    a few where it agrees) and the cells that differ there but not at the book's own; with
+    `verbose`, or where it differs, its checks."""
     from dataclasses import replace
     from ..check.verifier import cell_ranges
     own = report.differing_cells()
@@ -505,10 +505,12 @@ def _print_input_sets(report, verbose: bool) -> None:
         if s.skipped is not None:
             print(f"input set {s.number} (seed {report.seed}) not judged: {s.skipped}")
             continue
+        # where it differs, every input that shows it (to type in and see): else a few
         moved = sorted(s.changed, key=lambda k: (report.inputs.get(k) != 0, k))
-        shown = ", ".join(f"{k}={s.inputs[k]:g}" for k in moved[:INPUTS_SHOWN])
+        most = INPUTS_SHOWN if s.ok else len(moved)
+        shown = ", ".join(f"{k}={s.inputs[k]:g}" for k in moved[:most])
         name = (f"input set {s.number} (seed {report.seed}; {shown}"
-                f"{', …' if len(moved) > INPUTS_SHOWN else ''})")
+                f"{', …' if len(moved) > most else ''})")
         if s.ok:
             cells = len(set().union(*(c.judged for c in s.checks)))
             print(f"also judged at {name}: agree, {cells} cells compared")
