@@ -46,6 +46,9 @@ class Mutant:
     old: str
     new: str
     books: list = field(default_factory=list)   # (template, extra build arguments) aimed at it
+    # verify only the books aimed at it: a mutant whose term vanishes at their inputs (and not
+    # at every bundled book's), which verify must catch at its other input sets
+    aimed_only: bool = False
 
 
 MUTANTS = [
@@ -139,6 +142,26 @@ MUTANTS = [
            "src/linkbook/language/bodies.py",
            'spec.get("angle", -90)', 'spec.get("angle", 90)',
            [(f"{FORCES}/marghitu.toml", [])]),
+    # Terms that vanish at the books' own inputs: caught only at verify's other input sets
+    Mutant("vanishing: the crank's inertia torque −I·α left out (α = alpha_in = 0)",
+           "src/linkbook/language/bodies.py",
+           "                body.couples.append(lin((-1, mul(inertia, alpha))))\n",
+           '                if alpha != "{alpha_in}":\n'
+           "                    body.couples.append(lin((-1, mul(inertia, alpha))))\n",
+           [("fourbar", []), ("slider-crank", []), ("pump", [])], aimed_only=True),
+    Mutant("vanishing: a slider's offset left out of its loop (offset a1 = 0)",
+           "src/linkbook/language/steps/slider.py",
+           "slider(c.model, pin_x=dx.text, pin_y=dy.at_least(PRODUCT), line_y=\"0\",",
+           "slider(c.model, pin_x=dx.text, pin_y=py.at_least(PRODUCT), line_y=\"0\",",
+           [("slider-crank", ["--set", "a1=0"])], aimed_only=True),
+    Mutant("vanishing: the weight m·g left out (g = 0)",
+           "src/linkbook/language/bodies.py",
+           "            wx = lin((1, mul(mass, g[0])), (-1, mul(mass, METRES_REF, ax)))\n"
+           "            wy = lin((1, mul(mass, g[1])), (-1, mul(mass, METRES_REF, ay)))\n",
+           "            wx = lin((-1, mul(mass, METRES_REF, ax)))\n"
+           "            wy = lin((-1, mul(mass, METRES_REF, ay)))\n",
+           [("fourbar", ["--set", "g=0"]), ("slider-crank", ["--set", "g=0"])],
+           aimed_only=True),
 ]
 
 
@@ -167,7 +190,7 @@ def run(repo: Path, args: list[str], timeout: int = 900) -> int:
 
 
 def caught_by_verify(repo: Path, m: Mutant, work: Path) -> str:
-    books = [(name, []) for name in BUNDLED] + m.books
+    books = ([] if m.aimed_only else [(name, []) for name in BUNDLED]) + m.books
     for i, (name, extra) in enumerate(books):
         book = work / f"{i}-{Path(name).stem}.xlsx"     # a name may be a path
         if run(repo, [sys.executable, "-m", "linkbook", "build", name, *extra, "-o",

@@ -123,7 +123,7 @@ def test_a_signal_during_the_save_ends_in_one_line_and_leaves_no_temporary_file(
 @pytest.mark.parametrize("signum,status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_a_signal_during_verify_ends_in_one_line(tmp_path, book, signum, status):
     (tmp_path / "fourbar.xlsx").write_bytes(book)
-    code, err, _ = _stopped_midway(tmp_path, "engine.evaluator", "evaluate",
+    code, err, _ = _stopped_midway(tmp_path, "engine.evaluator", "Engine",
                                    ["verify", "fourbar.xlsx"], signum)
     assert code == status and len(err.strip().splitlines()) == 1, err
     assert err.startswith("linkbook: stopped by"), err

@@ -44,11 +44,14 @@ def _verify(capsys, *args) -> tuple[int, list[str], str]:
     return code, out.out.strip().splitlines(), out.err
 
 
-def test_a_passing_book_is_two_lines(books, capsys):
+def test_a_passing_book_is_three_lines(books, capsys):
+    """The header, the other input set judged and the verdict."""
     code, lines, err = _verify(capsys, books["good"])
     assert code == 0 and err == ""
     assert lines[0] == f"{books['good']}: fourbar, engine vector"
-    assert len(lines) == 2 and lines[1].startswith("all agree: "), lines
+    assert lines[1].startswith("also judged at input set 2 (seed 1; ") and \
+        lines[1].endswith(" cells compared"), lines
+    assert len(lines) == 3 and lines[2].startswith("all agree: "), lines
 
 
 def test_verbose_shows_every_check(books, capsys):
@@ -91,6 +94,8 @@ def test_json_is_one_list_of_objects_with_the_same_keys(books, capsys):
     assert good["error"] is None and bad["error"] is None
     assert junk["error"] == f"{books['junk']}: not an .xlsx workbook (not a zip file)"
     assert junk["ok"] is False and junk["checks"] == [] and junk["book"] == str(books["junk"])
+    assert good["seed"] == 1 and [s["set"] for s in good["input_sets"]] == [1, 2]
+    assert junk["input_sets"] == []
     assert "junk.xlsx" in err
 
 

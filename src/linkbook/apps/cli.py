@@ -52,12 +52,19 @@ VERIFY_OUTPUT = """output:
   -v adds the table of every check; -q leaves out the books that agree (and the count, when
   every book agrees: then nothing is printed).
 
+  Before the verdict, one line per other input set the formulas were judged at (the vector
+  engine: the book's inputs moved a little, its zeros made non-zero, drawn from --seed):
+    also judged at input set 2 (seed 1; alpha_in=105.9, a1=71.63, ...): agree, N cells
+    differs at input set 2 (seed 1; alpha_in=105.9, ...): Forces!D7:D79, ...     (exit 1)
+
   --json prints a list with one object per book, always with the same keys: book, mechanism,
   engine, linkbook (the version), status (0, 1 or 2), ok, error (null, or why the book cannot
-  be verified), cells, formula_cells, mismatches (how many cells differ), likely_causes and
-  unjudged and not_judged (too near a singular position) (cell ranges in the book's sheet
-  order, a run down a column as one range: "Sweep!E5:E77"), max_abs_diff, inputs, tolerance,
-  checks."""
+  be verified), cells, formula_cells, mismatches (how many cells differ, at any input set),
+  likely_causes, unjudged and not_judged (too near a singular position) (cell ranges in the
+  book's sheet order, a run down a column as one range: "Sweep!E5:E77"), max_abs_diff, inputs,
+  tolerance, checks, seed (null where only the book's own inputs were judged) and input_sets
+  (the book's own first: set, inputs, changed, judged, not_judged_because, cells, mismatches,
+  differing)."""
 
 
 def _parser():
@@ -144,6 +151,9 @@ def _parser():
                         "gnumeric (recalculate in Gnumeric's ssconvert)")
     v.add_argument("--json", action="store_true",
                    help="print the reports as JSON: a list, one object per book (see below)")
+    v.add_argument("--seed", type=_positive_int(0, 2 ** 31 - 1), default=None, metavar="N",
+                   help="the seed of the other input set the formulas are judged at (default "
+                        "1); the same seed draws the same set")
     amount = v.add_mutually_exclusive_group()
     amount.add_argument("-q", "--quiet", action="store_true",
                         help="print only the books that do not agree (the exit status says the "
@@ -375,8 +385,10 @@ def _verify(args) -> int:
     import json
     from ..check.verifier import report_of
     reports = []
+    from ..check.verifier import DEFAULT_SEED
+    seed = DEFAULT_SEED if args.seed is None else args.seed
     for book in args.books:
-        report = report_of(book, args.engine)
+        report = report_of(book, args.engine, seed)
         reports.append(report)
         _notes(report.path, report.notes)
         if report.error is not None:
@@ -413,7 +425,23 @@ def _as_data(report) -> dict:
         "stored_values_differ": report.stored_differ,
         "max_abs_diff": report.max_abs if usable else None, "inputs": report.inputs,
         "tolerance": {**TOLERANCE_RULE, "S": report.size} if usable else None,
-        "checks": [c.as_dict() for c in report.checks]}
+        "checks": [c.as_dict() for c in report.checks],
+        "seed": report.seed, "input_sets": _input_sets_data(report) if usable else []}
+
+
+def _input_sets_data(report) -> list[dict]:
+    """Each input set the formulas were judged at, the book's own first."""
+    own = report.differing_cells()
+    sets = [{"set": 1, "inputs": report.inputs, "changed": [], "judged": True,
+             "not_judged_because": None, "cells": report.cells, "mismatches": len(own),
+             "differing": _ranges(report, own)}]
+    for s in report.input_sets:
+        differ = s.differing()
+        sets.append({"set": s.number, "inputs": s.inputs, "changed": s.changed,
+                     "judged": s.skipped is None, "not_judged_because": s.skipped,
+                     "cells": len(set().union(*(c.judged for c in s.checks))),
+                     "mismatches": len(differ), "differing": _ranges(report, differ)})
+    return sets
 
 
 def _in_book_order(report, cells) -> list[tuple[str, str]]:
@@ -444,21 +472,8 @@ def _print_report(report, verbose: bool = False) -> None:
     of their differing cells, and the verdict line."""
     from ..check.verifier import cell_ranges
     print(f"{report.path}: {report.mechanism}, engine {report.engine}")
-    shown = [c for c in report.checks if verbose or not c.ok]
-    if shown:
-        print(f"{'block':12} {'column':20} {'cells':>6} {'max |Δ|':>10} {'#N/A agree':>11}  "
-              "verdict")
-    for c in shown:
-        verdict = "ok" if c.ok else f"{len(c.mismatches)} DIFFER"
-        print(f"{c.block:12} {c.name:20} {c.cells:6d} {c.max_abs:10.2e} "
-              f"{f'{c.na_agree}/{c.na_expected}':>11}  {verdict}")
-    for c in report.checks:
-        # the likely causes first, then a few of the cells downstream of them
-        ordered = sorted(c.mismatches, key=lambda m: (m.sheet, m.cell) not in report.causes)
-        for m in ordered[:5]:
-            cause = (m.sheet, m.cell) in report.causes
-            print(f"  {m.sheet}!{m.cell}: expected {m.expected}, got {m.got}"
-                  + ("   <- likely cause (reads no differing cell)" if cause else ""))
+    _print_checks([c for c in report.checks if verbose or not c.ok], report.causes)
+    _print_input_sets(report, verbose)
     compared = f"{report.cells} of {report.formula_cells} formula cells compared"
     if report.disagrees:
         causes = cell_ranges(_in_book_order(report, report.causes))
@@ -484,6 +499,57 @@ def _cannot_judge(report) -> list[str]:
                                  f"{DETERMINED:.0%} of their value)"))
     return [f"{len(cells)} formula cells {why}: "
             f"{cell_ranges(_in_book_order(report, cells))}" for cells, why in kinds if cells]
+
+
+def _print_checks(shown: list, causes) -> None:
+    """The table of the checks `shown`, then a few differing cells of each: the likely causes
+    first (`causes`), then cells downstream of them."""
+    if shown:
+        print(f"{'block':12} {'column':20} {'cells':>6} {'max |Δ|':>10} {'#N/A agree':>11}  "
+              "verdict")
+    for c in shown:
+        verdict = "ok" if c.ok else f"{len(c.mismatches)} DIFFER"
+        print(f"{c.block:12} {c.name:20} {c.cells:6d} {c.max_abs:10.2e} "
+              f"{f'{c.na_agree}/{c.na_expected}':>11}  {verdict}")
+    for c in shown:
+        ordered = sorted(c.mismatches, key=lambda m: (m.sheet, m.cell) not in causes)
+        for m in ordered[:5]:
+            cause = (m.sheet, m.cell) in causes
+            print(f"  {m.sheet}!{m.cell}: expected {m.expected}, got {m.got}"
+                  + ("   <- likely cause (reads no differing cell)" if cause else ""))
+
+
+def _print_input_sets(report, verbose: bool) -> None:
+    """One line per other input set: its verdict, its inputs (those made from a zero first;
+    a few where it agrees) and the cells that differ there but not at the book's own; with
+    `verbose`, or where it differs, its checks."""
+    from dataclasses import replace
+    from ..check.verifier import cell_ranges
+    own = report.differing_cells()
+    for s in report.input_sets:
+        if s.skipped is not None:
+            print(f"input set {s.number} (seed {report.seed}) not judged: {s.skipped}")
+            continue
+        # where it differs, every input that shows it (to type in and see): else a few
+        moved = sorted(s.changed, key=lambda k: (report.inputs.get(k) != 0, k))
+        most = INPUTS_SHOWN if s.ok else len(moved)
+        shown = ", ".join(f"{k}={s.inputs[k]:g}" for k in moved[:most])
+        name = (f"input set {s.number} (seed {report.seed}; {shown}"
+                f"{', …' if len(moved) > most else ''})")
+        if s.ok:
+            cells = len(set().union(*(c.judged for c in s.checks)))
+            print(f"also judged at {name}: agree, {cells} cells compared")
+        else:
+            only = _in_book_order(report, s.differing() - own)
+            print(f"differs at {name}: "
+                  + (cell_ranges(only) if only else "the cells that differ at the book's own"))
+        # the checks with cells that differ there only, as the book's own are shown
+        shown = [c if verbose else replace(c, mismatches=[
+            m for m in c.mismatches if (m.sheet, m.cell) not in own]) for c in s.checks]
+        _print_checks([c for c in shown if verbose or not c.ok], report.causes)
+
+
+INPUTS_SHOWN = 4        # of an input set's values, on its line
 
 
 def _positive_int(lo: int, hi: int):

@@ -113,6 +113,7 @@ class Judging:
     # turn an expression of an angle reads them in (reference.solve's `turns`)
     turns: dict = field(default_factory=dict)
     turns_now: dict = field(default_factory=dict)
+    own_inputs: bool = True        # False: one of verify's other input sets (input_sets.py)
 
     @property
     def mechanism(self):

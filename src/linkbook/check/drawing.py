@@ -52,7 +52,7 @@ def check_drawing(j: Judging) -> None:
     j.run("joints", "drawing rows", pos.sheet, drawing_cells, np.array(drawing_expected),
           "length", _joint_slope(j, coordinates), dead=np.array(dead))
     j.checks.append(_check_links(j, over_sweep))
-    if j.record.frames is not None:
+    if j.record.frames is not None and j.own_inputs:
         j.checks += _check_frames(j, joints, drawn, free)
 
 

@@ -42,7 +42,9 @@ def check_grid(j: Judging) -> list[Check]:
     grid, stroke = j.record.grid, j.record.stroke
     solver, param = j.solver, grid.param
     expected_by_block = {}
-    own_sweep = stroke.sheet != grid.sheet     # else the grid is its own stroke sweep
+    # at another input set (input_sets.py) the grid alone: the Stroke sweep holds the grid's
+    # own formula at finer angles, and the stroke under the grid is that sampling's
+    own_sweep = stroke.sheet != grid.sheet and j.own_inputs    # else the grid is its own
     for block in (grid, stroke) if own_sweep else (grid,):
         ws = j.wb[block.sheet]
         angles = input_column(ws, "A", block.rows, solver.mechanism.input_is_angle)
@@ -63,6 +65,8 @@ def check_grid(j: Judging) -> list[Check]:
             h = Check(block.sheet, f"{param} header", j.size, scale=j.size)
             j.compare(h, block.sheet, heads, np.array(adjust), "length")
             checks.append(h)
+    if not j.own_inputs:
+        return checks
     fine = expected_by_block[stroke.sheet]
     strokes = np.ptp(fine, axis=0)          # NaN where some angle cannot close
     cells = [f"{c}{grid.stroke_row}" for c in grid.columns]

@@ -32,25 +32,31 @@ def check_book(wb, record: BuildRecord, values: dict, is_error, error_code, *,
     return judge_book(wb, record, values, Rules(is_error, error_code, tol, relative))
 
 
-def judge_book(wb, record: BuildRecord, values: dict, rules: Rules) -> list[Check]:
-    """check_book, with the rules given whole."""
+def judge_book(wb, record: BuildRecord, values: dict, rules: Rules,
+               own_inputs: bool = True) -> list[Check]:
+    """check_book, with the rules given whole. `own_inputs` False: the input cells hold one of
+    verify's other input sets (input_sets.py), where the tables are judged (the sweep, the
+    current position and its joints, the constants, Motion, Forces, the grid) and what reads
+    only them or the sampling is left to the book's own inputs: the drawing's frames, the degree
+    windows, the numbers-only copies, the geometry summary, the stroke sweep."""
     from . import drawing, grid, summary
     solver = Reference(record)
     params = inputs_of(wb, record)
     j = Judging(wb, record, values, rules, solver, solver.mechanism.build(), params,
-                mechanism_size(record, params))
+                mechanism_size(record, params), own_inputs=own_inputs)
     _check_sweep(j)
     _check_position(j)
     drawing.check_drawing(j)
-    _check_degree_windows(j)
-    j.checks += _check_numbers_only(j)
+    if own_inputs:
+        _check_degree_windows(j)
+        j.checks += _check_numbers_only(j)
     _check_constants(j)
     if record.motion is not None:
         _check_motion(j)
     if record.forces is not None:
         from .force_cells import check_forces
         check_forces(j)
-    if "closes" in record.sweep.columns:
+    if "closes" in record.sweep.columns and own_inputs:
         j.checks += summary.check_assembly(j)
     if record.grid is not None:
         j.checks += grid.check_grid(j)

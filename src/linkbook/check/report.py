@@ -28,10 +28,14 @@ class Report:
     # what the file holds that leaves the numbers alone but a reader should hear of (a
     # built-in name an application wrote twice with other ranges)
     notes: list[str] = field(default_factory=list)
+    # the seed the other input sets were drawn from (None: the book's own inputs only) and
+    # those sets, each with its checks (input_sets.py)
+    seed: int | None = None
+    input_sets: list = field(default_factory=list)
 
     @property
     def disagrees(self) -> bool:
-        return any(not c.ok for c in self.checks)
+        return any(not c.ok for c in self.checks) or any(not s.ok for s in self.input_sets)
 
     @property
     def not_judged(self) -> list[tuple[str, str]]:
@@ -70,8 +74,12 @@ class Report:
 
     @property
     def differing(self) -> int:
-        """Cells that differ from the reference (each counted once)."""
-        return len({(m.sheet, m.cell) for c in self.checks for m in c.mismatches})
+        """Cells that differ from the reference, at any input set (each counted once)."""
+        return len(self.differing_cells().union(*(s.differing() for s in self.input_sets)))
+
+    def differing_cells(self) -> set[tuple[str, str]]:
+        """The cells that differ at the book's own inputs."""
+        return {(m.sheet, m.cell) for c in self.checks for m in c.mismatches}
 
     @property
     def max_abs(self) -> float:

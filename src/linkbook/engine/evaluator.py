@@ -62,7 +62,8 @@ Modules of the engine: references (what a formula reads: descriptors, shapes, th
 adapter (the one place that touches `formulas`' internals: its tokenizer, compiled pipes,
 ExcelModel), vector (vector calls), groups (cells into groups of one shape), plan (each group's
 mode and compiled function), order (the order of evaluation), running (running sums), grammar
-(the fast parser), and
+(the fast parser), rerun (after run(), the book again with other values in some constant
+cells: only what moves with them and is asked for), and
 this one: the public entry points and the Engine that runs the steps above.
 """
 
@@ -79,7 +80,7 @@ from .adapter import (call, cell_result, empty_as_zero, evaluate_formulas_model,
                       tokenize)
 from .errors import CircularReferenceError, EngineError, UnsupportedFormulaError
 from .groups import Group, Grouper, Member
-from .order import cell_order, closure, found_in, group_deps, untangled_components
+from .order import cell_order, closure, downstream, group_deps, untangled_components
 from .plan import Planner
 from .running import running_sum_input
 from .references import (RefDesc, References, cell_name, cells_read, formula_shape,
@@ -238,12 +239,7 @@ class Engine:
         needed may be evaluated, never less."""
         self._prepare()
         read = list(read)
-        row, col = coordinate_to_tuple(cell)
-        grid = self.grid.get(sheet)
-        if grid is None or row >= grid.shape[0] or col >= grid.shape[1]:
-            raise EngineError(f"no cell {sheet}!{cell}")
-        if self.owner[sheet][row, col] >= 0:
-            raise EngineError(f"{sheet}!{cell} holds a formula, not an input value")
+        place = self._input_place(sheet, cell)
         targets = []
         for s, a1 in read:
             r, c = coordinate_to_tuple(a1)
@@ -256,15 +252,8 @@ class Engine:
                 if needed.intersection(component):
                     self._evaluate_component(component)
         inputs = list(inputs)
-        varying = {(sheet, row, col): np.array(inputs, dtype=object)}
-        readers: dict[int, set[int]] = {}
-        for gid, ds in deps.items():
-            for d in ds:
-                readers.setdefault(d, set()).add(gid)
-        marks = {s: np.zeros(g.shape, dtype=np.int8) for s, g in self.grid.items()}
-        marks[sheet][row, col] = 1
-        first = {gid for gid in needed if 1 in found_in(self.groups[gid], marks)}
-        reached = closure(first, readers) & needed
+        varying = {place: np.array(inputs, dtype=object)}
+        reached = downstream(self.groups, self.grid, [place], deps) & needed
         with np.errstate(all="ignore"):
             for component in self.order:          # then what moves with the input, per value
                 if not reached.intersection(component):
@@ -279,6 +268,16 @@ class Engine:
                 value = varying[(s, r, c)][f] if (s, r, c) in varying else self.grid[s][r, c]
                 out[(s, a1)] = public_value(value, self.owner[s][r, c] >= 0)
             yield out
+
+    def _input_place(self, sheet: str, cell: str) -> tuple[str, int, int]:
+        """(sheet, row, col) of a constant cell that may take other values."""
+        row, col = coordinate_to_tuple(cell)
+        grid = self.grid.get(sheet)
+        if grid is None or row >= grid.shape[0] or col >= grid.shape[1]:
+            raise EngineError(f"no cell {sheet}!{cell}")
+        if self.owner[sheet][row, col] >= 0:
+            raise EngineError(f"{sheet}!{cell} holds a formula, not an input value")
+        return sheet, row, col
 
     def _vary_vector(self, g: Group, varying: dict, n: int) -> bool:
         """One call of g's vector function for all members × all input values; False (nothing

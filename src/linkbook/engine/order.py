@@ -183,3 +183,18 @@ def closure(start: set[int], edges: dict[int, set[int]]) -> set[int]:
                 reached.add(nxt)
                 todo.append(nxt)
     return reached
+
+
+def downstream(groups: list[Group], grid: dict[str, np.ndarray], places, deps: dict[int, set[int]]
+               ) -> set[int]:
+    """The groups that read a cell of `places` ((sheet, row, col) each), directly or through
+    other groups (`deps`: the groups each group reads; `grid`: a value grid per sheet, for its
+    shape)."""
+    readers: dict[int, set[int]] = {}
+    for gid, ds in deps.items():
+        for d in ds:
+            readers.setdefault(d, set()).add(gid)
+    marks = {s: np.zeros(g.shape, dtype=np.int8) for s, g in grid.items()}
+    for sheet, row, col in places:
+        marks[sheet][row, col] = 1
+    return closure({g.gid for g in groups if 1 in found_in(g, marks)}, readers)

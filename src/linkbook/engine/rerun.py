@@ -1,0 +1,100 @@
+"""A book evaluated again with other values in some of its constant cells, after Engine.run():
+what verify judges at its other input sets.
+
+Only the formulas downstream of the changed cells can give other values, and of those only the
+ones asked for are evaluated: a formula cell is evaluated when it is first looked up, with the
+groups it needs, in the engine's order and by its own code (vector calls, running sums, cell by
+cell), so each value is the one run() gives a book holding those inputs. A cell that does not
+move with the inputs keeps run()'s value. Leaving the `with` block puts the book's own values
+back into the engine, so it may rerun again with other inputs.
+"""
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+
+import numpy as np
+
+from .adapter import public_value
+from .errors import EngineError
+from .order import closure, downstream, group_deps
+from .references import cell_name
+from ..base.xlsx import coordinate_to_tuple
+
+
+@contextmanager
+def rerun(engine, inputs: dict[tuple[str, str], object]) -> Iterator[Mapping]:
+    """The values of every cell, as a mapping like run()'s, with the constant cells of `inputs`
+    ((sheet, 'I7') -> value) holding those values. After run() only."""
+    if not engine.groups and not engine.constants:
+        raise EngineError("rerun follows run()")
+    places = [engine._input_place(sheet, cell) for sheet, cell in inputs]
+    kept = {sheet: grid.copy() for sheet, grid in engine.grid.items()}
+    try:
+        for (sheet, row, col), value in zip(places, inputs.values()):
+            engine.grid[sheet][row, col] = value
+        yield Rerun(engine, places)
+    finally:
+        engine.grid = kept
+
+
+class Rerun(Mapping):
+    """(sheet, 'B7') -> value, as run() gives it, of a book whose changed inputs the engine's
+    grid holds; each formula downstream of them evaluated when first asked for."""
+
+    def __init__(self, engine, places: list[tuple[str, int, int]]):
+        self.engine = engine
+        self.deps = {g.gid: group_deps(g, engine.owner) for g in engine.groups}
+        self.moved = downstream(engine.groups, engine.grid, places, self.deps)
+        self.done: set[int] = set()
+
+    def _place(self, key) -> tuple[str, int, int] | None:
+        """(sheet, row, col) of a cell of the value grid; None for any other key (run()'s
+        dict has no value for it either)."""
+        try:
+            sheet, cell = key
+            row, col = coordinate_to_tuple(cell)
+            grid = self.engine.grid.get(sheet)
+        except (TypeError, ValueError, AttributeError):
+            return None
+        if grid is None or row >= grid.shape[0] or col >= grid.shape[1]:
+            return None
+        return sheet, row, col
+
+    def __getitem__(self, key):
+        place = self._place(key)
+        if place is None:
+            raise KeyError(key)
+        sheet, row, col = place
+        engine = self.engine
+        gid = int(engine.owner[sheet][row, col])
+        if gid < 0:
+            if (row, col) not in engine.constants.get(sheet, {}):
+                raise KeyError(key)         # an empty cell: run() gives none either
+            return public_value(engine.grid[sheet][row, col], False)
+        if gid in self.moved and gid not in self.done:
+            self._evaluate(gid)
+        return public_value(engine.grid[sheet][row, col], True)
+
+    def _evaluate(self, gid: int) -> None:
+        """Group gid and what it needs of the groups that moved, in the engine's order."""
+        need = (closure({gid}, self.deps) & self.moved) - self.done
+        with np.errstate(all="ignore"):
+            for component in self.engine.order:
+                if need.intersection(component):
+                    self.engine._evaluate_component(component)
+                    self.done.update(component)
+
+    def __iter__(self):
+        engine = self.engine
+        for sheet, cells in engine.constants.items():
+            for row, col in cells:
+                yield sheet, cell_name(row, col)
+        for g in engine.groups:
+            for m in g.members:
+                yield g.sheet, cell_name(m.row, m.col)
+
+    def __len__(self) -> int:
+        return sum(map(len, self.engine.constants.values())) + sum(
+            len(g.members) for g in self.engine.groups)
+
