@@ -13,14 +13,10 @@ filter. Prints one JSON object: the edited cells' values after the recalculation
 from __future__ import annotations
 
 import json
-import os
-import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
 
-from uno_probe import connect, prop
+from uno_probe import prop, running_office
 
 XLSX_FILTER = "Calc MS Excel 2007 XML"
 
@@ -38,44 +34,22 @@ def edit(doc, address: str, value) -> None:
 
 def main() -> None:
     book, out, edits = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
-    pipe = f"linkbook_edit_{os.getpid()}"
-    with tempfile.TemporaryDirectory(prefix="linkbook-uno-") as profile:
-        office = subprocess.Popen(
-            ["soffice", f"-env:UserInstallation={Path(profile).as_uri()}", "--headless",
-             "--invisible", "--norestore", "--nologo", "--nolockcheck",
-             f"--accept=pipe,name={pipe};urp;"],
-            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-            start_new_session=True)
-        desktop = None
-        try:
-            ctx = connect(pipe, time.time() + 60)
-            desktop = ctx.ServiceManager.createInstanceWithContext(
-                "com.sun.star.frame.Desktop", ctx)
-            doc = desktop.loadComponentFromURL(Path(book).resolve().as_uri(), "_blank", 0,
-                                               (prop("Hidden", True),))
-            for address, value in edits.items():
-                edit(doc, address, value)
-            doc.calculateAll()
-            after = {}
-            for address in edits:
-                sheet_name, cell_name = address.rsplit("!", 1)
-                cell = doc.Sheets.getByName(sheet_name.strip("'")).getCellRangeByName(cell_name)
-                after[address] = cell.getValue() if cell.getType().value == "VALUE" \
-                    else cell.getString()
-            doc.storeToURL(Path(out).resolve().as_uri(),
-                           (prop("FilterName", XLSX_FILTER), prop("Overwrite", True)))
-            doc.close(True)
-            print(json.dumps(after))
-        finally:
-            if desktop is not None:
-                try:
-                    desktop.terminate()
-                except Exception:
-                    pass
-            try:
-                office.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                os.killpg(office.pid, 9)
+    with running_office("edit") as desktop:
+        doc = desktop.loadComponentFromURL(Path(book).resolve().as_uri(), "_blank", 0,
+                                           (prop("Hidden", True),))
+        for address, value in edits.items():
+            edit(doc, address, value)
+        doc.calculateAll()
+        after = {}
+        for address in edits:
+            sheet_name, cell_name = address.rsplit("!", 1)
+            cell = doc.Sheets.getByName(sheet_name.strip("'")).getCellRangeByName(cell_name)
+            after[address] = cell.getValue() if cell.getType().value == "VALUE" \
+                else cell.getString()
+        doc.storeToURL(Path(out).resolve().as_uri(),
+                       (prop("FilterName", XLSX_FILTER), prop("Overwrite", True)))
+        doc.close(True)
+        print(json.dumps(after))
 
 
 if __name__ == "__main__":

@@ -12,6 +12,7 @@ linked cell, value, position) and the cells' values before and after each move.
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
@@ -89,10 +90,11 @@ def read(sheet, cells: list[str]) -> dict:
     return out
 
 
-def main() -> None:
-    book, sheet_name, moves, cells = sys.argv[1], sys.argv[2], json.loads(sys.argv[3]), \
-        json.loads(sys.argv[4])
-    pipe = f"linkbook_probe_{os.getpid()}"
+@contextlib.contextmanager
+def running_office(name: str):
+    """A headless LibreOffice of its own (a fresh profile, a pipe named after `name` and this
+    process), its Desktop yielded; ended whatever happens."""
+    pipe = f"linkbook_{name}_{os.getpid()}"
     with tempfile.TemporaryDirectory(prefix="linkbook-uno-") as profile:
         office = subprocess.Popen(
             ["soffice", f"-env:UserInstallation={Path(profile).as_uri()}", "--headless",
@@ -100,33 +102,42 @@ def main() -> None:
              f"--accept=pipe,name={pipe};urp;"],
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             start_new_session=True)
+        desktop = None
         try:
             ctx = connect(pipe, time.time() + 60)
             desktop = ctx.ServiceManager.createInstanceWithContext(
                 "com.sun.star.frame.Desktop", ctx)
-            doc = desktop.loadComponentFromURL(Path(book).resolve().as_uri(), "_blank", 0,
-                                               (prop("Hidden", True),))
-            doc.calculateAll()
-            sheet = doc.Sheets.getByName(sheet_name)
-            found = controls_of(sheet)
-            report = {"controls": [info for info, _ in found], "before": read(sheet, cells),
-                      "after": []}
-            for index, value in moves:
-                info, model = found[index]
-                model.setPropertyValue(PROPS[info["kind"]][4], value)
-                doc.calculateAll()
-                report["after"].append(read(sheet, cells))
-            doc.close(True)
-            print(json.dumps(report))
+            yield desktop
         finally:
-            try:
-                desktop.terminate()
-            except Exception:
-                pass
+            if desktop is not None:
+                try:
+                    desktop.terminate()
+                except Exception:
+                    pass
             try:
                 office.wait(timeout=20)
             except subprocess.TimeoutExpired:
                 os.killpg(office.pid, 9)
+
+
+def main() -> None:
+    book, sheet_name, moves, cells = sys.argv[1], sys.argv[2], json.loads(sys.argv[3]), \
+        json.loads(sys.argv[4])
+    with running_office("probe") as desktop:
+        doc = desktop.loadComponentFromURL(Path(book).resolve().as_uri(), "_blank", 0,
+                                           (prop("Hidden", True),))
+        doc.calculateAll()
+        sheet = doc.Sheets.getByName(sheet_name)
+        found = controls_of(sheet)
+        report = {"controls": [info for info, _ in found], "before": read(sheet, cells),
+                  "after": []}
+        for index, value in moves:
+            info, model = found[index]
+            model.setPropertyValue(PROPS[info["kind"]][4], value)
+            doc.calculateAll()
+            report["after"].append(read(sheet, cells))
+        doc.close(True)
+        print(json.dumps(report))
 
 
 if __name__ == "__main__":
