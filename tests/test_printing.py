@@ -55,3 +55,20 @@ def test_the_mechanism_sheet_prints_on_one_page(tmp_path, name):
     builder.build_file(templates.with_overrides(templates.load(name), [], None, None), path)
     pages = preview(path, tmp_path / "pages", dpi=20, sheets=["Mechanism"])
     assert [p.name for p in pages] == [f"{name}-Mechanism-1.png"]
+
+
+@pytest.mark.slow
+@pytest.mark.libreoffice
+def test_a_five_degree_fourbar_prints_on_at_most_thirty_pages(tmp_path):
+    """The bundled four-bar (5°, forces): every visible sheet, as LibreOffice prints it."""
+    from linkbook.apps.preview import preview
+    from linkbook.book import builder
+    from linkbook.engine import office
+    if not office.soffice_path() or not shutil.which("pdftoppm"):
+        if os.environ.get("CI"):
+            pytest.fail("CI needs soffice and pdftoppm: .ci/run installs them")
+        pytest.skip("needs soffice and pdftoppm")
+    path = tmp_path / "fourbar.xlsx"
+    builder.build_file(templates.with_overrides(templates.load("fourbar"), [], None, None), path)
+    pages = preview(path, tmp_path / "pages", dpi=20)
+    assert len(pages) <= 30, [p.name for p in pages]
