@@ -165,3 +165,18 @@ def test_text_in_an_input_cell_is_refused_with_the_cell_named(tmp_path, capsys, 
     lines = err.strip().splitlines()
     assert code == 2 and len(lines) == 1, err
     assert f"(cell {cell}): must be a number, not text (got {text!r})" in lines[0], lines[0]
+
+
+def test_a_formula_in_an_input_cell_is_named_as_a_formula(tmp_path, capsys):
+    """=50 typed where a2 belongs: an input is a number, and the message says what is there."""
+    code, err = _run(tmp_path, ["build", "fourbar", "-o", "fb.xlsx"], capsys)
+    assert code == 0, err
+    wb = openpyxl.load_workbook(tmp_path / "fb.xlsx")
+    cell = wb.defined_names["a_2"].attr_text.split("!")[1].replace("$", "")
+    wb["Mechanism"][cell].value = "=50"
+    wb.save(tmp_path / "fb.xlsx")
+    code, err = _run(tmp_path, ["verify", "fb.xlsx"], capsys)
+    lines = err.strip().splitlines()
+    assert code == 2 and len(lines) == 1, err
+    assert f"input a2 (cell {cell}): holds a formula (=50); an input must be a number typed in " \
+        "its cell" in lines[0], lines[0]

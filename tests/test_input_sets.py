@@ -82,6 +82,8 @@ def test_a_term_that_vanishes_at_the_books_inputs_differs_at_another_set(books, 
     edited = EDITED[books[name]] & other.differing()
     assert edited and edited <= report.causes
     assert report.status == 1 and report.differing == len(other.differing())
+    # the largest difference is the other set's, where the wrong term shows
+    assert report.max_abs == other.max_abs > max(c.max_abs for c in report.checks)
     code = cli.main(["verify", str(books[name])])
     lines = capsys.readouterr().out.splitlines()
     assert code == 1 and lines[-1].startswith("DISAGREES: ")
@@ -146,6 +148,8 @@ def test_json_names_the_seed_and_each_input_set(books, capsys):
     assert code == 1 and bad["input_sets"][1]["inputs"] == other["inputs"]
     assert bad["input_sets"][0]["mismatches"] == 0 and bad["input_sets"][1]["differing"]
     assert bad["mismatches"] == bad["input_sets"][1]["mismatches"]
+    assert bad["max_abs_diff"] == bad["input_sets"][1]["max_abs_diff"] > 1e-6
+    assert any(not c["ok"] for c in bad["input_sets"][1]["checks"])
 
 
 def _same(a, b) -> bool:

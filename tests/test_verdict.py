@@ -65,7 +65,7 @@ def test_a_column_missing_from_the_record_is_not_passed(fourbar, tmp_path, capsy
     def unknown_only(wb, meta):            # a column no other formula reads
         meta["summary"].pop("mu_max")
     code, last = _verify(_edited(fourbar, tmp_path / "unknown.xlsx", unknown_only), capsys)
-    assert code == 2 and last.startswith("CANNOT JUDGE 1 formula cells") and "Mechanism!C" in last
+    assert code == 2 and last.startswith("CANNOT JUDGE 1 formula cell ") and "Mechanism!C" in last
 
 
 def test_a_formula_of_the_users_own_is_named(fourbar, tmp_path, capsys):

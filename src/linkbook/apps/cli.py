@@ -64,7 +64,8 @@ VERIFY_OUTPUT = """output:
   book's sheet order, a run down a column as one range: "Sweep!E5:E77"), max_abs_diff, inputs,
   tolerance, checks, seed (null where only the book's own inputs were judged) and input_sets
   (the book's own first: set, inputs, changed, judged, not_judged_because, cells, mismatches,
-  differing)."""
+  differing, not_judged, max_abs_diff, checks); the max_abs_diff above is the largest of
+  every set's."""
 
 
 def _parser():
@@ -385,10 +386,8 @@ def _verify(args) -> int:
     import json
     from ..check.verifier import report_of
     reports = []
-    from ..check.verifier import DEFAULT_SEED
-    seed = DEFAULT_SEED if args.seed is None else args.seed
     for book in args.books:
-        report = report_of(book, args.engine, seed)
+        report = report_of(book, args.engine, args.seed)
         reports.append(report)
         _notes(report.path, report.notes)
         if report.error is not None:
@@ -434,13 +433,17 @@ def _input_sets_data(report) -> list[dict]:
     own = report.differing_cells()
     sets = [{"set": 1, "inputs": report.inputs, "changed": [], "judged": True,
              "not_judged_because": None, "cells": report.cells, "mismatches": len(own),
-             "differing": _ranges(report, own)}]
+             "differing": _ranges(report, own), "not_judged": _ranges(report, report.not_judged),
+             "max_abs_diff": max((c.max_abs for c in report.checks), default=0.0),
+             "checks": [c.as_dict() for c in report.checks]}]
     for s in report.input_sets:
         differ = s.differing()
         sets.append({"set": s.number, "inputs": s.inputs, "changed": s.changed,
                      "judged": s.skipped is None, "not_judged_because": s.skipped,
-                     "cells": len(set().union(*(c.judged for c in s.checks))),
-                     "mismatches": len(differ), "differing": _ranges(report, differ)})
+                     "cells": s.cells, "mismatches": len(differ),
+                     "differing": _ranges(report, differ),
+                     "not_judged": _ranges(report, s.not_judged()),
+                     "max_abs_diff": s.max_abs, "checks": [c.as_dict() for c in s.checks]})
     return sets
 
 
@@ -487,7 +490,10 @@ def _print_report(report, verbose: bool = False) -> None:
     elif report.unjudged or report.not_judged:
         print(f"CANNOT JUDGE {'; '.join(_cannot_judge(report))}; {compared}")
     else:
-        print(f"all agree: {compared}, max |Δ| {report.max_abs:.2e}")
+        skipped = [f"input set {s.number}" for s in report.input_sets if s.skipped is not None]
+        scope = (f" (at the book's own inputs; {', '.join(skipped)} not judged)" if skipped
+                 else "")
+        print(f"all agree{scope}: {compared}, max |Δ| {report.max_abs:.2e}")
 
 
 def _cannot_judge(report) -> list[str]:
@@ -497,7 +503,7 @@ def _cannot_judge(report) -> list[str]:
     kinds = ((report.unjudged, "(the build record does not say what they hold)"),
              (report.not_judged, "too near a singular position (their rounding bound reaches "
                                  f"{DETERMINED:.0%} of their value)"))
-    return [f"{len(cells)} formula cells {why}: "
+    return [f"{_cells(len(cells))} {why}: "
             f"{cell_ranges(_in_book_order(report, cells))}" for cells, why in kinds if cells]
 
 
@@ -537,8 +543,10 @@ def _print_input_sets(report, verbose: bool) -> None:
         name = (f"input set {s.number} (seed {report.seed}; {shown}"
                 f"{', …' if len(moved) > most else ''})")
         if s.ok:
-            cells = len(set().union(*(c.judged for c in s.checks)))
-            print(f"also judged at {name}: agree, {cells} cells compared")
+            unsure = _in_book_order(report, s.not_judged())
+            print(f"also judged at {name}: agree, {s.cells} cells compared"
+                  + (f"; {_cells(len(unsure))} not judged there, too near a singular position: "
+                     f"{cell_ranges(unsure)}" if unsure else ""))
         else:
             only = _in_book_order(report, s.differing() - own)
             print(f"differs at {name}: "
@@ -550,6 +558,10 @@ def _print_input_sets(report, verbose: bool) -> None:
 
 
 INPUTS_SHOWN = 4        # of an input set's values, on its line
+
+
+def _cells(n: int) -> str:
+    return f"{n} formula cell{'' if n == 1 else 's'}"
 
 
 def _positive_int(lo: int, hi: int):

@@ -60,6 +60,20 @@ class InputSet:
     def differing(self) -> set[tuple[str, str]]:
         return {(m.sheet, m.cell) for c in self.checks for m in c.mismatches}
 
+    def not_judged(self) -> set[tuple[str, str]]:
+        """Cells too near a singular position at this set to judge (Check.determines), but
+        for those that differ."""
+        return set().union(*(c.not_judged for c in self.checks)) - self.differing()
+
+    @property
+    def cells(self) -> int:
+        """Formula cells compared with the reference at this set (those not judged left out)."""
+        return len(set().union(*(c.judged for c in self.checks)) - self.not_judged())
+
+    @property
+    def max_abs(self) -> float:
+        return max((c.max_abs for c in self.checks), default=0.0)
+
 
 def other_sets(solver, record: BuildRecord, params: dict[str, float], angles: np.ndarray,
                seed: int, count: int = OTHER_SETS) -> list[InputSet]:

@@ -66,6 +66,9 @@ def inputs_of(wb, record: BuildRecord) -> dict[str, float]:
     for symbol, info in record.inputs.items():
         raw = ws[info.cell].value
         field = f"input {symbol} (cell {info.cell})"
+        if ws[info.cell].data_type == "f":
+            raise UnusableFile(f"{field}: holds a formula ({raw}); an input must be a number "
+                               "typed in its cell")
         if isinstance(raw, str):
             # Text is never a number here, whatever its digits ('1_0', full-width or
             # Arabic-Indic ones): the applications show #VALUE! where Python would read 10.

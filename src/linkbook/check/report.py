@@ -83,7 +83,10 @@ class Report:
 
     @property
     def max_abs(self) -> float:
-        return max((c.max_abs for c in self.checks), default=0.0)
+        """The largest difference from the reference, at the book's own inputs and at the
+        other sets."""
+        return max([c.max_abs for c in self.checks] + [s.max_abs for s in self.input_sets],
+                   default=0.0)
 
 
 

@@ -112,14 +112,14 @@ def _judge_other_sets(wb, record, evaluation, rules: Rules, params: dict, seed: 
     return sets
 
 
-def report_of(path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Report:
+def report_of(path, engine: str = "vector", seed: int | None = None) -> Report:
     """verify(), with a book that cannot be verified at all given as a Report of status 2 whose
     `error` is the one line that says why (the command prints it; the API returns it), so
-    that a status is always there to act on."""
+    that a status is always there to act on. `seed` None: DEFAULT_SEED."""
     from ..base.safety import UnsafeFile
     from ..engine.office import OfficeFailed, OfficeUnavailable
     try:
-        return verify(Path(path), engine, seed)
+        return verify(Path(path), engine, DEFAULT_SEED if seed is None else seed)
     except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:
         said = " ".join(str(exc).split())
         if not said.startswith(f"{path}: "):    # among many books, each line names its own
