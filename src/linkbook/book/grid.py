@@ -81,6 +81,6 @@ def _grid_formula(model, names, input_column, param, out, param_row, place: str)
     try:
         return Resolver(model, names, cells, field="grid.output", place=place).formula(out)
     except InputError as exc:
-        raise InputError(exc.field, f"{str(exc)[len(exc.field) + 2:]}, in each grid cell (all "
-                                    "of it inlined there): grid an earlier column, or leave "
-                                    "out the [grid]") from None
+        raise InputError(exc.field, f"{exc.message}, in each grid cell (all of it inlined "
+                                    "there): grid an earlier column, or leave out the [grid]") \
+            from None

@@ -153,4 +153,4 @@ def _value(c, field: str, raw: object, known: set[str], kind: str) -> None:
         try:
             check_value(field, kind, raw)
         except InputError as exc:
-            raise DescriptionError(field, str(exc)[len(exc.field) + 2:]) from None
+            raise DescriptionError(field, exc.message) from None
