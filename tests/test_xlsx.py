@@ -221,7 +221,8 @@ def test_a_name_defined_twice_is_refused(tmp_path, fourbar_bytes, capsys, first)
     assert "xl/workbook.xml" in last and "is defined twice in the workbook" in last, last
 
 
-SWEEP_TITLES = "<definedName name=\"_xlnm.Print_Titles\" localSheetId=\"1\">'Sweep'!$3:$4,'Sweep'!$A:$A</definedName>"
+SWEEP_TITLES = ("<definedName name=\"_xlnm.Print_Titles\" localSheetId=\"1\">"
+                "'Sweep'!$3:$4,'Sweep'!$A:$A</definedName>")
 
 
 @pytest.mark.parametrize("again", [

@@ -429,22 +429,20 @@ def _as_data(report) -> dict:
 
 
 def _input_sets_data(report) -> list[dict]:
-    """Each input set the formulas were judged at, the book's own first."""
-    own = report.differing_cells()
-    sets = [{"set": 1, "inputs": report.inputs, "changed": [], "judged": True,
-             "not_judged_because": None, "cells": report.cells, "mismatches": len(own),
-             "differing": _ranges(report, own), "not_judged": _ranges(report, report.not_judged),
-             "max_abs_diff": max((c.max_abs for c in report.checks), default=0.0),
-             "checks": [c.as_dict() for c in report.checks]}]
-    for s in report.input_sets:
-        differ = s.differing()
-        sets.append({"set": s.number, "inputs": s.inputs, "changed": s.changed,
-                     "judged": s.skipped is None, "not_judged_because": s.skipped,
-                     "cells": s.cells, "mismatches": len(differ),
-                     "differing": _ranges(report, differ),
-                     "not_judged": _ranges(report, s.not_judged()),
-                     "max_abs_diff": s.max_abs, "checks": [c.as_dict() for c in s.checks]})
-    return sets
+    """Each input set the formulas were judged at, the book's own first, each with the same
+    keys."""
+    def entry(number, inputs, changed, skipped, cells, checks, not_judged) -> dict:
+        differ = differing(checks)
+        return {"set": number, "inputs": inputs, "changed": changed,
+                "judged": skipped is None, "not_judged_because": skipped, "cells": cells,
+                "mismatches": len(differ), "differing": _ranges(report, differ),
+                "not_judged": _ranges(report, not_judged),
+                "max_abs_diff": max((c.max_abs for c in checks), default=0.0),
+                "checks": [c.as_dict() for c in checks]}
+    from ..check.checks import differing
+    return [entry(1, report.inputs, [], None, report.cells, report.checks, report.not_judged),
+            *(entry(s.number, s.inputs, s.changed, s.skipped, s.cells, s.checks,
+                    s.not_judged()) for s in report.input_sets)]
 
 
 def _in_book_order(report, cells) -> list[tuple[str, str]]:

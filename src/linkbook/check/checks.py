@@ -136,6 +136,17 @@ class Check:
 STORED = "stored"      # the block of the check of stored values (stored.py)
 
 
+def differing(checks: list[Check]) -> set[tuple[str, str]]:
+    """The cells that differ in any of `checks`, each once."""
+    return {(m.sheet, m.cell) for c in checks for m in c.mismatches}
+
+
+def undetermined(checks: list[Check]) -> set[tuple[str, str]]:
+    """The cells too near a singular position to judge in any of `checks`
+    (Check.determines), each once; a cell that differs in one of them is counted there."""
+    return set().union(*(c.not_judged for c in checks)) - differing(checks)
+
+
 def expected_of(ref: dict, key: str) -> np.ndarray:
     """Reference values for a column key; `_deg` keys are the degree view of a radian key."""
     if key.endswith("_deg") and key[:-4] in ref:

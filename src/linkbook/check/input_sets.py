@@ -26,7 +26,7 @@ from ..base.record import BuildRecord
 from ..language.domain import LENGTH_UNITS, InputError, check_lengths_together, check_value
 from ..language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
                                    OFFSET_KIND, RATE_KIND)
-from .checks import Check
+from .checks import Check, differing, undetermined
 from .reading import mechanism_size, written_in
 
 DEFAULT_SEED = 1
@@ -58,12 +58,11 @@ class InputSet:
         return all(c.ok for c in self.checks)
 
     def differing(self) -> set[tuple[str, str]]:
-        return {(m.sheet, m.cell) for c in self.checks for m in c.mismatches}
+        return differing(self.checks)
 
     def not_judged(self) -> set[tuple[str, str]]:
-        """Cells too near a singular position at this set to judge (Check.determines), but
-        for those that differ."""
-        return set().union(*(c.not_judged for c in self.checks)) - self.differing()
+        """Cells too near a singular position at this set to judge (Check.determines)."""
+        return undetermined(self.checks)
 
     @property
     def cells(self) -> int:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .checks import STORED, Check
+from .checks import STORED, Check, differing, undetermined
 
 
 @dataclass
@@ -42,8 +42,7 @@ class Report:
         """Cells too near a singular position to judge (Check.determines), each once: compared
         with the reference, but by a bound too wide to tell a wrong formula; a cell that
         differs elsewhere is counted there."""
-        differ = {(m.sheet, m.cell) for c in self.checks for m in c.mismatches}
-        return sorted(set().union(*(c.not_judged for c in self.checks)) - differ)
+        return sorted(undetermined(self.checks))
 
     @property
     def ok(self) -> bool:
@@ -79,7 +78,7 @@ class Report:
 
     def differing_cells(self) -> set[tuple[str, str]]:
         """The cells that differ at the book's own inputs."""
-        return {(m.sheet, m.cell) for c in self.checks for m in c.mismatches}
+        return differing(self.checks)
 
     @property
     def max_abs(self) -> float:

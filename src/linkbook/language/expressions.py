@@ -218,7 +218,7 @@ def is_comparison(raw: object) -> bool:
     which the book's sums would read otherwise than the reference."""
     if not isinstance(raw, str):
         return False
-    return isinstance(ast.parse(raw.replace("^", "**"), mode="eval").body, ast.Compare)
+    return isinstance(parsed("expression", raw), ast.Compare)
 
 
 def _value(node: ast.AST, values: dict[str, float]) -> float:
