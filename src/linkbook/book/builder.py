@@ -15,7 +15,7 @@ from .controls import Control
 from .stroke import grid_is_fine
 from ..base.sheets import GRID, MECH, STROKE
 from ..base.files import write_atomic
-from ..language.excel import one_group
+from ..language.excel import is_direction
 from ..language.model import COLUMN
 from ..base.pause import gc_paused
 from ..language.templates import Sweep, Template
@@ -33,6 +33,7 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
     if table_cells(t) > SMALL_BOOK:
         domain.check_size(*book_size(t, values_needed))
     built = workbook.build(t)
+    check_frames(t, built.model)
     angles = engine.evaluate(built.workbook,
                              only=degree_window_sources(built) | loop_witness_cells(built))
     workbook.set_degree_windows(built, degree_windows(built, angles))
@@ -42,6 +43,35 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
     charts.add_charts(built, t, built.model)
     _print_setup(built.workbook)
     return built, values
+
+
+def check_frames(t: Template, model) -> None:
+    """Refuse a frame whose two points are at one place on every row of the sweep (two ground
+    points at one place, a slide's point on its pivot at offset 0): its direction is
+    undefined, so every cell it places would be #N/A. Where they meet on some rows only (a
+    crank pin passing over a pivot) those rows are #N/A, as the reference says. Measured on
+    the reference's positions with the template's values."""
+    if not model.frames:
+        return
+    import numpy as np
+    from ..check import reference
+    angles = np.array(t.sweep.angles())
+    try:
+        points = reference.solve(t.mechanism.description,
+                                 reference.positions_only(t.values()), angles)["points"]
+    except ValueError:          # what the reference cannot solve, verify says
+        return
+
+    def xy(point: str) -> np.ndarray:
+        return np.array([np.broadcast_to(np.asarray(c, dtype=float), angles.shape)
+                         for c in points[point]])
+    for field, a, b in model.frames:
+        dx, dy = xy(b) - xy(a)
+        met, defined = (dx == 0) & (dy == 0), np.isfinite(dx) & np.isfinite(dy)
+        if met.any() and met[defined].all():
+            raise domain.InputError(field, f"{a} and {b} are at one place on every row of "
+                                           "the sweep: a frame needs two points apart (its "
+                                           "direction is undefined)")
 
 
 def _print_setup(wb) -> None:
@@ -63,7 +93,7 @@ def _cut_columns(built: workbook.Built):
     a rounding error in a sine, which applications do not share, would pick +π or −π."""
     columns = built.record.sweep.columns
     return [(q, columns[q.key]) for q in built.model.of_role(COLUMN)
-            if q.formula.startswith("ATAN2(") and one_group(q.formula)]
+            if is_direction(q.formula)]
 
 
 def degree_window_sources(built: workbook.Built) -> set[tuple[str, str]]:

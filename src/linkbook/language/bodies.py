@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .excel import (PRODUCT, SUM, ZERO, Expr, angle_of_triangle_or_na, lin, local_point, minus,
+from .excel import (PRODUCT, SUM, ZERO, Expr, angle_of_triangle_or_na, lin, local_point,
                     mul, plus, radians, sq, turned)
 from .expressions import expression
 from .fields import as_table
@@ -228,7 +228,7 @@ class BodiesAndLoads:
                                                             f"{body.joints}")
         a, b = map(str, frame)
         name = f"G{body.number}"
-        theta = self._frame_angle(name, a, b)
+        theta = self._frame_angle(f"{where}.centre.frame", name, a, b)
         (axp, ayp) = self.c.points[a]
         if "local" in spec:
             u, v = (self.expression(f"{where}.centre.local[{i}]", spec["local"][i], True)
@@ -259,17 +259,13 @@ class BodiesAndLoads:
                       f"acceleration of G{body.number}, y", (0, body.number))
         return name, (ax, ay)
 
-    def _frame_angle(self, name: str, a: str, b: str) -> Expr:
-        """angle(A→B) of a centre's frame: a link's angle column, else ATAN2 of the points,
-        #N/A where they meet (a slide's link of offset 0 has its point on its pivot), not
-        ATAN2(0, 0)'s #DIV/0! (or LibreOffice's 0)."""
-        theta = self.c.angle_of(a, b)
+    def _frame_angle(self, where: str, name: str, a: str, b: str) -> Expr:
+        """angle(A→B) of a centre's frame (the compiler's angle_of: #N/A where they meet), one
+        alias: the centre's formulas use it more than once."""
+        theta = self.c.angle_of(a, b, where)
         if any(pair in self.c.rigid for pair in ((a, b), (b, a))):
             return theta
-        (ax, ay), (bx, by) = self.c.points[a], self.c.points[b]
-        dx, dy = minus(bx, ax).at_least(SUM), minus(by, ay).at_least(SUM)
-        return Expr(self.w.alias(f"_{name}_frame",
-                                 f"IF(AND({dx}=0,{dy}=0),NA(),{theta.text})"))
+        return Expr(self.w.alias(f"_{name}_frame", theta.text))
 
     def _by_distances(self, where: str, spec: dict, name: str, a: str, b: str, theta: Expr
                       ) -> tuple[str, str]:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .excel import direction, key
 from .model import ALIAS, COLUMN, LENGTH, RAD, Model, Quantity
 
 
@@ -51,11 +52,17 @@ def input_angle(model: Model, key: str, symbol: str) -> None:
     model.add(Quantity(key, symbol, RAD, f"RADIANS({{{key}_deg}})", label="input angle"))
 
 
-def polar(model: Model, dx: str, dy: str, x: Sym, y: Sym, length: Sym, angle: Sym) -> None:
-    """A vector from its components: the calculator's rectangular-to-polar conversion."""
+def polar(model: Model, dx: str, dy: str, x: Sym, y: Sym, length: Sym, angle: Sym,
+          closes: bool = False) -> None:
+    """A vector from its components: the calculator's rectangular-to-polar conversion. Its
+    angle is #N/A where the vector is zero (excel.direction), except for a loop that `closes`
+    on it only where it is not zero (a dyad's P→Q: its triangle needs |PQ| > 0): there the
+    plain ATAN2 keeps a formula a grid inlines short."""
+    atan = f"ATAN2({{{x.key}}},{{{y.key}}})" if closes else \
+        direction(key(x.key), key(y.key)).text
     model.add(
         quantity(x, LENGTH, dx),
         quantity(y, LENGTH, dy),
         quantity(length, LENGTH, f"SQRT({{{x.key}}}^2+{{{y.key}}}^2)"),
-        quantity(angle, RAD, f"ATAN2({{{x.key}}},{{{y.key}}})"),  # Excel's ATAN2 takes x first
+        quantity(angle, RAD, atan),
     )

@@ -11,7 +11,7 @@ import keyword
 from ..base.xlsx import excel_name_problem
 from .columns import Column, Sym, input_angle
 from .dynamics import check_dynamics
-from .excel import ATOM, SUM, Expr, key, minus, references
+from .excel import ATOM, SUM, Expr, direction, key, minus, references
 from .expressions import expression
 from .fields import IDENT, POINT_NAME, RESERVED_KEYS, as_table, as_text, check_keys
 from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS,
@@ -187,14 +187,17 @@ class Compiler:
         cx, cy = self.points[centre]
         self.model.blocks.append(Block(centre, cx.text, cy.text, *direction))
 
-    def angle_of(self, a: str, b: str) -> Expr:
-        """angle(A→B) as Excel text: a known link's angle column, or ATAN2 of the points."""
+    def angle_of(self, a: str, b: str, field: str) -> Expr:
+        """angle(A→B) of the frame `field` names, as Excel text: a known link's angle column,
+        or the direction of the points, #N/A where they meet (build refuses a frame whose
+        points meet on every row: model.frames)."""
         if (a, b) in self.rigid:
             return self.rigid[(a, b)][1]
         if (b, a) in self.rigid:
             return Expr(f"{self.rigid[(b, a)][1].at_least(SUM)}+PI()", SUM)
         (ax, ay), (bx, by) = self.points[a], self.points[b]
-        return Expr(f"ATAN2({minus(bx, ax).text},{minus(by, ay).text})")
+        self.model.frames.append((field, a, b))
+        return direction(minus(bx, ax), minus(by, ay))
 
     def length_of(self, a: str, b: str) -> Expr:
         """|AB|: a known link's length, or the distance of the points."""

@@ -123,6 +123,37 @@ def minus(a: Expr, b: Expr) -> Expr:
     return Expr(f"{a.at_least(SUM)}-{b.at_least(ATOM if b.rank == NEGATION else PRODUCT)}", SUM)
 
 
+def direction(dx: Expr, dy: Expr) -> Expr:
+    """The angle of the vector (dx, dy), ATAN2 (Excel's takes x first), #N/A where both are
+    zero: two points at one place give no direction, and ATAN2(0, 0) is #DIV/0! in Excel and
+    Gnumeric but 0 in LibreOffice. Every frame's and vector's angle is written here."""
+    atan = f"ATAN2({dx.text},{dy.text})"
+    if any(_nonzero_number(d) for d in (dx, dy)):
+        return Expr(atan)
+    tests = [f"{d.text}=0" for d in (dx, dy) if not d.zero]
+    if not tests:
+        return Expr("NA()")
+    test = tests[0] if len(tests) == 1 else f"AND({tests[0]},{tests[1]})"
+    return Expr(f"IF({test},NA(),{atan})")
+
+
+_GUARDED_ATAN2 = re.compile(r"^IF\((?:AND\()?.*,NA\(\),(ATAN2\(.*\))\)$")
+
+
+def is_direction(formula: str) -> bool:
+    """Whether a formula is one angle of a vector as direction() writes it."""
+    guarded = _GUARDED_ATAN2.match(formula)
+    atan = guarded.group(1) if guarded else formula
+    return atan.startswith("ATAN2(") and one_group(atan)
+
+
+def _nonzero_number(e: Expr) -> bool:
+    try:
+        return float(e.text.replace("(", "").replace(")", "")) != 0
+    except ValueError:
+        return False
+
+
 def key(name: str) -> Expr:
     return Expr(f"{{{name}}}")
 

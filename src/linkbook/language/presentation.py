@@ -4,7 +4,7 @@ and the charts. Read after the steps, from what they placed (the compiler's poin
 """
 from __future__ import annotations
 
-from .excel import ATOM, PRODUCT, minus, radians
+from .excel import ATOM, PRODUCT, SUM, direction, minus, radians
 from .fields import as_table, as_text, check_keys
 from .model import COLUMN, LENGTH, RAD, Chart, DescriptionError, FourBarLoop, Joint
 from .schema import keys_of, schema
@@ -101,7 +101,7 @@ class Presentation:
         dx, dy_ = minus(qx, ox), minus(qy, oy)
         ground = (f"ABS({dx.text})" if dy_.zero else f"ABS({dy_.text})" if dx.zero
                   else f"SQRT({dx.at_least(ATOM)}^2+{dy_.at_least(ATOM)}^2)")
-        angle = f"ATAN2({dx.text},{dy_.text})"
+        angle = direction(dx, dy_).at_least(SUM)
         if not crank["phase"].zero:
             angle = f"{angle}-{radians(crank['phase']).at_least(PRODUCT)}"
         return FourBarLoop(ground, crank["length"].text, dy[coupler].text, dy[rocker].text,

@@ -19,6 +19,13 @@ def interior(ux, uy, vx, vy):
     return np.arctan2(np.abs(ux * vy - uy * vx), ux * vx + uy * vy)
 
 
+def direction(dx, dy):
+    """The angle of the vector (dx, dy), NaN where it is zero: two points at one place give
+    no direction (np.arctan2 would say 0)."""
+    dx, dy = np.asarray(dx, dtype=float), np.asarray(dy, dtype=float)
+    return np.where((dx == 0.0) & (dy == 0.0), math.nan, np.arctan2(dy, dx))
+
+
 def cos_sin_deg(deg: float) -> tuple[float, float]:
     """cos and sin of an angle in degrees, exact at multiples of 90° (a horizontal line stays
     exactly horizontal)."""

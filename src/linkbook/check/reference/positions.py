@@ -15,7 +15,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .expressions import branch_sign, evaluate, scalar
-from .geometry import Point
+from .geometry import Point, direction
 from .newton import RES_TOL
 from .step_type import StepType
 
@@ -252,7 +252,7 @@ class Positions:
             angle = angle + math.pi
         else:
             (ax, ay), (bx, by) = self.points[a], self.points[b]
-            return np.arctan2(by - ay, bx - ax), self.coords_fixed(a) and self.coords_fixed(b)
+            return direction(bx - ax, by - ay), self.coords_fixed(a) and self.coords_fixed(b)
         fixed = self.fixed.get(key, False) if key is not None else \
             self.coords_fixed(a) and self.coords_fixed(b)
         return angle, fixed

@@ -65,7 +65,7 @@ def place(c, field: str, s: dict) -> None:
         Column("y", f"y{n}", f"y{n}", f"y of {n}", LENGTH)])
     (px, py), (qx, qy) = c.points[p], c.points[q]
     polar(c.model, minus(px, qx).text, minus(py, qy).text,
-          cols["xs"], cols["ys"], cols["s"], cols["phi"])
+          cols["xs"], cols["ys"], cols["s"], cols["phi"], closes=True)
     p_key = c.length_operand(f"{field}.p_length", f"p_length_{n}", p_len, s["p_length"])
     q_key = c.length_operand(f"{field}.q_length", f"q_length_{n}", q_len, s["q_length"])
     # angle(P→R) from μ, or from the angle at P when μ is hidden and that angle is shown.

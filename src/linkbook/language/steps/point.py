@@ -33,7 +33,7 @@ def place(c, field: str, s: dict) -> None:
                                   RAD, True, shown=False))
     cols = c.columns(field, s, defaults)
     ax, ay = c.points[a]
-    base = c.angle_of(a, b)
+    base = c.angle_of(a, b, f"{field}.frame")
     if form == "local":
         pair = s["local"]
         if not isinstance(pair, list) or len(pair) != 2:

@@ -61,7 +61,7 @@ def place(c, field: str, s: dict) -> None:
     length_key = c.length_operand(f"{field}.length", f"length_{n}", length, s["length"])
     pos = cols["s"].key
     if along:
-        angle = c.angle_of(*along)
+        angle = c.angle_of(*along, f"{field}.along")
         if not direction.zero:
             angle = Expr(plus(angle, radians(direction).text), SUM)
         line = cols["line"]

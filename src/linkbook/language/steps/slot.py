@@ -24,7 +24,7 @@ def place(c, field: str, s: dict) -> None:
         Column("s", f"s_{n}", f"s_{n}", f"{n} along its line from {through}", LENGTH),
         Column("x", f"x{n}", f"x{n}", f"x of {n}", LENGTH),
         Column("y", f"y{n}", f"y{n}", f"y of {n}", LENGTH)])
-    uc, us = turned(c.angle_of(a, b), c.expr(f"{field}.slot_angle",
+    uc, us = turned(c.angle_of(a, b, f"{field}.slot_frame"), c.expr(f"{field}.slot_angle",
                                              s.get("slot_angle", 0)))
     dc, ds = turned(None, c.expr(f"{field}.direction", s.get("direction", 0)))
     (ex, ey), (tx, ty) = c.points[e], c.points[through]

@@ -13,7 +13,7 @@ from functools import partial
 
 import numpy as np
 
-from ..geometry import HALF_PI, Point, interior, near
+from ..geometry import HALF_PI, Point, direction, interior, near
 from ..newton import NEAR_DOUBLE, RES_TOL, TANGENT, Fun, directions, finite, solved_column, sweep
 from ..positions import Positions
 from ..rates import Rates
@@ -75,7 +75,7 @@ def place(solver: Positions, step: Mapping) -> None:
     offset = solver.num(step, "offset")
     b = solver.branch(step)
     xs, ys = P[0] - Q[0], P[1] - Q[1]
-    phi = np.arctan2(ys, xs)
+    phi = direction(xs, ys)
     theta = near(_slide_angles(P, Q, offset, b, solver.size, solver.tol_f), phi - b * HALF_PI)
     ux, uy = np.cos(theta), np.sin(theta)
     x, y = Q[0] + offset * ux, Q[1] + offset * uy

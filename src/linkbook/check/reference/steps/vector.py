@@ -6,6 +6,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from ..geometry import direction
 from ..positions import Positions
 from ..rates import Rates
 from ..step_type import StepType
@@ -20,7 +21,7 @@ def place(solver: Positions, step: Mapping) -> None:
     F, T = solver.known(step, "from"), solver.known(step, "to")
     moving = solver.moves(step["from"], step["to"])
     xs, ys = T[0] - F[0], T[1] - F[1]
-    phi = np.arctan2(ys, xs)
+    phi = direction(xs, ys)
     for col, value in (("xs", xs), ("ys", ys), ("s", np.hypot(xs, ys)), ("phi", phi)):
         k = solver.column(step, col, f"{col}_{key}", value, moving)
     solver.add_link(step["from"], step["to"], phi, k)
