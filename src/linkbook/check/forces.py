@@ -15,7 +15,8 @@ The description is a template's ``[mechanism]`` table (docs/language.md) with it
     at = "C"; force = ["Fx", "Fy"]        # N; or force = { magnitude = "F", angle = "beta" }
     body = ["B0", "B"]; torque = "T4"     # N·m, counter-clockwise, on the body holding these
 
-Every value is a number, a parameter or an expression, which may name the steps' columns too.
+Every value is a number, a parameter or an expression, which may name the steps' columns and
+the rates too (a damper's −c·ω: the kinematic reference's own rates).
 Lengths are in the template's ``length_unit``, converted to metres once: forces in N, moments in
 N·m. A force at a block's point acts on the block, at any other point on the lowest-numbered
 link holding it, unless the load names its link (``body`` beside ``at``).
@@ -24,7 +25,7 @@ Why it is independent: it reads the topology from the description, assembles the
 the constraints, 3 per moving body (ΣF = m·a_G, ΣM = I_G·α, in d'Alembert's form) with the
 reactions as unknowns, and solves them with numpy row by row. All it takes from linkbook is the
 kinematic reference's public ``solve``: the motion of every point, and the evaluation of the
-expressions (as `expression` steps). No closed form of the workbook's is used.
+expressions (as an `expression` step's, after the rates). No closed form of the workbook's is used.
 
 Topology. The rigid bodies are the sets of points that move together: each ``links`` entry and
 each step's links (a crank's pivot and pin, a dyad's two sides, a slider's rod, a slide's link
@@ -411,12 +412,14 @@ def _body_of(top: _Topology, joints: Sequence[str], what: str) -> _Body:
 
 @dataclass
 class _Loads:
-    """What acts on the bodies, as keys of the solved description (`expression` steps appended
-    to it: the reference's parser evaluates them, per row where they name a column; a centre
-    of mass is a `point` step, and so moves with the rest). A vector is ("xy", x, y) or
-    ("polar", magnitude, angle in degrees)."""
+    """What acts on the bodies, as keys of the solved description: each value a formula the
+    reference's parser evaluates after the rates, per row where it names a column or a rate
+    (`values`: solve's `late`); a centre of mass a `point` step appended to the description,
+    and so moving with the rest. A vector is ("xy", x, y) or ("polar", magnitude, angle in
+    degrees)."""
     description: Mapping
     steps: list[dict] = field(default_factory=list)
+    values: dict[str, object] = field(default_factory=dict)
     gravity: tuple[str, str, str] | None = None
     forces: list[tuple[_Body, str, tuple[str, str, str]]] = field(default_factory=list)
     torques: list[tuple[_Body, str]] = field(default_factory=list)
@@ -426,8 +429,8 @@ class _Loads:
     def value(self, formula: object, what: str) -> str:
         if isinstance(formula, bool) or not isinstance(formula, (int, float, str)):
             raise ValueError(f"{what}: expected a number or an expression, got {formula!r}")
-        key = f"{_OWN}{len(self.steps)}"
-        self.steps.append({"type": "expression", "key": key, "formula": formula})
+        key = f"{_OWN}{len(self.values)}"
+        self.values[key] = formula
         return key
 
     def vector(self, spec, what: str) -> tuple[str, str, str]:
@@ -717,21 +720,37 @@ def _load_equations(top: _Topology, loads: _Loads, rows: _Rows, system: _System)
 def _solve_rows(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """x with A·x = b on every row, and each row's condition number. Rows and columns are
     scaled by their largest entries first (forces and moments, metres and ones); a row with a
-    NaN or a condition number above SINGULAR is NaN."""
+    NaN in A or a condition number above SINGULAR is NaN. A known load that is NaN (a load
+    that is an error on its row) makes NaN only the unknowns that depend on it (_unreached)."""
     n, k = b.shape
-    finite = np.isfinite(A).all(axis=(1, 2)) & np.isfinite(b).all(axis=1)
+    finite = np.isfinite(A).all(axis=(1, 2))
+    missing = ~np.isfinite(b) & finite[:, None]
     A = np.where(finite[:, None, None], A, np.eye(k))
     big = np.maximum(np.abs(A).max(axis=2), np.finfo(float).tiny)
-    A, b = A / big[..., None], np.where(finite[:, None], b, 0.0) / big
+    A, b = A / big[..., None], np.where(finite[:, None] & ~missing, b, 0.0) / big
     col = np.maximum(np.abs(A).max(axis=1, keepdims=True), np.finfo(float).tiny)
     A = A / col
     cond = np.linalg.cond(A) if n else np.zeros(0)
     ok = finite & (cond < SINGULAR)
-    y = np.linalg.solve(np.where(ok[:, None, None], A, np.eye(k)),
-                        np.where(ok[:, None], b, 0.0)[..., None])[..., 0]
+    A = np.where(ok[:, None, None], A, np.eye(k))
+    y = np.linalg.solve(A, np.where(ok[:, None], b, 0.0)[..., None])[..., 0]
     x = y / col[:, 0, :]
     x[~ok] = np.nan
+    x[_reached(A, missing & ok[:, None])] = np.nan
     return x, np.where(finite, cond, np.nan)
+
+
+def _reached(A: np.ndarray, missing: np.ndarray) -> np.ndarray:
+    """Per row, the unknowns a missing entry of b reaches: x_i depends on b_j where
+    (A⁻¹)_ij is not zero (A scaled: its inverse's entries are of order one, and those that
+    are zero by the system's structure come out below 1e-12 of the largest)."""
+    out = np.zeros(missing.shape, dtype=bool)
+    rows = np.nonzero(missing.any(axis=1))[0]
+    if rows.size:
+        inverse = np.abs(np.linalg.inv(A[rows]))
+        reach = np.einsum("rij,rj->ri", inverse, missing[rows].astype(float))
+        out[rows] = reach > 1e-12 * inverse.max(axis=(1, 2))[:, None]
+    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -805,8 +824,8 @@ def forces(description: Mapping, params: Mapping[str, float], angles_deg,
     top = topology(description)
     loads = _read_loads(description, top)
     angles = np.atleast_1d(np.asarray(angles_deg, dtype=float))
-    rows = _Rows(solve(loads.described(), params, angles, turns), len(angles),
-                 LENGTH_UNITS[length_unit])
+    rows = _Rows(solve(loads.described(), params, angles, turns, late=loads.values),
+                 len(angles), LENGTH_UNITS[length_unit])
     with np.errstate(invalid="ignore", divide="ignore"):
         system = _equations(top, loads, rows)
         x, cond = _solve_rows(system.A, system.b)

@@ -5,6 +5,7 @@ and loads"). The writer (forces.py) solves the groups; this part says what is kn
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 from .excel import (PRODUCT, SUM, ZERO, Expr, angle_of_triangle_or_na, lin, local_point,
@@ -15,6 +16,8 @@ from .mechanisms import TO_METRES
 from .model import ACCEL, LENGTH, DescriptionError
 
 GROUND = 1
+# what can make a value another error than #N/A: a division, a power, ATAN2(0, 0)
+_CAN_FAIL = re.compile(r"[/^]|ATAN2\(")
 METRES = TO_METRES           # the named cell of metres per length unit
 METRES_REF = f"{{{METRES}}}"    # the placeholder of that cell in a formula
 
@@ -45,7 +48,10 @@ class BodiesAndLoads:
     and calls the writer's `add` and `holders` (forces.ForceWriter)."""
 
     def expr(self, where: str, raw: object) -> str:
-        return self.expression(where, raw).text
+        """A mass, an inertia or a load as formula text, #N/A where its value is an error (a
+        division by zero on some row): verify's reference has no other error."""
+        text = self.expression(where, raw).text
+        return f"IFERROR({text},NA())" if _CAN_FAIL.search(text) else text
 
     def expression(self, where: str, raw: object, constant: bool = False):
         """A value of the force keys: what an `expression` step may name, and to_metres; a

@@ -19,7 +19,7 @@ from .mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, LOAD_UNITS, MOTIO
 from .model import (ALIAS, COLUMN, CONSTANT, LENGTH, RAD, Block, DescriptionError, Guide, Model,
                     Quantity)
 from .forces import ForceWriter
-from .motion import MotionWriter
+from .motion import MotionWriter, readable_rates
 from .presentation import Presentation
 from .schema import keys_of, schema
 from .steps import COMMON_KEYS, STEPS
@@ -225,7 +225,8 @@ class Compiler:
         Presentation(self).read(d)
         motion = MotionWriter(self)
         motion.run()
-        check_dynamics(self, d, steps_keys)       # last: a problem of the steps explains more
+        # last: a problem of the steps explains more
+        check_dynamics(self, d, steps_keys | readable_rates(self.model))
         if any(k in d for k in FORCE_KEYS):
             ForceWriter(self, motion).run()
         return self.model

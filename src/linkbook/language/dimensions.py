@@ -105,6 +105,10 @@ class _Dimensions:
         if name == "IF":
             self.dim(args[0])
             return self.same(args[1:])
+        if name in ("AND", "OR", "NOT", "SIGN"):      # TRUE, FALSE, -1, 0, 1: numbers
+            for a in args:
+                self.dim(a)
+            return Fraction(0)
         if name in ("ABS", "MIN", "MAX", "IFERROR"):
             return self.same(args)
         return None                                   # PI(), NA(): numbers

@@ -3,8 +3,8 @@
 
 The schema has checked their shape already; here each name must be one the mechanism has (a
 link's joints its points, a centre's frame two of those joints, a load's point a point) and each
-value an expression of what an `expression` step may use, and `to_metres` (metres per length
-unit: a load may convert a length with it). Nothing is written into the model: a
+value an expression of what an `expression` step may use, the Motion sheet's rates (a damper's
+−c·ω) and `to_metres` (metres per length unit: a load may convert a length with it). Nothing is written into the model: a
 book built from a description with these keys is the book built without them.
 """
 from __future__ import annotations
@@ -27,7 +27,9 @@ _CENTRE_FORMS = {"local": set(), "distances": {"side"}, "distance": {"angle"}}
 def check_dynamics(c, data: dict, steps_keys: set[str]) -> None:
     """Check the description's dynamics, bodies and loads against the compiled steps of `c`
     (a Compiler that has placed every step); `steps_keys`: the keys of the quantities the steps
-    placed, which their expressions may name as an `expression` step's formula does."""
+    placed, which their expressions may name as an `expression` step's formula does, and the
+    Motion sheet's rates (a mass, an inertia and a load may read them; a centre and gravity
+    only the parameters)."""
     for key in KEYS:
         found = mechanism_key_problem(key, data[key]) if key in data else None
         if found:

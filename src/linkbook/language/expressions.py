@@ -17,7 +17,9 @@ from .model import DescriptionError
 # name -> number of arguments (None: one or more)
 FUNCTIONS = {"SQRT": 1, "ABS": 1, "SIN": 1, "COS": 1, "TAN": 1, "ASIN": 1, "ACOS": 1, "ATAN": 1,
              "ATAN2": 2, "RADIANS": 1, "DEGREES": 1, "PI": 0, "MIN": None, "MAX": None,
-             "IF": 3, "IFERROR": 2, "NA": 0}
+             "IF": 3, "IFERROR": 2, "NA": 0, "AND": None, "OR": None, "NOT": 1, "SIGN": 1}
+# the functions whose value is TRUE or FALSE, as a comparison's
+LOGICAL = ("AND", "OR", "NOT")
 _COMPARE = {ast.Gt: ">", ast.GtE: ">=", ast.Lt: "<", ast.LtE: "<=", ast.Eq: "=", ast.NotEq: "<>"}
 # What an expression may be (docs/language.md): the readers of an expression — Python's parser,
 # the writer here, the reference's reader — recurse once per level, so a text of thousands of
@@ -214,11 +216,13 @@ def _zero(node: ast.AST, values: dict[str, float]) -> bool:
 
 
 def is_comparison(raw: object) -> bool:
-    """Whether an expression's value is TRUE or FALSE (a comparison outside any function),
-    which the book's sums would read otherwise than the reference."""
+    """Whether an expression's value is TRUE or FALSE (a comparison, AND, OR or NOT outside any
+    other function), which the book's sums would read otherwise than the reference."""
     if not isinstance(raw, str):
         return False
-    return isinstance(parsed("expression", raw), ast.Compare)
+    tree = parsed("expression", raw)
+    return isinstance(tree, ast.Compare) or isinstance(tree, ast.Call) and \
+        isinstance(tree.func, ast.Name) and tree.func.id.upper() in LOGICAL
 
 
 def _value(node: ast.AST, values: dict[str, float]) -> float:
@@ -270,4 +274,5 @@ _EXCEL = {"SQRT": math.sqrt, "ABS": abs, "SIN": math.sin, "COS": math.cos, "TAN"
           "ASIN": math.asin, "ACOS": math.acos, "ATAN": math.atan,
           "ATAN2": lambda x, y: math.atan2(y, x), "RADIANS": math.radians,
           "DEGREES": math.degrees, "PI": lambda: math.pi, "MIN": min, "MAX": max,
-          "NA": _not_available}
+          "NA": _not_available, "SIGN": lambda x: float((x > 0) - (x < 0)),
+          "AND": lambda *a: all(a), "OR": lambda *a: any(a), "NOT": lambda x: not x}

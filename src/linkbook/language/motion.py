@@ -36,6 +36,12 @@ def rate_symbol(symbol: str, order: int, angle: bool) -> str:
     return symbol[0] + ("\u0307", "\u0308")[order - 1] + symbol[1:]
 
 
+def readable_rates(model) -> set[str]:
+    """The Motion sheet's keys a load may read (docs/language.md): every rate, not a loop's
+    determinant (its sign and scale are the writer's choice, not a quantity of the motion)."""
+    return {q.key for q in model.of_role(MOTION) if not q.key.startswith("det_")}
+
+
 class MotionWriter:
     """Adds the Motion sheet's quantities to a compiled model (compiler.Compiler's state): each
     step type's rates (steps package) through the helpers here."""

@@ -12,10 +12,12 @@ import numpy as np
 from .positions import Positions
 from .rates import MOTION_PARAMS, Rates
 from .steps import STEP_TYPES
+from .steps.expression import evaluate_late
 
 
 def solve(description: Mapping, params: Mapping[str, float], angles_deg,
-          turns: Mapping[str, np.ndarray] | None = None) -> dict:
+          turns: Mapping[str, np.ndarray] | None = None,
+          late: Mapping[str, object] | None = None) -> dict:
     """Position analysis of a described mechanism at each input angle (degrees, 1-D array-like).
 
     description: the [mechanism] table of a template as parsed by tomllib (input, ground, steps,
@@ -35,6 +37,9 @@ def solve(description: Mapping, params: Mapping[str, float], angles_deg,
     own choice; a formula of the angle itself (a load `T*theta14`) then means what it means
     with the angle as shown.
 
+    late: {key: formula} evaluated after the rates, as an `expression` step's formula but
+    reading the rates too (a load: a damper's −c·ω); each value comes back under its key.
+
     Raises ValueError for a malformed description (unknown step type, unknown point, unknown
     parameter, a branch not ±1, a key written twice, ...).
     """
@@ -45,11 +50,14 @@ def solve(description: Mapping, params: Mapping[str, float], angles_deg,
         solver = Positions(description, params, angles, STEP_TYPES, turns)
         out = solver.run()
         speed, accel = MOTION_PARAMS["angle" if solver.angle_input else "length"]
+        rates = {}
         if speed in params and accel in params:
-            out.update(Rates(solver, description, float(params[speed]),
-                             float(params[accel])).run())
+            rates = Rates(solver, description, float(params[speed]), float(params[accel])).run()
+            out.update(rates)
             if solver.angle_input:
                 out["rpm_in"] = float(params[speed]) * 30.0 / math.pi   # rad/s in rev/min
+        if late:
+            out.update(evaluate_late(solver, rates, late))
         return out
 
 

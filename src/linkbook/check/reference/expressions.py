@@ -8,6 +8,7 @@ grammar. Any error Excel would show (#NUM!, #DIV/0!, #N/A) is NaN.
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from collections.abc import Callable, Mapping
@@ -57,6 +58,21 @@ def _iferror(a, b):
     return _clean(np.where(np.isnan(a), b, a))
 
 
+def _logical(fn):
+    """AND, OR: TRUE (1) or FALSE (0) of numbers (non-zero is TRUE); an error propagates."""
+    def f(*args):
+        values = [np.asarray(a, dtype=float) for a in args]
+        error = functools.reduce(np.logical_or, [np.isnan(v) for v in values])
+        value = functools.reduce(fn, [v != 0.0 for v in values])
+        return np.where(error, math.nan, np.asarray(value, dtype=float))
+    return f
+
+
+def _not(x):
+    x = np.asarray(x, dtype=float)
+    return np.where(np.isnan(x), math.nan, (x == 0.0).astype(float))
+
+
 def _extreme(fn):
     def f(*args):
         out = np.asarray(args[0], dtype=float)
@@ -85,6 +101,10 @@ _FUNCTIONS: dict[str, tuple[int | None, Callable]] = {
     "IF": (3, _if),
     "IFERROR": (2, _iferror),
     "NA": (0, lambda: np.asarray(math.nan)),
+    "AND": (None, _logical(np.logical_and)),
+    "OR": (None, _logical(np.logical_or)),
+    "NOT": (1, _not),
+    "SIGN": (1, _np1(np.sign)),
 }
 
 
@@ -276,7 +296,7 @@ def _run(tree: tuple, env: Mapping[str, object], text: str):
 def evaluate(expr: object, env: Mapping[str, object]):
     """Value of an expression of the mechanism language: a number, or text in Excel syntax
     (symbols, numbers, + - * / ^, comparisons, parentheses and SQRT ABS SIN COS TAN ASIN ACOS
-    ATAN ATAN2(x, y) RADIANS DEGREES PI() MIN MAX IF IFERROR NA()) over env: {name: number or
+    ATAN ATAN2(x, y) RADIANS DEGREES PI() MIN MAX IF IFERROR NA() AND OR NOT SIGN) over env: {name: number or
     array}. A float when every name it uses is a number, else an array. A domain error (SQRT of
     a negative, a division by zero, ...) gives NaN, as Excel shows an error; a malformed
     expression or an unknown name raises ValueError."""

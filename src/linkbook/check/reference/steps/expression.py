@@ -23,16 +23,27 @@ def place(solver: Positions, step: Mapping) -> None:
         raise ValueError(f"{solver.where}: missing key")
     if "formula" not in step:
         raise ValueError(f"{solver.where}: missing formula")
-    # The workbook makes it one named cell when every name it uses is fixed (a parameter, a
-    # constant, a hidden value independent of the input angle); such names are passed as
-    # floats, so that the value comes back as a float.
-    env = {k: (float(np.asarray(v).flat[0]) if solver.fixed.get(k) and np.ndim(v) and solver.n
-               else _turned(v, solver.turns.get(k))) for k, v in solver.env.items()}
-    value = evaluate(step["formula"], env)
+    value = evaluate(step["formula"], env_of(solver))
     if isinstance(value, float):
         solver.put(key, value, True)
     else:
         solver.put(key, np.broadcast_to(value, (solver.n,)).astype(float), False)
+
+
+def env_of(solver: Positions) -> dict:
+    """What an expression reads: the parameters, the input and every column so far. The
+    workbook makes it one named cell when every name it uses is fixed (a parameter, a constant,
+    a hidden value independent of the input angle); such names are passed as floats, so that
+    the value comes back as a float. An angle is read in the turn an evaluation shows."""
+    return {k: (float(np.asarray(v).flat[0]) if solver.fixed.get(k) and np.ndim(v) and solver.n
+                else _turned(v, solver.turns.get(k))) for k, v in solver.env.items()}
+
+
+def evaluate_late(solver: Positions, rates: Mapping, formulas: Mapping[str, object]) -> dict:
+    """Formulas that may read the rates as well (a load: a damper's −c·ω), evaluated after
+    them: {key: a float, or an array over the rows}."""
+    env = {**env_of(solver), **rates}
+    return {key: evaluate(formula, env) for key, formula in formulas.items()}
 
 
 def _turned(angle, shown):
