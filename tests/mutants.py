@@ -118,6 +118,12 @@ MUTANTS = [
            "                pass\n",
            [(f"{FORCES}/fourbar.toml", ["--set", "alpha_in=50"]),
             (f"{FORCES}/watt-sixbar.toml", [])]),
+    Mutant("force friction sign: a torque load written with its sign flipped (the four-bar's "
+           "friction −T4·SIGN(ω14) drives its rocker)",
+           "src/linkbook/language/bodies.py",
+           'body.couples.append(self.expr(f"{where}.torque", load["torque"]))',
+           'body.couples.append(lin((-1, self.expr(f"{where}.torque", load["torque"]))))',
+           [("fourbar", [])]),
     Mutant("force column: a pin force's size not written",
            "src/linkbook/language/forces.py",
            'self.add(key, key, NEWTON, f"SQRT({sq(x)}+{sq(y)})", f"{what}, size", (2, pair))',

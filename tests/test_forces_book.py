@@ -239,17 +239,27 @@ class Motion(SIMotion):
         return vel, acc, w, al
 
 
-def power_terms(t: templates.Template, params: dict, motion: Motion, effort) -> list:
+# Excel's functions a load may use, as numpy's (Python's eval reads the load's text)
+EXCEL = {"SIGN": np.sign, "IF": np.where, "AND": np.logical_and, "OR": np.logical_or,
+         "NOT": np.logical_not, "ABS": np.abs, "SQRT": np.sqrt, "PI": lambda: math.pi}
+
+
+def power_terms(t: templates.Template, params: dict, motion: Motion, effort,
+                book: dict | None = None) -> list:
     """The terms of T12·ω12 (or F_in·v_in) + Σ F·v_P + Σ T·ω + Σ m g·v_G − Σ (m a_G·v_G + I α ω),
     which sum to zero on every row: the links are rigid, the pins and guides frictionless, so
-    the power of every effort goes into the kinetic energy. `effort`: the book's T12 or F_in."""
+    the power of every effort goes into the kinetic energy (a damper's or a friction's power
+    is a load's). `effort`: the book's T12 or F_in; `book`: the book's own Motion columns on
+    those rows, which a load that reads the motion reads (book_rates)."""
     d = t.mechanism.description
 
-    def number(raw) -> float:
-        """A value of the description: a number, a parameter or arithmetic of parameters."""
+    def number(raw):
+        """A value of the description: a number, a parameter or arithmetic of parameters and
+        the book's rates, per row."""
         if not isinstance(raw, str):
             return float(raw)
-        return float(eval(raw.replace("^", "**"), {"__builtins__": {}}, dict(params)))
+        return np.asarray(eval(raw.replace("^", "**"), {"__builtins__": {}},
+                               {**EXCEL, **params, **(book or {})}), dtype=float)
 
     speed = params["omega_in"] if t.mechanism.input_is_angle else \
         params["v_in"] * METRES[t.length_unit]
@@ -292,7 +302,9 @@ def assert_power_balance(t: templates.Template, built, values) -> int:
     params = t.values()
     motion = Motion(t, params, inputs)
     terms = power_terms(t, params, motion,
-                        np.array([e for e, ok in zip(efforts, solved) if ok], dtype=float))
+                        np.array([e for e, ok in zip(efforts, solved) if ok], dtype=float),
+                        {**book_rates(built, values, rows), t.mechanism.input_key:
+                         np.radians(inputs) if t.mechanism.input_is_angle else np.asarray(inputs)})
     residual = sum(terms)
     size = sum(np.abs(term) for term in terms)
     # a row at a dead centre has no velocities in the kinematic reference (its power cannot be
@@ -308,6 +320,15 @@ def assert_power_balance(t: templates.Template, built, values) -> int:
     worst = np.argmax(np.abs(residual) - bound)
     assert np.all(np.abs(residual) <= bound), (rows[worst], residual[worst], size[worst])
     return len(rows)
+
+
+def book_rates(built, values, rows) -> dict:
+    """The book's own Motion columns on these rows (the Forces sheet's rows are the Motion
+    sheet's): what a load that reads the motion reads in the book."""
+    motion = built.meta["motion"]
+    cell = (lambda v: v if isinstance(v, float) else math.nan)     # #N/A: NaN
+    return {key: np.array([cell(values[(motion["sheet"], f"{letter}{r}")]) for r in rows])
+            for key, letter in motion["columns"].items()}
 
 
 def coarse(t: templates.Template, values: dict) -> templates.Template:

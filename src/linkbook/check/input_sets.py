@@ -167,7 +167,7 @@ def _natural_scales(record: BuildRecord, input_kind: str, params: dict[str, floa
     force = typical("force", mass * GRAVITY)
     by_kind = {"mass": mass, "inertia": typical("inertia", mass * metres ** 2 / 12),
                "force": force, "torque": typical("torque", force * metres),
-               "acceleration": GRAVITY,
+               "acceleration": GRAVITY, "damping": typical("damping", force * metres / OMEGA),
                OFFSET_KIND: OFFSET_SHARE * min((abs(v) for s, v in params.items()
                                                 if kinds[s] == LENGTH_KIND), default=size)}
     out = {s: by_kind[k] for s, k in kinds.items() if k in by_kind}

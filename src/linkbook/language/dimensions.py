@@ -9,7 +9,7 @@ from fractions import Fraction
 from .expressions import value_of
 from .mechanisms import LENGTH_KIND, MOTION_SYMBOLS, OFFSET_KIND, Mechanism
 from .bodies import METRES
-from .model import LENGTH, Model
+from .model import ACCEL, AREA, LENGTH, SPEED, Model
 from .steps import STEPS
 
 # The power of length each expression stands for: a parameter of kind length or offset, a
@@ -123,6 +123,9 @@ def _dimension_word(d: Fraction) -> str:
         d, f"a length to the power {d}")
 
 
+LENGTH_DIMENSIONS = {LENGTH: 1, SPEED: 1, ACCEL: 1, AREA: 2}
+
+
 def unconvertible(mechanism: Mechanism, model: Model) -> tuple[str, str] | None:
     """(field, why) of the first place a description writes a length as a number (or mixes
     a length with a number), so that a change of length unit could not convert it; None when
@@ -131,7 +134,8 @@ def unconvertible(mechanism: Mechanism, model: Model) -> tuple[str, str] | None:
     dims = {symbol: int(kind in (LENGTH_KIND, OFFSET_KIND))
             for symbol, kind in mechanism.parameters.items()}
     dims.update({s: 1 for s in MOTION_SYMBOLS[LENGTH_KIND]})
-    dims.update({q.key: int(q.unit == LENGTH) for q in model.quantities})
+    # a velocity and an acceleration carry one length (per second: a load reads the rates)
+    dims.update({q.key: LENGTH_DIMENSIONS.get(q.unit, 0) for q in model.quantities})
     dims[mechanism.input_key] = int(not mechanism.input_is_angle)
     for name, xy in (description.get("ground") or {}).items():
         for i, raw in enumerate(xy):
