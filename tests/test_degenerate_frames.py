@@ -15,8 +15,8 @@ from linkbook.engine import office
 from linkbook.language import templates
 
 # A crank A0-A of 35 and a ground point P0 at (35, 0): at θ12 = 0 the crank pin A is exactly
-# on P0, so D, carried by the frame A→P0, has no place there (and only there: the sweep stops
-# at 330° so that no row lands a rounding error away from P0).
+# on P0, so D, carried by the frame A→P0, has no place there, and the vector P0→A no angle
+# (and only there: the sweep stops at 330° so that no row lands a rounding error from P0).
 PASSING = """
 title = "a point framed on a crank pin and a pivot it passes over"
 length_unit = "mm"
@@ -42,6 +42,11 @@ type = "point"
 point = "D"
 frame = ["A", "P0"]
 local = [10, 5]
+[[mechanism.steps]]
+type = "vector"
+from = "P0"
+to = "A"
+key = "r"
 """
 # the same frame on two ground points at one place: D is nowhere on any row
 ONE_PLACE = PASSING.replace('P0 = ["a2", 0]', 'P0 = ["a1", 0]').replace(
@@ -49,15 +54,17 @@ ONE_PLACE = PASSING.replace('P0 = ["a2", 0]', 'P0 = ["a1", 0]').replace(
 
 
 def _book(tmp_path, text: str):
-    """The built book's path, and where D's cells are on the row θ12 = 0."""
+    """The built book's path, and where D's cells and the vector's angle are on the row
+    θ12 = 0."""
     toml = tmp_path / "frame.toml"
     toml.write_text(text, encoding="utf-8")
     path = tmp_path / "frame.xlsx"
     built = builder.build_file(templates.load(str(toml)), path)
     sweep, motion = built.meta["sweep"], built.meta["motion"]
-    cells = [("Sweep", f"{sweep['columns'][k]}{sweep['rows'][0]}") for k in ("xD", "yD")]
+    cells = [("Sweep", f"{sweep['columns'][k]}{sweep['rows'][0]}")
+             for k in ("xD", "yD", "phi_r")]
     cells += [("Motion", f"{letter}{motion['rows'][0]}")
-              for k, letter in motion["columns"].items() if k.endswith("_D")]
+              for k, letter in motion["columns"].items() if k.endswith(("_D", "_phi_r"))]
     return path, cells
 
 
@@ -88,7 +95,7 @@ def test_a_crank_pin_passing_over_a_pivot_is_na_there_and_verifies(tmp_path):
     report = linkbook.verify(path)
     assert report.status == 0, report.differing
     values = engine.evaluate_file(path)
-    assert len(cells) == 6 and {_code(values[c]) for c in cells} == {"#N/A"}
+    assert len(cells) == 9 and {_code(values[c]) for c in cells} == {"#N/A"}
     assert isinstance(values[("Sweep", cells[0][1].replace("5", "6"))], float)
     assert not any(_code(v) == "#DIV/0!" for v in values.values())
 
