@@ -14,6 +14,7 @@ import pytest
 import linkbook
 from linkbook.book import builder
 from linkbook.check.reference import solve
+from linkbook.engine import evaluator as engine
 from linkbook.language import templates
 from test_forces_book import assert_power_balance, assert_verified
 
@@ -87,3 +88,25 @@ def test_libreoffice_recalculates_a_damped_book_as_the_references(tmp_path):
     builder.build_file(case("inverted-slider-crank-damper"), path)
     report = linkbook.verify(path, engine="libreoffice")
     assert report.status == 0, report.differing
+
+
+def test_a_load_that_is_an_error_on_one_row_is_na_there_and_only_what_it_reaches():
+    """A torque on the crank that divides by zero at θ12 = 180° exactly (RADIANS(180) is PI()):
+    the book shows #N/A there (not #DIV/0!) in the driving torque, the reference has no value
+    there either, and the pins, which a couple on the crank does not reach, stay numbers in
+    both."""
+    data = tomllib.loads((templates.TEMPLATE_DIR / "fourbar.toml").read_text(encoding="utf-8"))
+    data["mechanism"]["loads"].append(
+        {"body": ["A0", "A"], "torque": "IF(theta12 > 3, 0.01/(theta12 - PI()), 0)"})
+    built, values = builder.make(templates.from_data("pole", data))
+    assert_verified(built, values)
+    forces = built.meta["forces"]
+    row = forces["rows"][0] + 36                                  # θ12 = 180°
+    assert values[(forces["sheet"], f"A{row}")] == 180
+
+    def at(key: str, r: int = row):
+        value = values[(forces["sheet"], f"{forces['columns'][key]}{r}")]
+        return engine.error_code(value) if engine.is_error(value) else value
+    assert at("T12") == "#N/A"
+    assert all(isinstance(at(key), float) for key in ("F12x", "F23x", "F34x", "F14x"))
+    assert isinstance(at("T12", row + 1), float)
