@@ -721,7 +721,7 @@ def _solve_rows(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """x with A·x = b on every row, and each row's condition number. Rows and columns are
     scaled by their largest entries first (forces and moments, metres and ones); a row with a
     NaN in A or a condition number above SINGULAR is NaN. A known load that is NaN (a load
-    that is an error on its row) makes NaN only the unknowns that depend on it (_unreached)."""
+    that is an error on its row) makes NaN only the unknowns that depend on it (_reached)."""
     n, k = b.shape
     finite = np.isfinite(A).all(axis=(1, 2))
     missing = ~np.isfinite(b) & finite[:, None]

@@ -4,8 +4,9 @@
 The schema has checked their shape already; here each name must be one the mechanism has (a
 link's joints its points, a centre's frame two of those joints, a load's point a point) and each
 value an expression of what an `expression` step may use, the Motion sheet's rates (a damper's
-−c·ω) and `to_metres` (metres per length unit: a load may convert a length with it). Nothing is written into the model: a
-book built from a description with these keys is the book built without them.
+−c·ω) and `to_metres` (metres per length unit: a load may convert a length with it). Nothing is
+written into the model: a book built from a description with these keys is the book built
+without them.
 """
 from __future__ import annotations
 

@@ -17,7 +17,7 @@ RATE_KIND = "rate"     # the input's speed or acceleration: any number
 # Kinds of the loads' parameters (docs/language.md, "Mass, gravity and loads"), each in the one
 # SI unit the force analysis reads it in, whatever the book's length unit.
 LOAD_UNITS = {"mass": "kg", "inertia": "kg·m²", "force": "N", "torque": "N·m",
-              "acceleration": "m/s²", "damping": "N·m·s"}     # damping: a damper's torque per rad/s
+              "acceleration": "m/s²", "damping": "N·m·s"}    # a rotary damper's torque per rad/s
 NOT_NEGATIVE_KINDS = ("mass", "inertia")
 # How a unit is typed on a keyboard without · and ²: kg*m^2, kg m^2, N.m, m/s**2, m / s^2
 PRODUCT_SIGNS = re.compile(r"\s*[*.·⋅]\s*|(?<=[A-Za-z])\s+(?=[A-Za-z])")
