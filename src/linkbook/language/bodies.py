@@ -16,8 +16,9 @@ from .mechanisms import TO_METRES
 from .model import ACCEL, LENGTH, DescriptionError
 
 GROUND = 1
-# what can make a value another error than #N/A: a division, a power, ATAN2(0, 0)
-_CAN_FAIL = re.compile(r"[/^]|ATAN2\(")
+# what can make a value another error than #N/A: a division (but by a whole number), a power
+# (but a whole one), ATAN2(0, 0)
+_CAN_FAIL = re.compile(r"[/^](?![1-9]\d*(?![\d.E]))|ATAN2\(")
 METRES = TO_METRES           # the named cell of metres per length unit
 METRES_REF = f"{{{METRES}}}"    # the placeholder of that cell in a formula
 
