@@ -4,6 +4,7 @@ reference names the same cells undefined; a frame whose points meet on every row
 from __future__ import annotations
 
 import os
+import tomllib
 
 import pytest
 
@@ -82,12 +83,28 @@ def test_a_frame_whose_points_meet_on_every_row_is_refused_naming_it(tmp_path):
     assert not (tmp_path / "frame.xlsx").exists()
 
 
-def test_a_slide_of_offset_zero_framing_its_link_on_its_pivot_is_refused(tmp_path):
-    """The inverted slider-crank's link 4 has its centre in the frame B0→B; at offset 0 the
-    foot B is the pivot B0 on every row."""
-    with pytest.raises(InputError, match=r"mechanism\.bodies\[2\]\.centre\.frame: B0 and B "
-                                         r"are at one place on every row"):
-        linkbook.build("inverted-slider-crank", tmp_path / "x.xlsx", sets=["a4=0"])
+def test_a_point_framed_on_a_slides_pivot_and_foot_at_offset_zero_is_refused():
+    """The lever framed on its pivot B0 and the slide's foot B: at offset 0 the foot is the
+    pivot on every row."""
+    data = tomllib.loads(
+        (templates.TEMPLATE_DIR / "inverted-slider-crank.toml").read_text(encoding="utf-8"))
+    data["parameters"]["a4"]["value"] = 0
+    del data["mechanism"]["columns"]
+    data["mechanism"]["steps"].append({"type": "point", "point": "E", "frame": ["B0", "B"],
+                                       "local": [50, 0]})
+    with pytest.raises(InputError, match=r"mechanism\.steps\[\d\] \(point E\)\.frame: B0 and "
+                                         r"B are at one place on every row"):
+        builder.make(templates.from_data("lever", data))
+
+
+def test_a_centre_framed_on_a_slides_pivot_and_foot_at_offset_zero_is_a_warning():
+    """The inverted slider-crank's link 4 has its centre in the frame B0→B: in-line (offset
+    0) the book keeps its kinematics, and says in one line that link 4's forces are #N/A."""
+    built, _ = builder.make(templates.with_overrides(templates.load("inverted-slider-crank"),
+                                                     ["a4=0"], None, None))
+    assert built.warnings == ["inverted-slider-crank.toml: mechanism.bodies[2].centre.frame: "
+                              "B0 and B are at one place on every row of the sweep: the "
+                              "link's centre of mass, and every force it reaches, is #N/A"]
 
 
 def test_a_crank_pin_passing_over_a_pivot_is_na_there_and_verifies(tmp_path):

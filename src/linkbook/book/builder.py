@@ -33,7 +33,7 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
     if table_cells(t) > SMALL_BOOK:
         domain.check_size(*book_size(t, values_needed))
     built = workbook.build(t)
-    check_frames(t, built.model)
+    built.warnings += check_frames(t, built.model)
     angles = engine.evaluate(built.workbook,
                              only=degree_window_sources(built) | loop_witness_cells(built))
     workbook.set_degree_windows(built, degree_windows(built, angles))
@@ -45,14 +45,15 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
     return built, values
 
 
-def check_frames(t: Template, model) -> None:
-    """Refuse a frame whose two points are at one place on every row of the sweep (two ground
-    points at one place, a slide's point on its pivot at offset 0): its direction is
-    undefined, so every cell it places would be #N/A. Where they meet on some rows only (a
-    crank pin passing over a pivot) those rows are #N/A, as the reference says. Measured on
-    the reference's positions with the template's values."""
+def check_frames(t: Template, model) -> list[str]:
+    """Refuse a step's frame whose two points are at one place on every row of the sweep (two
+    ground points at one place, a slide's point on its pivot at offset 0): its direction is
+    undefined, so every cell it places would be #N/A. A centre of mass's such frame is one
+    warning line (its link's forces are #N/A; the kinematics stand). Where they meet on some
+    rows only (a crank pin passing over a pivot) those rows are #N/A, as the reference says.
+    Measured on the reference's positions with the template's values."""
     if not model.frames:
-        return
+        return []
     import numpy as np
     from ..check import reference
     angles = np.array(t.sweep.angles())
@@ -60,18 +61,24 @@ def check_frames(t: Template, model) -> None:
         points = reference.solve(t.mechanism.description,
                                  reference.positions_only(t.values()), angles)["points"]
     except ValueError:          # what the reference cannot solve, verify says
-        return
+        return []
 
     def xy(point: str) -> np.ndarray:
         return np.array([np.broadcast_to(np.asarray(c, dtype=float), angles.shape)
                          for c in points[point]])
-    for field, a, b in model.frames:
+    warnings = []
+    for field, a, b, step in model.frames:
         dx, dy = xy(b) - xy(a)
         met, defined = (dx == 0) & (dy == 0), np.isfinite(dx) & np.isfinite(dy)
-        if met.any() and met[defined].all():
-            raise domain.InputError(field, f"{a} and {b} are at one place on every row of "
-                                           "the sweep: a frame needs two points apart (its "
+        if not (met.any() and met[defined].all()):
+            continue
+        what = f"{a} and {b} are at one place on every row of the sweep"
+        if step:
+            raise domain.InputError(field, f"{what}: a frame needs two points apart (its "
                                            "direction is undefined)")
+        warnings.append(f"{field}: {what}: the link's centre of mass, and every force it "
+                        "reaches, is #N/A")
+    return warnings
 
 
 def _print_setup(wb) -> None:

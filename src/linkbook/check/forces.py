@@ -595,6 +595,8 @@ class _System:
         self.origin = {b.number: rows.position(b.joints[0]) for b in top.bodies}
         self.A = np.zeros((rows.n, self.k, self.k))
         self.b = np.zeros((rows.n, self.k))
+        # where a value of the description (a load, a mass) is an error: its equations' b
+        self.errors = np.zeros((rows.n, self.k), dtype=bool)
         self.names: list[str] = []
         self.reactions: list[_Reaction] = []
         self.effort = ""                # the input's unknown: T12 or F_in
@@ -652,6 +654,12 @@ class _System:
         self.b[:, r + 1] -= fy
         self.b[:, r + 2] -= _cross(px - ox, py - oy, fx, fy)
 
+    def note_errors(self, body: int, value, equations: tuple[int, ...] = (0, 1, 2)) -> None:
+        """The equations of a body that a value of the description enters, where it is an
+        error (NaN): those rows' unknowns it reaches are NaN, the others stand."""
+        for e in equations:
+            self.errors[:, self.first[body] + e] |= np.isnan(value)
+
     def known_couple(self, body: int, torque) -> None:
         self.b[:, self.first[body] + 2] -= torque
 
@@ -705,6 +713,8 @@ def _load_equations(top: _Topology, loads: _Loads, rows: _Rows, system: _System)
     g = rows.vector(loads.gravity) if loads.gravity else (0.0, 0.0)
     for body in top.bodies:
         mass, inertia = (rows.array(k) for k in loads.masses[body.number])
+        system.note_errors(body.number, mass)
+        system.note_errors(body.number, inertia, (2,))
         system.known_couple(body.number, -inertia * rows.angular_acceleration(body))
         if body.centre is not None:
             (gx, gy), (ax, ay) = rows.position(body.centre), rows.rate("a", body.centre)
@@ -713,17 +723,21 @@ def _load_equations(top: _Topology, loads: _Loads, rows: _Rows, system: _System)
     for body, point, spec in loads.forces:
         fx, fy = rows.vector(spec)
         system.known_force(body.number, fx, fy, *rows.position(point))
+        system.note_errors(body.number, fx + fy)
     for body, key in loads.torques:
         system.known_couple(body.number, rows.array(key))
+        system.note_errors(body.number, rows.array(key), (2,))
 
 
-def _solve_rows(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _solve_rows(A: np.ndarray, b: np.ndarray, errors: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
     """x with A·x = b on every row, and each row's condition number. Rows and columns are
     scaled by their largest entries first (forces and moments, metres and ones); a row with a
-    NaN in A or a condition number above SINGULAR is NaN. A known load that is NaN (a load
-    that is an error on its row) makes NaN only the unknowns that depend on it (_reached)."""
+    NaN or a condition number above SINGULAR is NaN, but for a NaN in b where a value of the
+    description is an error (`errors`): that makes NaN only the unknowns it reaches
+    (_reaches)."""
     n, k = b.shape
-    finite = np.isfinite(A).all(axis=(1, 2))
+    finite = np.isfinite(A).all(axis=(1, 2)) & (np.isfinite(b) | errors).all(axis=1)
     missing = ~np.isfinite(b) & finite[:, None]
     A = np.where(finite[:, None, None], A, np.eye(k))
     big = np.maximum(np.abs(A).max(axis=2), np.finfo(float).tiny)
@@ -732,25 +746,27 @@ def _solve_rows(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     A = A / col
     cond = np.linalg.cond(A) if n else np.zeros(0)
     ok = finite & (cond < SINGULAR)
+    structure = (A[ok] != 0).any(axis=0)
     A = np.where(ok[:, None, None], A, np.eye(k))
     y = np.linalg.solve(A, np.where(ok[:, None], b, 0.0)[..., None])[..., 0]
     x = y / col[:, 0, :]
     x[~ok] = np.nan
-    x[_reached(A, missing & ok[:, None])] = np.nan
+    x[(missing & ok[:, None]).astype(float) @ _reaches(structure).T > 0] = np.nan
     return x, np.where(finite, cond, np.nan)
 
 
-def _reached(A: np.ndarray, missing: np.ndarray) -> np.ndarray:
-    """Per row, the unknowns a missing entry of b reaches: x_i depends on b_j where
-    (A⁻¹)_ij is not zero (A scaled: its inverse's entries are of order one, and those that
-    are zero by the system's structure come out below 1e-12 of the largest)."""
-    out = np.zeros(missing.shape, dtype=bool)
-    rows = np.nonzero(missing.any(axis=1))[0]
-    if rows.size:
-        inverse = np.abs(np.linalg.inv(A[rows]))
-        reach = np.einsum("rij,rj->ri", inverse, missing[rows].astype(float))
-        out[rows] = reach > 1e-12 * inverse.max(axis=(1, 2))[:, None]
-    return out
+def _reaches(structure: np.ndarray) -> np.ndarray:
+    """Which unknowns each equation's known side reaches: x_i depends on b_j where (A⁻¹)_ij
+    is not zero for a matrix of the system's structure (its entries that are not zero on some
+    row) with generic values. A term that is zero on one row only (a moment arm where a crank
+    lies on the line) still counts: the book's formula reads that load there too."""
+    generic = np.where(structure, np.random.default_rng(1).uniform(1.0, 2.0, structure.shape),
+                       0.0)
+    try:
+        inverse = np.abs(np.linalg.inv(generic))
+    except np.linalg.LinAlgError:      # no row solves: nothing to spare
+        return np.ones(structure.shape, dtype=bool)
+    return inverse > 1e-9 * inverse.max()
 
 
 # --------------------------------------------------------------------------------------------
@@ -828,5 +844,8 @@ def forces(description: Mapping, params: Mapping[str, float], angles_deg,
                  len(angles), LENGTH_UNITS[length_unit])
     with np.errstate(invalid="ignore", divide="ignore"):
         system = _equations(top, loads, rows)
-        x, cond = _solve_rows(system.A, system.b)
+        x, cond = _solve_rows(system.A, system.b, system.errors)
+        for r in system.reactions:      # a guide's couple is NaN where its force is (the book's)
+            if r.couple is not None:
+                x[np.isnan(x[:, r.cols[0]]), r.couple] = np.nan
         return {**_report(top, system, x), "cond": cond}

@@ -267,9 +267,10 @@ class BodiesAndLoads:
         return name, (ax, ay)
 
     def _frame_angle(self, where: str, name: str, a: str, b: str) -> Expr:
-        """angle(A→B) of a centre's frame (the compiler's angle_of: #N/A where they meet), one
-        alias: the centre's formulas use it more than once."""
-        theta = self.c.angle_of(a, b, where)
+        """angle(A→B) of a centre's frame (the compiler's angle_of: #N/A where they meet, so a
+        book whose link has its two joints at one place, a slide's link at offset 0, keeps its
+        kinematics), one alias: the centre's formulas use it more than once."""
+        theta = self.c.angle_of(a, b, where, step=False)
         if any(pair in self.c.rigid for pair in ((a, b), (b, a))):
             return theta
         return Expr(self.w.alias(f"_{name}_frame", theta.text))

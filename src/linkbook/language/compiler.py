@@ -187,16 +187,16 @@ class Compiler:
         cx, cy = self.points[centre]
         self.model.blocks.append(Block(centre, cx.text, cy.text, *direction))
 
-    def angle_of(self, a: str, b: str, field: str) -> Expr:
+    def angle_of(self, a: str, b: str, field: str, step: bool = True) -> Expr:
         """angle(A→B) of the frame `field` names, as Excel text: a known link's angle column,
-        or the direction of the points, #N/A where they meet (build refuses a frame whose
-        points meet on every row: model.frames)."""
+        or the direction of the points, #N/A where they meet (model.frames: build refuses a
+        step's frame whose points meet on every row, and warns of another's)."""
         if (a, b) in self.rigid:
             return self.rigid[(a, b)][1]
         if (b, a) in self.rigid:
             return Expr(f"{self.rigid[(b, a)][1].at_least(SUM)}+PI()", SUM)
         (ax, ay), (bx, by) = self.points[a], self.points[b]
-        self.model.frames.append((field, a, b))
+        self.model.frames.append((field, a, b, step))
         return direction(minus(bx, ax), minus(by, ay))
 
     def length_of(self, a: str, b: str) -> Expr:

@@ -117,8 +117,8 @@ class Model:
     guides: list[Guide] = field(default_factory=list)    # drawn under the links
     blocks: list[Block] = field(default_factory=list)
     where: str = ""           # the template's field being compiled: what Model.add stamps
-    # the frames whose angle is the direction of two points: (field, A, B)
-    frames: list[tuple[str, str, str]] = field(default_factory=list)
+    # the frames whose angle is the direction of two points: (field, A, B, a step's frame?)
+    frames: list[tuple[str, str, str, bool]] = field(default_factory=list)
 
     def add(self, *quantities: Quantity) -> None:
         known = {q.key for q in self.quantities}
