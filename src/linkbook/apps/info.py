@@ -212,7 +212,8 @@ def _force_peaks(book: Book) -> list[dict]:
 def _force_summary(book: Book) -> list[dict]:
     """The Forces sheet's summary of the sweep in the book's order (the driving effort's mean,
     RMS, extremes and where, each pin's peak, for a crank the energy fluctuation, Cs and the
-    flywheel inertia): each value with the label left of it and the unit right of it."""
+    flywheel inertia): each value with the label left of it (the row's nearest text: a long
+    label reads on over empty cells to its value) and the unit right of it."""
     forces = book.record.forces
     if not forces:
         return []
@@ -221,8 +222,9 @@ def _force_summary(book: Book) -> list[dict]:
         if key.startswith(CHART_POINTS):
             continue
         row, col = coordinate_to_tuple(info.cell)
-        label, unit = (_text(book, forces.sheet, f"{column_letter(col + d)}{row}")
-                       for d in (-1, 1))
+        label = next((text for c in range(col - 1, 0, -1)
+                      if (text := _text(book, forces.sheet, f"{column_letter(c)}{row}"))), "")
+        unit = _text(book, forces.sheet, f"{column_letter(col + 1)}{row}")
         found.append({"key": key, "what": label, "unit": unit,
                       "value": _plain(book.values.get((forces.sheet, info.cell)))})
     return found
