@@ -106,3 +106,89 @@ def test_no_page_break_cuts_the_forces_summary(name):
     first, last = summary_rows(b.meta["forces"])
     breaks = [brk.id for brk in b.workbook["Forces"].row_breaks.brk]   # the last row above it
     assert not [r for r in breaks if first <= r < last], (first, last, breaks)
+
+
+# ------------------------------------------------------------- no label clipped
+# Text measured by the font files themselves (Pillow), not by the writer's width table: DejaVu
+# Sans, the widest of the fonts a book is drawn with, 11 pt at 96 dpi hinted to 15 px, in
+# digits of 7 px plus one for the cell's padding (how a column's width counts characters).
+DEJAVU = Path("/usr/share/fonts/truetype/dejavu")
+SLACK = 0.05          # a width is written to a tenth of a character
+
+
+def _font_width():
+    from PIL import ImageFont
+    fonts = {bold: ImageFont.truetype(str(DEJAVU / name), 15)
+             for bold, name in ((False, "DejaVuSans.ttf"), (True, "DejaVuSans-Bold.ttf"))}
+    return lambda text, bold, size: fonts[bold].getlength(text) * size / 11 / 7 + 1.0
+
+
+def _column(ws, c: int) -> float:
+    from openpyxl.utils import get_column_letter
+    d = ws.column_dimensions.get(get_column_letter(c))
+    return d.width if d is not None and d.customWidth else 8.43
+
+
+def _free(ws, r: int, c: int) -> bool:
+    cell = ws._cells.get((r, c))
+    return cell is None or cell.value is None
+
+
+def _room(ws, r: int, first: int, last: int, horizontal) -> float:
+    """The width a one-line text has: its cell (or merged cells), and where it is aligned
+    left (or right) the empty cells it runs on over to the right (or left); centred, both."""
+    room = sum(_column(ws, k) for k in range(first, last + 1))
+    sides = {"right": (-1,), "center": (-1, 1), "centerContinuous": (-1, 1)}.get(horizontal, (1,))
+    for step in sides:
+        k = last + 1 if step > 0 else first - 1
+        while 1 <= k <= 16384 and _free(ws, r, k) and room < 500:
+            room += _column(ws, k)
+            k += step
+    return room
+
+
+def clipped_labels(ws, width) -> list[tuple]:
+    """Every text cell of the sheet that does not show whole: a wrapped one with a word wider
+    than its column or more lines than its row is high; a one-line one wider than its room."""
+    merged = {(m.min_row, m.min_col): m.max_col for m in ws.merged_cells.ranges}
+    found = []
+    for (r, c), cell in sorted(ws._cells.items()):
+        text = cell.value
+        if not isinstance(text, str) or cell.data_type == "f":
+            continue
+        bold = bool(cell.font and cell.font.b)
+        size = float(cell.font.sz or 11) if cell.font else 11.0
+        last = merged.get((r, c), c)
+        if cell.alignment is not None and cell.alignment.wrap_text:
+            room = sum(_column(ws, k) for k in range(c, last + 1)) + SLACK
+            lines: list[str] = []
+            for word in text.split():
+                if width(word, bold, size) > room:
+                    found.append((cell.coordinate, text, "a word wider than the column"))
+                if lines and width(f"{lines[-1]} {word}", bold, size) <= room:
+                    lines[-1] += f" {word}"
+                else:
+                    lines.append(word)
+            d = ws.row_dimensions.get(r)
+            height = d.ht if d is not None and d.ht else 15.0
+            if len(lines) * 15.0 * size / 11 > height + 0.01:
+                found.append((cell.coordinate, text, f"{len(lines)} lines in {height} pt"))
+        elif width(text, bold, size) > _room(ws, r, c, last,
+                                             cell.alignment.horizontal) + SLACK:
+            found.append((cell.coordinate, text, "wider than its room"))
+    return found
+
+
+@pytest.mark.parametrize("name", BUNDLED)
+def test_no_label_of_a_bundled_book_is_clipped(name):
+    """Every visible sheet: headers, notes, the Sweep sheet's bookkeeping labels (`1 where
+    every loop closes`, `last angle of a gap`: clipped before), the summaries' labels."""
+    if not (DEJAVU / "DejaVuSans-Bold.ttf").exists():
+        if os.environ.get("CI"):
+            pytest.fail("CI needs fonts-dejavu-core")
+        pytest.skip("needs DejaVu Sans to measure text")
+    width = _font_width()
+    b, _ = built(name)
+    found = {ws.title: clipped_labels(ws, width) for ws in b.workbook.worksheets
+             if ws.sheet_state == "visible"}
+    assert not any(found.values()), {k: v for k, v in found.items() if v}

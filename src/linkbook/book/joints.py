@@ -12,7 +12,8 @@ from ..language.model import LENGTH, Model
 from .resolve import Resolver
 from ..language.templates import Template
 from .frames import SQUARE_CELL
-from .style import block_head, column_range, number_format, put_text, set_formula, text_width
+from .style import (block_head, column_range, column_width, number_format, put_text,
+                    set_formula)
 from .sweep import numbers_place
 
 
@@ -63,8 +64,8 @@ def joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
                         "ground": False, "kind": part["kind"], "label": part["label"]})
     for col in ("L", "M"):      # a slider's rows name longer points (`B guide 1`): shown whole
         names = [ws[f"{col}{r}"].value for r in range(7, row)]
-        widest = max((text_width(n) for n in names if isinstance(n, str)), default=0.0)
-        ws.column_dimensions[col].width = max(ws.column_dimensions[col].width, round(widest, 1))
+        widest = max((column_width(n) for n in names if isinstance(n, str)), default=0.0)
+        ws.column_dimensions[col].width = max(ws.column_dimensions[col].width, widest)
     return {"cells": cells, "drawing": drawing, "chart_row": row + 1}
 
 
