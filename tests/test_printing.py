@@ -192,3 +192,78 @@ def test_no_label_of_a_bundled_book_is_clipped(name):
     found = {ws.title: clipped_labels(ws, width) for ws in b.workbook.worksheets
              if ws.sheet_state == "visible"}
     assert not any(found.values()), {k: v for k, v in found.items() if v}
+
+
+# ------------------------------------------------------------- the polar diagram
+C = "{http://schemas.openxmlformats.org/drawingml/2006/chart}"
+A = "{http://schemas.openxmlformats.org/drawingml/2006/main}"
+XDR = "{http://schemas.openxmlformats.org/drawingml/2006/spreadsheetDrawing}"
+
+
+def _saved_charts(book):
+    """(chart XML root, its anchor's width / height) of every chart of a saved book."""
+    import posixpath
+    import re
+    import zipfile
+    from xml.etree import ElementTree as ET
+    rel_id = "{http://schemas.openxmlformats.org/officeDocument/2006/relationships}id"
+    out = []
+    with zipfile.ZipFile(book) as z:
+        drawings = [n for n in z.namelist() if re.fullmatch(r"xl/drawings/drawing\d+\.xml", n)]
+        for drawing in drawings:
+            rels = ET.fromstring(z.read(drawing.replace("drawings/", "drawings/_rels/") + ".rels"))
+            target = {r.get("Id"): posixpath.normpath(posixpath.join(
+                "xl/drawings", r.get("Target"))).lstrip("/") for r in rels}    # absolute or not
+            for anchor in ET.fromstring(z.read(drawing)):
+                chart, ext = anchor.find(f".//{C}chart"), anchor.find(f"{XDR}ext")
+                if chart is not None:
+                    root = ET.fromstring(z.read(target[chart.get(rel_id)]))
+                    out.append((root, int(ext.get("cx")) / int(ext.get("cy"))))
+    return out
+
+
+@pytest.mark.parametrize("name", FORCE_BOOKS)
+def test_the_polar_diagram_is_at_equal_scales(tmp_path, name):
+    """Both axes scale to the same data (the square's corners (−R, −R), (R, R), drawn
+    invisible, no legend entry) and neither has limits of its own, so each application gives
+    both the same span; the plot area's box is square on the chart's anchor."""
+    b, values = built(name)
+    book = tmp_path / f"{name}.xlsx"
+    b.workbook.save(book)
+    polar = [(root, ratio) for root, ratio in _saved_charts(book)
+             if "polar diagram" in "".join(root.itertext())]
+    assert len(polar) == 1
+    root, ratio = polar[0]
+    series = root.findall(f".//{C}ser")
+    assert len(series) == 3
+    deleted = [e.find(f"{C}idx").get("val") for e in root.iter(f"{C}legendEntry")
+               if e.find(f"{C}delete").get("val") in ("1", "true")]
+    assert deleted == ["1", "2"]
+    points = []
+    for corner in series[1:]:          # one point each: no line, no marker
+        assert corner.find(f"{C}spPr/{A}ln/{A}noFill") is not None
+        assert corner.find(f"{C}marker/{C}symbol").get("val") == "none"
+        point = []
+        for axis in ("xVal", "yVal"):
+            ref = corner.find(f"{C}{axis}/{C}numRef/{C}f").text     # 'Forces'!$B$101
+            sheet, cells = ref.rsplit("!", 1)
+            assert ":" not in cells
+            point.append(values[(sheet.strip("'"), cells.replace("$", ""))])
+        points.append(point)
+    (x0, y0), (x1, y1) = points
+    reach = max(abs(v) for k in ("shaking_x", "shaking_y")
+                for v in _column_values(b, values, k))
+    assert (x0, y0, x1, y1) == (-reach, -reach, reach, reach)
+    for axis in root.iter(f"{C}valAx"):
+        scaling = axis.find(f"{C}scaling")
+        assert scaling.find(f"{C}min") is None and scaling.find(f"{C}max") is None
+    layout = root.find(f"{C}chart/{C}plotArea/{C}layout/{C}manualLayout")
+    assert layout.find(f"{C}layoutTarget").get("val") == "inner"
+    w, h = (float(layout.find(f"{C}{k}").get("val")) for k in ("w", "h"))
+    assert w * ratio == pytest.approx(h, rel=1e-3)
+
+
+def _column_values(b, values, key):
+    table = b.meta["forces"]
+    r0, r1 = table["rows"]
+    return [values[("Forces", f"{table['columns'][key]}{r}")] for r in range(r0, r1 + 1)]

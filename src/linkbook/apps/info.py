@@ -16,8 +16,9 @@ from ..base.xlsx import column_letter, coordinate_to_tuple
 # Motion columns whose largest magnitude the summary reports: angular velocities and
 # accelerations, the sliders' speeds and accelerations, the traced point's speed and acceleration
 PEAK_PREFIXES = ("omega_", "alpha_", "v_", "acc_", "vmag_", "amag_")
-# Forces summary cells that are no summary: the two points of the chart's mean line
-CHART_POINTS = "mean_line_"
+# Forces summary cells that are no summary: the two points of the chart's mean line, and the
+# corners of the polar diagram's square
+CHART_POINTS = ("mean_line_", "polar_square_")
 WIDTH = 79      # a terminal's 80 columns, the last left free
 
 

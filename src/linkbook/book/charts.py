@@ -85,13 +85,17 @@ def _frame_axes(chart: ScatterChart, size_cm: float) -> None:
         axis.majorGridlines = ChartLines()
         axis.majorGridlines.spPr = GraphicalProperties(ln=LineProperties(solidFill=GRID_COLOUR,
                                                                           w=6350))
-    # The inner plot area is a square, SIDE of the chart's height, with the title above it and
-    # the legend to its right (a column of links fits there at any count). openpyxl writes
-    # chart.layout as the plot area's layout; Excel and LibreOffice both honour it.
+    _square_plot_area(chart, size_cm)
+
+
+def _square_plot_area(chart: ScatterChart, size_cm: float, left: float = 0.06) -> None:
+    """The inner plot area (the axes' box, without their labels) a square, SIDE of the chart's
+    height, with the title above it and the legend to its right (a column of links fits there
+    at any count); `left`: the room left of it, a share of the chart's width. openpyxl writes
+    chart.layout as the plot area's layout; Excel and LibreOffice both honour it."""
     chart.height, chart.width = size_cm, size_cm * WIDTH_RATIO
-    left, top = 0.06, 0.15
     chart.layout = Layout(ManualLayout(layoutTarget="inner", xMode="edge", yMode="edge",
-                                       x=left, y=top, w=SIDE / WIDTH_RATIO, h=SIDE))
+                                       x=left, y=0.15, w=SIDE / WIDTH_RATIO, h=SIDE))
     chart.legend.position = "r"
 
 
@@ -258,11 +262,33 @@ def _force_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:
             _angle_axis(chart, t)
         ws.add_chart(chart, f"A{anchor_row}")
         anchor_row += 21
+    ws.add_chart(_polar_diagram(ws_data, table), f"A{anchor_row}")
+
+
+POLAR_CM = 12      # the polar diagram's height (its square plot area: SIDE of it)
+
+
+def _polar_diagram(ws_data, table: dict) -> ScatterChart:
+    """The shaking force's tip over the sweep, at equal scales: with it, drawn invisible and
+    left out of the legend, the two corners of its square about the origin (the summary's
+    polar_square cells), so both axes scale to the same span, in a square plot area. (Gnumeric
+    lists the corners in the legend: it reads no deleted legend entry.)"""
+    from openpyxl.chart.legend import LegendEntry
+    from openpyxl.utils.cell import coordinate_from_string
+    from .forces import POLAR_SQUARE, SHAKING
     polar = _chart("Shaking force on the frame: polar diagram", "Fs_x [N]", "Fs_y [N]")
-    polar.series.append(_series(ws_data, letters["shaking_x"], letters["shaking_y"], rows,
-                                "Fs (tip of the vector over the sweep)"))
-    polar.width = polar.height = 14
-    ws.add_chart(polar, f"A{anchor_row}")
+    polar.series.append(_series(ws_data, *(table["columns"][k] for k in SHAKING),
+                                tuple(table["rows"]), "Fs (tip of the vector over the sweep)"))
+    for i in (0, 1):      # a series per corner: one point, no line to draw in any application
+        (x_col, row), (y_col, _) = (coordinate_from_string(
+            table["summary"][f"{POLAR_SQUARE}{a}{i}"]["cell"]) for a in "xy")
+        corner = _series(ws_data, x_col, y_col, (row, row), f"corner {i + 1} of the square")
+        corner.graphicalProperties.line.noFill = True
+        polar.series.append(corner)
+    polar.legend.legendEntry = [LegendEntry(idx=i, delete=True) for i in (1, 2)]
+    # room on the left for the y axis's title and its numbers, which a frame has not
+    _square_plot_area(polar, POLAR_CM, left=0.12)
+    return polar
 
 
 def _mean_line(ws, cells: dict) -> Series:

@@ -130,15 +130,40 @@ def summary(wb, ws, t: Template, model: Model, names: dict, table: dict) -> dict
             f"=IF({cs}*{omega}^2=0,NA(),{energy}/({cs}*{omega}^2))", "kg·m²",
             fmt=ENERGY_FORMAT)
     _mean_line_cells(ws, t, cells, row + 2, (label_col, value_col), mean, r0, r1)
+    _polar_square_cells(ws, cells, row + 6, (label_col, value_col),
+                        [f"${letters[k]}${r0}:${letters[k]}${r1}" for k in SHAKING])
     return {"summary": cells, **({"work": work} if work else {})}
 
 
 def summary_rows(forces: dict) -> tuple[int, int]:
-    """The rows of the summary block, its title to its last cell (the mean line's): printed
+    """The rows of the summary block, its title to its last cell (the chart points'): printed
     on one page (pages.apply_print_setup's keep_together)."""
     from openpyxl.utils.cell import coordinate_from_string
     rows = [coordinate_from_string(c["cell"])[1] for c in forces["summary"].values()]
     return min(rows) - 1, max(rows)
+
+
+SHAKING = ("shaking_x", "shaking_y")     # the shaking force's components: its polar diagram
+POLAR_SQUARE = "polar_square_"           # the summary cells of that diagram's square
+
+
+def _polar_square_cells(ws, cells: dict, row: int, columns: tuple[str, str],
+                        ranges: list[str]) -> None:
+    """Two points for the polar diagram, drawn invisible: the corners (−R, −R) and (R, R) of
+    the square about the origin that holds the shaking force, R its largest component in size.
+    Both axes then span the same data, so the applications' own axis scaling (live, after any
+    edit) gives both the same range: in a square plot area, equal scales."""
+    x, y = columns
+    put_text(ws, f"{x}{row}", "the polar diagram's square: (−R, −R), then (R, R), R the "
+                              "largest |Fs_x| or |Fs_y|", NOTE)
+    reach = f"${x}${row + 2}"
+    parts = ",".join(f"MAX({r}),-MIN({r})" for r in ranges)
+    formulas = {"x0": f"=-{reach}", "y0": f"=-{reach}", "x1": f"=MAX({parts})",
+                "y1": f"={reach}"}
+    for key, formula in formulas.items():
+        cell = f"{x if key[0] == 'x' else y}{row + 1 + int(key[1])}"
+        set_formula(ws[cell], formula).number_format = FORCE_FORMAT
+        cells[f"{POLAR_SQUARE}{key}"] = {"cell": cell, "kind": "number", "unit": ""}
 
 
 SUMMARY_LABEL_WIDTH = 44     # the longest label, "coefficient of speed fluctuation Cs (input)"
