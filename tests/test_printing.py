@@ -267,3 +267,42 @@ def _column_values(b, values, key):
     table = b.meta["forces"]
     r0, r1 = table["rows"]
     return [values[("Forces", f"{table['columns'][key]}{r}")] for r in range(r0, r1 + 1)]
+
+
+# ------------------------------------------------------------- joint names on the drawing
+@pytest.mark.parametrize("name", BUNDLED)
+def test_every_joint_is_named_once_on_the_drawing(tmp_path, name):
+    """The Mechanism sheet's drawing (chart XML of the saved book): per joint, as pylinkage
+    labels them, one invisible one-point series out of the legend, named by the joints
+    table's cell holding the joint's name and labelled with that name, drawn at a point the
+    drawing maps from the same joints-table row (so it moves with its joint)."""
+    import re
+    b, _ = built(name)
+    book = tmp_path / f"{name}.xlsx"
+    b.workbook.save(book)
+    drawing = [root for root, _ in _saved_charts(book)
+               if "at the current" in "".join(root.itertext())]
+    assert len(drawing) == 1
+    root, mech, frames = drawing[0], b.workbook["Mechanism"], b.workbook["Drawing data"]
+    deleted = {e.find(f"{C}idx").get("val") for e in root.iter(f"{C}legendEntry")
+               if e.find(f"{C}delete").get("val") in ("1", "true")}
+    named = []
+    for ser in root.iter(f"{C}ser"):
+        name_ref = ser.find(f"{C}tx/{C}strRef/{C}f")
+        if name_ref is None or ser.find(f"{C}dLbls") is None:
+            continue
+        labels = ser.find(f"{C}dLbls")
+        assert labels.find(f"{C}showSerName").get("val") == "1"
+        assert labels.find(f"{C}showVal").get("val") == "0"
+        assert ser.find(f"{C}spPr/{A}ln/{A}noFill") is not None
+        assert ser.find(f"{C}marker/{C}symbol").get("val") == "none"
+        assert ser.find(f"{C}idx").get("val") in deleted
+        sheet, cell = name_ref.text.rsplit("!", 1)
+        assert sheet.strip("'") == "Mechanism"
+        row = int(re.fullmatch(r"\$M\$(\d+)", cell).group(1))
+        for axis, column in (("xVal", "N"), ("yVal", "O")):    # the point drawn from that row
+            point = ser.find(f"{C}{axis}/{C}numRef/{C}f").text.rsplit("!", 1)[1]
+            formula = frames[point.replace("$", "")].value
+            assert f"'Mechanism'!{column}{row}-" in formula, (point, formula, row)
+        named.append(mech[f"M{row}"].value)
+    assert sorted(named) == sorted(j.name for j in b.model.joints)

@@ -11,6 +11,7 @@ from __future__ import annotations
 from openpyxl.chart import Reference, ScatterChart, Series
 from openpyxl.chart.axis import ChartLines
 from openpyxl.chart.data_source import NumFmt, StrRef
+from openpyxl.chart.legend import LegendEntry
 from openpyxl.chart.series import SeriesLabel
 from openpyxl.drawing.line import LineProperties
 from openpyxl.chart.layout import Layout, ManualLayout
@@ -22,7 +23,8 @@ from ..base.palette import PART_COLOURS, PATH_COLOUR, drawing_colours, link_labe
 from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, NEWTON, NEWTON_METRE, Model
 from .style import header, unit_text
 from ..language.templates import Template
-from ..base.sheets import CHARTS, FORCES_SHEET, GRID, MECH, MOTION_SHEET, SWEEP
+from ..base.sheets import (CHARTS, FORCES_SHEET, GRID, JOINT_COLUMN, MECH, MOTION_SHEET,
+                           SWEEP)
 from .workbook import Built
 
 LINE_EMU = 22000          # 1.7 pt
@@ -99,6 +101,39 @@ def _square_plot_area(chart: ScatterChart, size_cm: float, left: float = 0.06) -
     chart.legend.position = "r"
 
 
+JOINT_LABEL_SIZE = 900       # 9 pt, bold: a joint's name above its point
+
+
+def _joint_names(ws_frame, links: dict, drawing: list[dict]) -> list[Series]:
+    """Each joint named once on the drawing, as pylinkage does: a series of one point, the
+    first point of a link that reaches the joint, drawn invisible, named by the joints
+    table's cell with the joint's name and labelled with that name (its series name). The
+    label belongs to its point, so it moves with the joint when an input changes. (A label
+    of a link's own point with its text from a cell Excel shows, LibreOffice does not: it
+    shows the point's value there.)"""
+    from openpyxl.chart.label import DataLabelList
+    from openpyxl.chart.text import RichText
+    from openpyxl.drawing.text import CharacterProperties, Paragraph, ParagraphProperties
+    out, named = [], set()
+    for link in drawing:
+        if link.get("kind") in PART_COLOURS:        # a guide's or a block's corners: no joint
+            continue
+        for k, name in enumerate(link["joints"]):
+            if name in named:
+                continue
+            named.add(name)
+            row = link["rows"][0] + k
+            s = _mapped(ws_frame, links, (row, row), name)
+            s.tx = SeriesLabel(strRef=StrRef(f"{quote_sheetname(MECH)}!${JOINT_COLUMN}${row}"))
+            s.graphicalProperties.line.noFill = True
+            bold = CharacterProperties(sz=JOINT_LABEL_SIZE, b=True)
+            s.dLbls = DataLabelList(showSerName=True, showVal=False, showCatName=False,
+                                    dLblPos="t", txPr=RichText(
+                p=[Paragraph(pPr=ParagraphProperties(defRPr=bold), r=[], endParaRPr=bold)]))
+            out.append(s)
+    return out
+
+
 def _scale_bar(ws, frame: dict) -> Series:
     """One grid square drawn as a thick black bar; its legend entry (a live cell) names the
     square's size."""
@@ -157,6 +192,10 @@ def _drawing(wb, t, model: Model, meta: dict) -> None:
         chart.series.append(_mapped(ws_frame, p, tuple(p["rows"]), p["title"], width=12700,
                                     colour=PATH_COLOUR))
     chart.series.append(_scale_bar(ws_frame, frame))
+    names = _joint_names(ws_frame, links, pos["drawing"])     # last: the legend leaves them out
+    chart.series += names
+    chart.legend.legendEntry = [LegendEntry(idx=i, delete=True) for i in
+                                range(len(chart.series) - len(names), len(chart.series))]
     _frame_axes(chart, DRAWING_CM)
     ws.add_chart(chart, pos["chart_anchor"])   # under the joints table it draws
 
@@ -273,7 +312,6 @@ def _polar_diagram(ws_data, table: dict) -> ScatterChart:
     left out of the legend, the two corners of its square about the origin (the summary's
     polar_square cells), so both axes scale to the same span, in a square plot area. (Gnumeric
     lists the corners in the legend: it reads no deleted legend entry.)"""
-    from openpyxl.chart.legend import LegendEntry
     from openpyxl.utils.cell import coordinate_from_string
     from .forces import POLAR_SQUARE, SHAKING
     polar = _chart("Shaking force on the frame: polar diagram", "Fs_x [N]", "Fs_y [N]")
