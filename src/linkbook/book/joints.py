@@ -62,7 +62,8 @@ def joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
             row += 1
         drawing.append({"joints": [name for name, _ in part["points"]], "rows": [first, row - 1],
                         "ground": False, "kind": part["kind"], "label": part["label"]})
-    for col in ("L", JOINT_COLUMN):      # a slider's rows name longer points (`B guide 1`): shown whole
+    # a slider's rows name longer points (`B guide 1`): shown whole
+    for col in ("L", JOINT_COLUMN):
         names = [ws[f"{col}{r}"].value for r in range(7, row)]
         widest = max((column_width(n) for n in names if isinstance(n, str)), default=0.0)
         ws.column_dimensions[col].width = max(ws.column_dimensions[col].width, widest)

@@ -27,7 +27,8 @@ def apply_print_setup(wb, fit_to_width: tuple[str, ...] = (),
     Sheets named in `fit_to_width` print landscape, one page wide (blocks side by side stay
     together), with the row breaks chosen for them. `keep_together` names, by sheet, the
     (first, last) rows of blocks that no row break may cut, as none cuts a chart. A title or
-    note wider than the first page wraps within it. Call after the charts have been added; it changes no cell's value."""
+    note wider than the first page wraps within it. Call after the charts have been added; it
+    changes no cell's value."""
     from openpyxl.worksheet.page import PageMargins
     for ws in wb.worksheets:
         if ws.sheet_state != "visible":
