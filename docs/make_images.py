@@ -59,6 +59,19 @@ def colourful(page: Image.Image) -> int:
     return int(((rgb.max(axis=2) - rgb.min(axis=2)) > 60).sum())
 
 
+def page_with(pngs: list[Path], text: str) -> Path:
+    """The first of a preview's pages whose printed text holds `text` (pdftotext on the PDF
+    the preview wrote beside them: BOOK.pdf, its pages in the order of the pictures)."""
+    import subprocess
+    pdf = next(pngs[0].parent.glob("*.pdf"))
+    for number, png in enumerate(pngs, start=1):
+        printed = subprocess.run(["pdftotext", "-f", str(number), "-l", str(number), str(pdf),
+                                  "-"], capture_output=True, text=True, check=True).stdout
+        if text in printed:
+            return png
+    raise SystemExit(f"no page of {pdf.name} shows {text!r}")
+
+
 def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
@@ -68,10 +81,9 @@ def main() -> int:
         Image.open(chart_pages[0]).save(IMAGES / "fourbar-charts.png")
         grid = [Image.open(p).convert("RGB") for p in pages("pump", tmp, ("Grid",))]
         max(grid, key=colourful).save(IMAGES / "pump-family.png")      # the family chart
-        # the Charts sheet ends with the force charts: the driving torque on the third page
-        # from the end (beside the slider's acceleration), pin loads, the shaking force's polar
+        # the Charts sheet's page with the driving torque, found by its chart's title
         forces = pages("slider-crank", tmp, ("Charts",))
-        Image.open(forces[-3]).save(IMAGES / "slider-crank-forces.png")
+        Image.open(page_with(forces, "Driving effort")).save(IMAGES / "slider-crank-forces.png")
         for name in DRAWINGS:
             page = Image.open(pages(name, tmp)[0])
             page.crop(drawing_box(page)).save(IMAGES / f"{name}-mechanism.png")

@@ -41,6 +41,10 @@ KNOWN_WARNINGS = (
     re.compile(r"\tworksheet -> headerFooter"),
     re.compile(r"\(ssconvert:\d+\): Pango-CRITICAL \*\*: [\d:.]+: pango_attr_list_filter: "
                r"assertion 'list != NULL' failed"),
+    # the drawing's joint names: data labels showing their series' name, which Gnumeric
+    # does not read
+    re.compile(r"Unexpected element 'showSerName' in state : "),
+    re.compile(r"\tchartSpace -> chart -> plotArea -> scatterChart -> ser -> dLbls"),
 )
 
 def require_ssconvert() -> None:

@@ -79,7 +79,7 @@ def _book_with_charts(name: str, tmp: Path, sets=()) -> Path:
     t = _template(name, sets)
     b = workbook.build(t)
     charts.add_charts(b, t, b.model)
-    builder._print_setup(b.workbook)
+    builder._print_setup(b)
     path = tmp / f"{name}-charts.xlsx"
     b.workbook.save(path)
     return path

@@ -16,8 +16,9 @@ from ..base.xlsx import column_letter, coordinate_to_tuple
 # Motion columns whose largest magnitude the summary reports: angular velocities and
 # accelerations, the sliders' speeds and accelerations, the traced point's speed and acceleration
 PEAK_PREFIXES = ("omega_", "alpha_", "v_", "acc_", "vmag_", "amag_")
-# Forces summary cells that are no summary: the two points of the chart's mean line
-CHART_POINTS = "mean_line_"
+# Forces summary cells that are no summary: the two points of the chart's mean line, and the
+# corners of the polar diagram's square
+CHART_POINTS = ("mean_line_", "polar_square_")
 WIDTH = 79      # a terminal's 80 columns, the last left free
 
 
@@ -212,7 +213,8 @@ def _force_peaks(book: Book) -> list[dict]:
 def _force_summary(book: Book) -> list[dict]:
     """The Forces sheet's summary of the sweep in the book's order (the driving effort's mean,
     RMS, extremes and where, each pin's peak, for a crank the energy fluctuation, Cs and the
-    flywheel inertia): each value with the label left of it and the unit right of it."""
+    flywheel inertia): each value with the label left of it (the row's nearest text: a long
+    label reads on over empty cells to its value) and the unit right of it."""
     forces = book.record.forces
     if not forces:
         return []
@@ -221,8 +223,9 @@ def _force_summary(book: Book) -> list[dict]:
         if key.startswith(CHART_POINTS):
             continue
         row, col = coordinate_to_tuple(info.cell)
-        label, unit = (_text(book, forces.sheet, f"{column_letter(col + d)}{row}")
-                       for d in (-1, 1))
+        label = next((text for c in range(col - 1, 0, -1)
+                      if (text := _text(book, forces.sheet, f"{column_letter(c)}{row}"))), "")
+        unit = _text(book, forces.sheet, f"{column_letter(col + 1)}{row}")
         found.append({"key": key, "what": label, "unit": unit,
                       "value": _plain(book.values.get((forces.sheet, info.cell)))})
     return found

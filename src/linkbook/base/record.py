@@ -216,7 +216,7 @@ class Motion(Part):
 
 @_frozen
 class Forces(Motion):
-    """The Forces sheet: laid out as the Motion sheet, with the summary of the sweep beside it
+    """The Forces sheet: laid out as the Motion sheet, with the summary of the sweep under it
     (its cells; the coefficient of speed fluctuation is an input among them) and, for a crank,
     the column of the work of the driving torque above its mean."""
     summary: dict[str, SummaryCell] = _entry(_map(_part(SummaryCell)))

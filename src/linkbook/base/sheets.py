@@ -12,6 +12,7 @@ MECH, SWEEP, MOTION_SHEET, CHARTS, GRID, STROKE, META = (
     "Mechanism", "Sweep", "Motion", "Charts", "Grid", "Stroke sweep", "linkbook")
 FORCES_SHEET = "Forces"
 DRAWING_COLUMNS = ("N", "O")   # x and y of the joints table and of the links the drawing plots
+JOINT_COLUMN = "M"             # the joints table's joint names: the drawing's labels read them
 DASH = "—"     # "no value here" in text cells (SMALL, MIN, MAX and COUNT skip text)
 GAPS_SHOWN = 3       # the assembly gaps the summary lists
 CELL_TEXT = 30_000    # Excel holds at most 32,767 characters in a cell

@@ -41,7 +41,7 @@ def make(t: Template, values_needed: bool = True) -> tuple[workbook.Built, dict 
     workbook.set_radian_windows(built, radian_windows(built, angles))
     values = engine.evaluate(built.workbook) if values_needed else None
     charts.add_charts(built, t, built.model)
-    _print_setup(built.workbook)
+    _print_setup(built)
     return built, values
 
 
@@ -81,11 +81,15 @@ def check_frames(t: Template, model) -> list[str]:
     return warnings
 
 
-def _print_setup(wb) -> None:
+def _print_setup(built: workbook.Built) -> None:
     """Page layout for printing and previews; the Mechanism sheet (inputs, current position and
-    drawing side by side) prints one page wide, landscape, so no block is cut off."""
+    drawing side by side) prints one page wide, landscape, so no block is cut off, and the
+    Forces sheet's summary on one page."""
+    from .forces import summary_rows
     from .pages import apply_print_setup
-    apply_print_setup(wb, fit_to_width=(MECH,))
+    forces = built.meta.get("forces")
+    kept = {forces["sheet"]: [summary_rows(forces)]} if forces else {}
+    apply_print_setup(built.workbook, fit_to_width=(MECH,), keep_together=kept)
 
 
 def _angle_columns(built: workbook.Built):

@@ -11,6 +11,7 @@ from __future__ import annotations
 from openpyxl.chart import Reference, ScatterChart, Series
 from openpyxl.chart.axis import ChartLines
 from openpyxl.chart.data_source import NumFmt, StrRef
+from openpyxl.chart.legend import LegendEntry
 from openpyxl.chart.series import SeriesLabel
 from openpyxl.drawing.line import LineProperties
 from openpyxl.chart.layout import Layout, ManualLayout
@@ -22,7 +23,8 @@ from ..base.palette import PART_COLOURS, PATH_COLOUR, drawing_colours, link_labe
 from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, NEWTON, NEWTON_METRE, Model
 from .style import header, unit_text
 from ..language.templates import Template
-from ..base.sheets import CHARTS, FORCES_SHEET, GRID, MECH, MOTION_SHEET, SWEEP
+from ..base.sheets import (CHARTS, FORCES_SHEET, GRID, JOINT_COLUMN, MECH, MOTION_SHEET,
+                           SWEEP)
 from .workbook import Built
 
 LINE_EMU = 22000          # 1.7 pt
@@ -85,14 +87,51 @@ def _frame_axes(chart: ScatterChart, size_cm: float) -> None:
         axis.majorGridlines = ChartLines()
         axis.majorGridlines.spPr = GraphicalProperties(ln=LineProperties(solidFill=GRID_COLOUR,
                                                                           w=6350))
-    # The inner plot area is a square, SIDE of the chart's height, with the title above it and
-    # the legend to its right (a column of links fits there at any count). openpyxl writes
-    # chart.layout as the plot area's layout; Excel and LibreOffice both honour it.
+    _square_plot_area(chart, size_cm)
+
+
+def _square_plot_area(chart: ScatterChart, size_cm: float, left: float = 0.06) -> None:
+    """The inner plot area (the axes' box, without their labels) a square, SIDE of the chart's
+    height, with the title above it and the legend to its right (a column of links fits there
+    at any count); `left`: the room left of it, a share of the chart's width. openpyxl writes
+    chart.layout as the plot area's layout; Excel and LibreOffice both honour it."""
     chart.height, chart.width = size_cm, size_cm * WIDTH_RATIO
-    left, top = 0.06, 0.15
     chart.layout = Layout(ManualLayout(layoutTarget="inner", xMode="edge", yMode="edge",
-                                       x=left, y=top, w=SIDE / WIDTH_RATIO, h=SIDE))
+                                       x=left, y=0.15, w=SIDE / WIDTH_RATIO, h=SIDE))
     chart.legend.position = "r"
+
+
+JOINT_LABEL_SIZE = 900       # 9 pt, bold: a joint's name above its point
+
+
+def _joint_names(ws_frame, links: dict, drawing: list[dict]) -> list[Series]:
+    """Each joint named once on the drawing, as pylinkage does: a series of one point, the
+    first point of a link that reaches the joint, drawn invisible, named by the joints
+    table's cell with the joint's name and labelled with that name (its series name). The
+    label belongs to its point, so it moves with the joint when an input changes. (A label
+    of a link's own point with its text from a cell Excel shows, LibreOffice does not: it
+    shows the point's value there.)"""
+    from openpyxl.chart.label import DataLabelList
+    from openpyxl.chart.text import RichText
+    from openpyxl.drawing.text import CharacterProperties, Paragraph, ParagraphProperties
+    out, named = [], set()
+    for link in drawing:
+        if link.get("kind") in PART_COLOURS:        # a guide's or a block's corners: no joint
+            continue
+        for k, name in enumerate(link["joints"]):
+            if name in named:
+                continue
+            named.add(name)
+            row = link["rows"][0] + k
+            s = _mapped(ws_frame, links, (row, row), name)
+            s.tx = SeriesLabel(strRef=StrRef(f"{quote_sheetname(MECH)}!${JOINT_COLUMN}${row}"))
+            s.graphicalProperties.line.noFill = True
+            bold = CharacterProperties(sz=JOINT_LABEL_SIZE, b=True)
+            s.dLbls = DataLabelList(showSerName=True, showVal=False, showCatName=False,
+                                    dLblPos="t", txPr=RichText(
+                p=[Paragraph(pPr=ParagraphProperties(defRPr=bold), r=[], endParaRPr=bold)]))
+            out.append(s)
+    return out
 
 
 def _scale_bar(ws, frame: dict) -> Series:
@@ -153,6 +192,10 @@ def _drawing(wb, t, model: Model, meta: dict) -> None:
         chart.series.append(_mapped(ws_frame, p, tuple(p["rows"]), p["title"], width=12700,
                                     colour=PATH_COLOUR))
     chart.series.append(_scale_bar(ws_frame, frame))
+    names = _joint_names(ws_frame, links, pos["drawing"])     # last: the legend leaves them out
+    chart.series += names
+    chart.legend.legendEntry = [LegendEntry(idx=i, delete=True) for i in
+                                range(len(chart.series) - len(names), len(chart.series))]
     _frame_axes(chart, DRAWING_CM)
     ws.add_chart(chart, pos["chart_anchor"])   # under the joints table it draws
 
@@ -258,11 +301,32 @@ def _force_charts(wb, t, model: Model, meta: dict, anchor_row: int) -> None:
             _angle_axis(chart, t)
         ws.add_chart(chart, f"A{anchor_row}")
         anchor_row += 21
+    ws.add_chart(_polar_diagram(ws_data, table), f"A{anchor_row}")
+
+
+POLAR_CM = 12      # the polar diagram's height (its square plot area: SIDE of it)
+
+
+def _polar_diagram(ws_data, table: dict) -> ScatterChart:
+    """The shaking force's tip over the sweep, at equal scales: with it, drawn invisible and
+    left out of the legend, the two corners of its square about the origin (the summary's
+    polar_square cells), so both axes scale to the same span, in a square plot area. (Gnumeric
+    lists the corners in the legend: it reads no deleted legend entry.)"""
+    from openpyxl.utils.cell import coordinate_from_string
+    from .forces import POLAR_SQUARE, SHAKING
     polar = _chart("Shaking force on the frame: polar diagram", "Fs_x [N]", "Fs_y [N]")
-    polar.series.append(_series(ws_data, letters["shaking_x"], letters["shaking_y"], rows,
-                                "Fs (tip of the vector over the sweep)"))
-    polar.width = polar.height = 14
-    ws.add_chart(polar, f"A{anchor_row}")
+    polar.series.append(_series(ws_data, *(table["columns"][k] for k in SHAKING),
+                                tuple(table["rows"]), "Fs (tip of the vector over the sweep)"))
+    for i in (0, 1):      # a series per corner: one point, no line to draw in any application
+        (x_col, row), (y_col, _) = (coordinate_from_string(
+            table["summary"][f"{POLAR_SQUARE}{a}{i}"]["cell"]) for a in "xy")
+        corner = _series(ws_data, x_col, y_col, (row, row), f"corner {i + 1} of the square")
+        corner.graphicalProperties.line.noFill = True
+        polar.series.append(corner)
+    polar.legend.legendEntry = [LegendEntry(idx=i, delete=True) for i in (1, 2)]
+    # room on the left for the y axis's title and its numbers, which a frame has not
+    _square_plot_area(polar, POLAR_CM, left=0.12)
+    return polar
 
 
 def _mean_line(ws, cells: dict) -> Series:

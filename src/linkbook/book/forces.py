@@ -3,7 +3,7 @@ current position (row 5) and at every row of the Sweep sheet, each reading that 
 positions (Sweep) and accelerations (Motion). Its formulas come from the force writer
 (language/forces.py); lengths become metres through the one named cell `to_metres`.
 
-Beside the table, the summary of the sweep: the driving effort's mean (the trapezoid rule over
+Under the table, the summary of the sweep: the driving effort's mean (the trapezoid rule over
 the sweep's inputs: for a crank's full turn, the work per turn over 2π) and RMS, its largest and
 smallest value and where, each pin's peak load; for a crank also the energy fluctuation ΔE (the
 swing of the work of T12 above its mean, column W) and the flywheel inertia ΔE/(Cs·ω²) for the
@@ -66,8 +66,8 @@ def pin_keys(model: Model) -> list[str]:
 
 
 def summary(wb, ws, t: Template, model: Model, names: dict, table: dict) -> dict:
-    """The summary block right of the table (see the module's docstring); for a crank the
-    work column W right of the last force column."""
+    """The summary block under the table (see the module's docstring); for a crank the work
+    column W right of the last force column."""
     crank = t.mechanism.input_is_angle
     letters, (r0, r1) = table["columns"], table["rows"]
     last = max(column_index_from_string(v) for v in letters.values())
@@ -79,11 +79,9 @@ def summary(wb, ws, t: Template, model: Model, names: dict, table: dict) -> dict
     span = f"($A${r0 + 1}:$A${r1}-$A${r0}:$A${r1 - 1})"
     length = f"($A${r1}-$A${r0})"
     work = None
-    label_col = get_column_letter(last + (3 if crank else 2))
-    value_col = get_column_letter(last + (4 if crank else 3))
-    unit_col = get_column_letter(last + (5 if crank else 4))
+    label_col, value_col, unit_col = _summary_columns(ws)
     cells: dict = {}
-    row = 3
+    row = r1 + 2
     put_text(ws, f"{label_col}{row}", "Summary over the sweep", BOLD)
 
     def add(key, label, formula, unit, fill=DERIVED_FILL, fmt=FORCE_FORMAT, kind="number"):
@@ -132,9 +130,56 @@ def summary(wb, ws, t: Template, model: Model, names: dict, table: dict) -> dict
             f"=IF({cs}*{omega}^2=0,NA(),{energy}/({cs}*{omega}^2))", "kg·m²",
             fmt=ENERGY_FORMAT)
     _mean_line_cells(ws, t, cells, row + 2, (label_col, value_col), mean, r0, r1)
-    ws.column_dimensions[label_col].width = 44
-    ws.column_dimensions[value_col].width = 14
+    _polar_square_cells(ws, cells, row + 6, (label_col, value_col),
+                        [f"${letters[k]}${r0}:${letters[k]}${r1}" for k in SHAKING])
     return {"summary": cells, **({"work": work} if work else {})}
+
+
+def summary_rows(forces: dict) -> tuple[int, int]:
+    """The rows of the summary block, its title to its last cell (the chart points'): printed
+    on one page (pages.apply_print_setup's keep_together)."""
+    from openpyxl.utils.cell import coordinate_from_string
+    rows = [coordinate_from_string(c["cell"])[1] for c in forces["summary"].values()]
+    return min(rows) - 1, max(rows)
+
+
+SHAKING = ("shaking_x", "shaking_y")     # the shaking force's components: its polar diagram
+POLAR_SQUARE = "polar_square_"           # the summary cells of that diagram's square
+
+
+def _polar_square_cells(ws, cells: dict, row: int, columns: tuple[str, str],
+                        ranges: list[str]) -> None:
+    """Two points for the polar diagram, drawn invisible: the corners (−R, −R) and (R, R) of
+    the square about the origin that holds the shaking force, R its largest component in size.
+    Both axes then span the same data, so the applications' own axis scaling (live, after any
+    edit) gives both the same range: in a square plot area, equal scales."""
+    x, y = columns
+    put_text(ws, f"{x}{row}", "the polar diagram's square: (−R, −R), then (R, R), R the "
+                              "largest |Fs_x| or |Fs_y|", NOTE)
+    reach = f"${x}${row + 2}"
+    parts = ",".join(f"MAX({r}),-MIN({r})" for r in ranges)
+    formulas = {"x0": f"=-{reach}", "y0": f"=-{reach}", "x1": f"=MAX({parts})",
+                "y1": f"={reach}"}
+    for key, formula in formulas.items():
+        cell = f"{x if key[0] == 'x' else y}{row + 1 + int(key[1])}"
+        set_formula(ws[cell], formula).number_format = FORCE_FORMAT
+        cells[f"{POLAR_SQUARE}{key}"] = {"cell": cell, "kind": "number", "unit": ""}
+
+
+SUMMARY_LABEL_WIDTH = 44     # the longest label, "coefficient of speed fluctuation Cs (input)"
+
+
+def _summary_columns(ws) -> tuple[str, str, str]:
+    """The summary's label, value and unit columns, under the table from column B: a label
+    reads on over the empty cells to its right, the value stands in the first column past
+    SUMMARY_LABEL_WIDTH. Under the table, not beside it: a printed page of the summary then
+    has no repeated input column beside it (pages.py repeats column A on every page), only
+    the empty cells of column A under the table's last row."""
+    first = col = column_index_from_string("B")
+    while sum(ws.column_dimensions[get_column_letter(c)].width or 8.43
+              for c in range(first, col)) < SUMMARY_LABEL_WIDTH:
+        col += 1
+    return tuple(get_column_letter(c) for c in (first, col, col + 1))
 
 
 def _mean_line_cells(ws, t: Template, cells: dict, row: int, columns: tuple[str, str], mean: str,

@@ -11,8 +11,8 @@ from ..language.model import LENGTH, Model
 from .resolve import Resolver
 from ..language.templates import Template
 from .package import Formula
-from .style import (BOLD, BOX, INPUT_FILL, LINE_HEIGHT, NOTE, ROW, TITLE, header, label_lines,
-                    number_format, put, put_head, put_text, table_style)
+from .style import (BOLD, BOX, INPUT_FILL, LINE_HEIGHT, NOTE, ROW, TITLE, column_width, header,
+                    label_lines, number_format, put, put_head, put_text, table_style)
 
 COL = "\x01"   # stands for the column letter in a grid formula rendered once for all cells
 
@@ -33,8 +33,9 @@ def grid_sheet(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
     cols = []
     for j, value in enumerate(t.grid_values, start=2):
         letter = get_column_letter(j)
-        ws.column_dimensions[letter].width = 12
-        put_head(ws, head_row - 1, j, header(q_out.symbol, LENGTH, t.length_unit))
+        head = header(q_out.symbol, LENGTH, t.length_unit)
+        ws.column_dimensions[letter].width = max(12, column_width(head, bold=True))
+        put_head(ws, head_row - 1, j, head)
         c = ws.cell(head_row, j, value)
         c.fill = INPUT_FILL
         c.font = BOLD

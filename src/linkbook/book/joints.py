@@ -6,13 +6,14 @@ from __future__ import annotations
 
 import re
 
-from ..base.sheets import DRAWING_COLUMNS, SWEEP
+from ..base.sheets import DRAWING_COLUMNS, JOINT_COLUMN, SWEEP
 from ..language.excel import parenthesize, render
 from ..language.model import LENGTH, Model
 from .resolve import Resolver
 from ..language.templates import Template
 from .frames import SQUARE_CELL
-from .style import block_head, column_range, number_format, put_text, set_formula, text_width
+from .style import (block_head, column_range, column_width, number_format, put_text,
+                    set_formula)
 from .sweep import numbers_place
 
 
@@ -24,7 +25,7 @@ def joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
     row = 7
     x_col, y_col = DRAWING_COLUMNS
     for j in model.joints:
-        put_text(ws, f"M{row}", j.name)
+        put_text(ws, f"{JOINT_COLUMN}{row}", j.name)
         for col, expr in ((x_col, j.x), (y_col, j.y)):
             set_formula(ws[f"{col}{row}"], "=" + render(expr, resolve))
             ws[f"{col}{row}"].number_format = number_format(LENGTH, t.length_unit)
@@ -40,7 +41,7 @@ def joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
         first = row
         for name in link:
             put_text(ws, f"L{row}", f"link {i}")
-            put_text(ws, f"M{row}", name)
+            put_text(ws, f"{JOINT_COLUMN}{row}", name)
             set_formula(ws[f"{x_col}{row}"], f"={cells[name][0]}")
             set_formula(ws[f"{y_col}{row}"], f"={cells[name][1]}")
             for col in DRAWING_COLUMNS:
@@ -53,7 +54,7 @@ def joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
         first = row
         for name, (x, y) in part["points"]:
             put_text(ws, f"L{row}", part["kind"])
-            put_text(ws, f"M{row}", name)
+            put_text(ws, f"{JOINT_COLUMN}{row}", name)
             set_formula(ws[f"{x_col}{row}"], x)
             set_formula(ws[f"{y_col}{row}"], y)
             for col in DRAWING_COLUMNS:
@@ -61,10 +62,11 @@ def joints_table(ws, t: Template, model: Model, resolve: Resolver) -> dict:
             row += 1
         drawing.append({"joints": [name for name, _ in part["points"]], "rows": [first, row - 1],
                         "ground": False, "kind": part["kind"], "label": part["label"]})
-    for col in ("L", "M"):      # a slider's rows name longer points (`B guide 1`): shown whole
+    # a slider's rows name longer points (`B guide 1`): shown whole
+    for col in ("L", JOINT_COLUMN):
         names = [ws[f"{col}{r}"].value for r in range(7, row)]
-        widest = max((text_width(n) for n in names if isinstance(n, str)), default=0.0)
-        ws.column_dimensions[col].width = max(ws.column_dimensions[col].width, round(widest, 1))
+        widest = max((column_width(n) for n in names if isinstance(n, str)), default=0.0)
+        ws.column_dimensions[col].width = max(ws.column_dimensions[col].width, widest)
     return {"cells": cells, "drawing": drawing, "chart_row": row + 1}
 
 

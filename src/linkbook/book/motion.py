@@ -3,7 +3,6 @@ row of the Sweep sheet, each reading that row's positions.
 """
 from __future__ import annotations
 
-from openpyxl.styles import Alignment
 from openpyxl.utils import column_index_from_string, get_column_letter, quote_sheetname
 
 from ..base.sheets import MECH, MOTION_SHEET, SWEEP
@@ -51,7 +50,6 @@ def row_table(ws, t: Template, model: Model, names: dict, qs: list, sweep: dict,
         letter = letters[q.key]
         ws.column_dimensions[letter].width = 12
         put_text(ws, f"{letter}3", q.label, NOTE)
-        ws[f"{letter}3"].alignment = Alignment(wrap_text=True, vertical="top")
         put_head(ws, head_row, i, header(q.symbol, q.unit, t.length_unit))
     fit_labels(ws, 3, ["A"] + [letters[q.key] for q in qs], heads=head_row)
     own = {k: f"{v}{ROW}" for k, v in letters.items()}

@@ -20,12 +20,15 @@ DEFAULT_COL_CHARS = 8.54                 # what LibreOffice gives a column of no
 CHAR_CM = 0.0972 * 2.54
 
 
-def apply_print_setup(wb, fit_to_width: tuple[str, ...] = ()) -> None:
+def apply_print_setup(wb, fit_to_width: tuple[str, ...] = (),
+                      keep_together: dict[str, list[tuple[int, int]]] | None = None) -> None:
     """Landscape or portrait, a scale, page breaks and a footer for every visible sheet, so
     that printed (and previewed) pages are readable and no chart is split across pages.
     Sheets named in `fit_to_width` print landscape, one page wide (blocks side by side stay
-    together), with the row breaks chosen for them. A title or note wider than the first page
-    wraps within it. Call after the charts have been added; it changes no cell's value."""
+    together), with the row breaks chosen for them. `keep_together` names, by sheet, the
+    (first, last) rows of blocks that no row break may cut, as none cuts a chart. A title or
+    note wider than the first page wraps within it. Call after the charts have been added; it
+    changes no cell's value."""
     from openpyxl.worksheet.page import PageMargins
     for ws in wb.worksheets:
         if ws.sheet_state != "visible":
@@ -34,12 +37,13 @@ def apply_print_setup(wb, fit_to_width: tuple[str, ...] = ()) -> None:
         ws.page_setup.paperSize = ws.PAPERSIZE_A4
         ws.sheet_properties.pageSetUpPr.fitToPage = False    # a fixed scale keeps breaks
         _repeat_frozen_titles(ws)
-        sheet = _SheetShape.of(ws)
+        kept = (keep_together or {}).get(ws.title, [])
+        sheet = _SheetShape.of(ws, kept)
         orientation, scale, col_breaks, row_breaks = sheet.best_layout()
         fit = ws.title in fit_to_width
         room = sheet.first_page_cm(orientation, None if fit else scale, col_breaks)
         if _wrap_title_rows(ws, sheet, room):     # taller rows: the row breaks move
-            sheet = _SheetShape.of(ws)
+            sheet = _SheetShape.of(ws, kept)
             orientation, scale, col_breaks, row_breaks = sheet.best_layout()
         if fit:
             orientation, scale, col_breaks, row_breaks = "landscape", None, [], []
@@ -127,16 +131,26 @@ def _wrap_title_rows(ws, sheet: "_SheetShape", room_cm: float) -> bool:
 def _column_page_areas(ws, sheet: "_SheetShape", col_breaks) -> None:
     """A sheet printed in several columns of pages: one print range per column of pages, the
     later ones from the row under the title and note, so that the repeated column A does not
-    print a slice of them on every continuation page."""
+    print a slice of them on every continuation page, each down to the last row it holds
+    something in (a block under a table, the Forces sheet's summary, makes no empty pages
+    in the columns right of it)."""
     if not col_breaks or not ws.print_title_cols:
         return
     # the last range a few empty columns wider: a chart at the right edge keeps its right
     # side where LibreOffice's default column is narrower than this count of it
-    last_col, last_row = max(sheet.col_cm) + SPARE_COLUMNS, max(sheet.row_cm)
+    last_col = max(sheet.col_cm) + SPARE_COLUMNS
     starts = [1] + [c + 1 for c in col_breaks]
     ends = [c for c in col_breaks] + [last_col]
-    ws.print_area = [f"{_letter(a)}{1 if i == 0 else TITLE_ROWS + 1}:{_letter(b)}{last_row}"
-                     for i, (a, b) in enumerate(zip(starts, ends))]
+    ws.print_area = [f"{_letter(a)}{1 if i == 0 else TITLE_ROWS + 1}:{_letter(b)}"
+                     f"{_last_row(ws, sheet, a, b)}" for i, (a, b) in enumerate(zip(starts, ends))]
+
+
+def _last_row(ws, sheet: "_SheetShape", first_col: int, last_col: int) -> int:
+    """The last row holding a value or a chart in the columns first_col..last_col."""
+    rows = [row for (row, col), c in ws._cells.items()
+            if first_col <= col <= last_col and c.value is not None]
+    rows += [r1 for c0, c1, _, r1 in sheet.charts if c0 <= last_col and c1 >= first_col]
+    return max(rows, default=TITLE_ROWS + 1)
 
 
 def _set_breaks(ws, col_breaks, row_breaks) -> None:
@@ -157,16 +171,18 @@ def _letter(index: int) -> str:
 class _SheetShape:
     """Sizes in cm of a sheet's columns and rows, what is used, and where the charts sit."""
 
-    def __init__(self, col_cm, row_cm, used_cols, charts, title_rows_cm, title_cols_cm):
+    def __init__(self, col_cm, row_cm, used_cols, charts, title_rows_cm, title_cols_cm,
+                 kept=()):
         self.col_cm = col_cm              # index 1.. -> width in cm
         self.row_cm = row_cm              # index 1.. -> height in cm
         self.used_cols = used_cols        # column indices holding a value or a chart
         self.charts = charts              # (first col, last col, first row, last row)
         self.title_rows_cm = title_rows_cm    # repeated at the top of every further page
         self.title_cols_cm = title_cols_cm    # repeated at the left of every further page
+        self.kept = list(kept)            # (first row, last row) of blocks kept on one page
 
     @classmethod
-    def of(cls, ws) -> "_SheetShape":
+    def of(cls, ws, kept=()) -> "_SheetShape":
         from openpyxl.utils import column_index_from_string
         used_cols, max_row = set(), 0
         for (row, col), c in ws._cells.items():   # iter_rows() would fill the gaps with cells
@@ -188,7 +204,7 @@ class _SheetShape:
             first, last = (column_index_from_string(x)
                            for x in ws.print_title_cols.replace("$", "").split(":"))
             title_cols = sum(col_cm.get(c, 0.0) for c in range(first, last + 1))
-        return cls(col_cm, row_cm, used_cols, charts, title_rows, title_cols)
+        return cls(col_cm, row_cm, used_cols, charts, title_rows, title_cols, kept)
 
     def best_layout(self):
         """The orientation and scale that cost least: cost = pages / scale, e.g. 6 pages at 70 %
@@ -251,10 +267,10 @@ class _SheetShape:
         return blocks
 
     def _row_pages(self, height: float):
-        """A break where each page is full, and one before a chart that would otherwise be cut
-        at the foot of a page."""
+        """A break where each page is full, and one before a chart (or a block kept together)
+        that would otherwise be cut at the foot of a page."""
         starts = {}
-        for _, _, r0, r1 in self._merged_chart_rows():
+        for r0, r1 in self._kept_rows():
             starts[r0] = r1
         breaks, y, pages = [], 0.0, 1
         room = height - self.title_rows_cm
@@ -276,15 +292,16 @@ class _SheetShape:
             y += h
         return breaks, pages
 
-    def _merged_chart_rows(self):
-        spans = sorted((r0, r1) for _, _, r0, r1 in self.charts)
+    def _kept_rows(self):
+        """The row spans no break may cut: the charts' and the kept blocks', overlaps merged."""
+        spans = sorted([(r0, r1) for _, _, r0, r1 in self.charts] + list(self.kept))
         merged = []
         for r0, r1 in spans:
             if merged and r0 <= merged[-1][1]:
                 merged[-1][1] = max(merged[-1][1], r1)
             else:
                 merged.append([r0, r1])
-        return [(0, 0, r0, r1) for r0, r1 in merged]
+        return [(r0, r1) for r0, r1 in merged]
 
 
 def _printable_cm(orientation: str) -> tuple[float, float]:

@@ -151,6 +151,14 @@ def text_width(text: str, bold: bool = False) -> float:
     return units * PX_PER_UNIT / DIGIT_PX + 1.0
 
 
+def column_width(text: str, bold: bool = False) -> float:
+    """The width of a column that shows `text` on one line: text_width rounded up to the
+    tenth a width is written with (rounded to the nearest, a header could lose its last
+    letter to a second line)."""
+    import math
+    return math.ceil(text_width(text, bold) * 10 - 1e-9) / 10
+
+
 def label_lines(text: str, width: float) -> list[str]:
     """`text` broken between words as a cell `width` wide shows it (no word split)."""
     lines: list[str] = []
@@ -163,18 +171,20 @@ def label_lines(text: str, width: float) -> list[str]:
 
 
 def fit_labels(ws, row: int, letters, heads: int | None = None) -> None:
-    """Widen each column of a row of wrapped labels so that its longest word (and the bold
-    header under it, in row `heads`) fits whole, and make the row tall enough for every line."""
+    """Widen each column of a row of labels so that its longest word (and the bold header
+    under it, in row `heads`) fits whole, wrap each label in its column, and make the row tall
+    enough for every line."""
     lines = 1
     for letter in letters:
-        dim = ws.column_dimensions[letter]
+        dim, label = ws.column_dimensions[letter], ws[f"{letter}{row}"]
         width = dim.width or 12
-        needs = [text_width(w) for w in str(ws[f"{letter}{row}"].value or "").split()]
+        needs = [column_width(w) for w in str(label.value or "").split()]
         if heads is not None and isinstance(ws[f"{letter}{heads}"].value, str):
-            needs.append(text_width(ws[f"{letter}{heads}"].value, bold=True))   # one line
-        width = max([width] + needs)
-        dim.width = round(width, 1)
-        lines = max(lines, len(label_lines(str(ws[f"{letter}{row}"].value or ""), width)))
+            needs.append(column_width(ws[f"{letter}{heads}"].value, bold=True))   # one line
+        dim.width = width = max([width] + needs)
+        if label.value is not None:
+            label.alignment = Alignment(wrap_text=True, vertical="top")
+            lines = max(lines, len(label_lines(str(label.value), width)))
     ws.row_dimensions[row].height = LINE_HEIGHT * lines
 
 
@@ -207,7 +217,7 @@ def block_head(ws, first_col: str, title: str, columns, row: int = 5) -> None:
     start = column_index_from_string(first_col)
     for i, (head, width) in enumerate(columns):
         # a header on one line: at least its bold width in the font LibreOffice draws
-        width = max(width, round(text_width(head, bold=True), 1))
+        width = max(width, column_width(head, bold=True))
         ws.column_dimensions[get_column_letter(start + i)].width = width
         put_head(ws, row + 1, start + i, head)
 

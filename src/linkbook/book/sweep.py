@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from openpyxl.styles import Alignment
 from openpyxl.utils import column_index_from_string, get_column_letter
 
 from ..base.sheets import DASH, SWEEP
@@ -79,13 +78,11 @@ def sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
         ws.column_dimensions[letters[key]].width = 12
         if q is None:
             put_text(ws, f"{letters[key]}3", f"input {mech.input_word}", NOTE)
-            ws[f"{letters[key]}3"].alignment = Alignment(wrap_text=True, vertical="top")
             put_head(ws, head_row, i, header(mech.input_symbol, mech.input_unit, t.length_unit))
             continue
         degree_column = key.endswith("_deg") and key != q.key
         unit = DEG if degree_column else q.unit
         put_text(ws, f"{letters[key]}3", q.label, NOTE)
-        ws[f"{letters[key]}3"].alignment = Alignment(wrap_text=True, vertical="top")
         put_head(ws, head_row, i, header(q.symbol, unit, t.length_unit))
         if degree_column:
             formulas[key] = degree_formula(q, f"{letters[q.key]}{ROW}")
@@ -170,7 +167,6 @@ def sweep_numbers_only(ws_sweep, t: Template, model: Model, sweep: dict) -> list
         ws_sweep.column_dimensions[letter].width = 12
         put_text(ws_sweep, f"{letter}3", f"{q.symbol}'s numbers, {DASH} at #N/A: MIN and "
                                          "MAX read these", NOTE)
-        ws_sweep[f"{letter}3"].alignment = Alignment(wrap_text=True, vertical="top")
         numbers_only(ws_sweep, column_index_from_string(letter), r0 - 1,
                      [f"{cols[key]}{r}" for r in range(r0, r1 + 1)],
                      f"{q.symbol} numbers [{unit_text(q.unit, t.length_unit)}]",

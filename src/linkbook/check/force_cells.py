@@ -191,6 +191,13 @@ def _check_summary(j, ref: dict, scale: float, metres: float, dead: np.ndarray,
     for i in (0, 1):
         expected[f"mean_line_x{i}"] = (x[-i], 1.0)
         expected[f"mean_line_y{i}"] = (mean, size)
+    if "polar_square_x1" in table.summary:     # absent from a book written before it
+        # the polar diagram's square: its largest component in size (NaN where one is)
+        reach = float(np.max(np.abs(np.concatenate([column("shaking_x"),
+                                                    column("shaking_y")]))))
+        for corner, sign in (("0", -1.0), ("1", 1.0)):
+            for axis in "xy":
+                expected[f"polar_square_{axis}{corner}"] = (sign * reach, scale)
     for key, (value, bound) in expected.items():
         c = Check("forces summary", key, j.size, 1.0, bound)
         j.compare(c, sheet, [table.summary[key].cell], np.array([value]), "", sine=worst)
