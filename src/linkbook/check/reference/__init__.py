@@ -24,6 +24,7 @@ The package, by concern:
   drawing       the drawn guides and blocks of the sliders
   fourbar       four-bar loops: Grashof's class, the input's limit angles
   synthesis     function generation (issue 38): the four-bar through given (θ2, θ4) pairs
+  synthesis_motion  motion and path generation (issue 38): the four-bar through three poses
 """
 
 from __future__ import annotations
