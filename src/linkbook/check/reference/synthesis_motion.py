@@ -61,40 +61,61 @@ def standard_form_condition(turn: np.ndarray, rotation: np.ndarray) -> float:
     return float(np.linalg.cond(m))
 
 
+def _minus_one(turn: np.ndarray) -> np.ndarray:
+    """e^{iθ} − 1 without cancellation at small θ: 2i·sin(θ/2)·e^{iθ/2}."""
+    return 2j * np.sin(0.5 * turn) * np.exp(0.5j * turn)
+
+
 def dyad_from_rotations(points: np.ndarray, turn: np.ndarray, rotation: np.ndarray
                         ) -> tuple[complex, complex] | None:
     """(G, M): the fixed pivot and the moving pivot at pose 1 of the dyad that turns through
     `rotation` (ρ_1 = 0, ρ_2, ρ_3) while the coupler turns through `turn` (Δα_j) and its point
-    passes through `points`. Pose j in the rotation about G and in the coupler's displacement:
-    (1 − e^{iρ_j})·G + (e^{iρ_j} − e^{iΔα_j})·M = P_j − e^{iΔα_j}·P_1. None if singular."""
-    spin, swing = np.exp(1j * rotation[1:]), np.exp(1j * turn[1:])
-    m = np.column_stack([1.0 - spin, spin - swing])
+    passes through `points`. Pose j in the rotation about G and in the coupler's displacement,
+    measured from P_1 (g = G − P_1, m = M − P_1, δ_j = P_j − P_1, so that poses far from the
+    origin lose no digits): (1 − e^{iρ_j})·g + (e^{iρ_j} − e^{iΔα_j})·m = δ_j. None if
+    singular."""
+    spin, swing = _minus_one(rotation[1:]), _minus_one(turn[1:])
+    m = np.column_stack([-spin, spin - swing])
     try:
-        g, moving = np.linalg.solve(m, points[1:] - swing * points[0])
+        g, moving = np.linalg.solve(m, points[1:] - points[0])
     except np.linalg.LinAlgError:
         return None
-    return complex(g), complex(moving)
+    return complex(points[0] + g), complex(points[0] + moving)
 
 
 def circle_condition(points: np.ndarray, turn: np.ndarray, fixed: complex
                      ) -> tuple[np.ndarray, np.ndarray]:
     """The rows and right-hand side of |M_j − G|² = |M_1 − G|², j = 2, 3, in the unknown
     m = M − P_1 (real, 2-vector): with e_j = P_j − G and M_j = P_j + e^{iΔα_j}·m,
-    2·(e^{−iΔα_j}·e_j − e_1)·m = |e_1|² − |e_j|²."""
-    e = points - fixed
-    rows = 2.0 * (np.exp(-1j * turn[1:]) * e[1:] - e[0])
-    return np.column_stack([rows.real, rows.imag]), abs(e[0]) ** 2 - np.abs(e[1:]) ** 2
+    2·(e^{−iΔα_j}·e_j − e_1)·m = |e_1|² − |e_j|². Both sides are written in the poses'
+    differences δ_j = P_j − P_1, so that close poses lose no digits to cancellation:
+    e^{−iΔα_j}·e_j − e_1 = e^{−iΔα_j}·δ_j + (e^{−iΔα_j} − 1)·e_1 and
+    |e_1|² − |e_j|² = −δ_j·(e_1 + e_j)."""
+    first, delta = points[0] - fixed, points[1:] - points[0]
+    rows = 2.0 * (np.exp(-1j * turn[1:]) * delta + _minus_one(-turn[1:]) * first)
+    rhs = -(delta.real * (2.0 * first + delta).real + delta.imag * (2.0 * first + delta).imag)
+    return np.column_stack([rows.real, rows.imag]), rhs
 
 
 def dyad_from_fixed_pivot(points: np.ndarray, turn: np.ndarray, fixed: complex
                           ) -> tuple[complex, float]:
-    """(M, cond₂): the moving pivot at pose 1 whose three positions lie on a circle about the
-    given fixed pivot, by lstsq of the circle condition; M is NaN where it is near-singular."""
+    """(M, condition): the moving pivot at pose 1 whose three positions lie on a circle about
+    the given fixed pivot, by lstsq of the circle condition; M is NaN where that is
+    near-singular. Close poses make its entries small differences of larger terms, so its
+    condition counts what they lose: (the largest term of a row + of the right-hand side / |m|)
+    over the smallest singular value, the solution's relative error per unit round-off."""
     m, rhs = circle_condition(points, turn, fixed)
-    condition = float(np.linalg.cond(m))
+    first, delta = abs(points[0] - fixed), np.abs(points[1:] - points[0])
+    row_terms = 2.0 * (delta + np.abs(_minus_one(turn[1:])) * first)
+    rhs_terms = delta * (2.0 * first + delta)
+    smallest = float(np.linalg.svd(m, compute_uv=False)[-1])
+    if not smallest > 0.0:
+        return complex(math.nan, math.nan), math.inf
+    u = np.linalg.lstsq(m, rhs, rcond=None)[0]
+    reach = max(math.hypot(*u), 1e-300)
+    condition = float((row_terms.max() + rhs_terms.max() / reach) / smallest)
     if not condition <= SINGULAR_COND:
         return complex(math.nan, math.nan), condition
-    u = np.linalg.lstsq(m, rhs, rcond=None)[0]
     return complex(points[0] + complex(u[0], u[1])), condition
 
 
