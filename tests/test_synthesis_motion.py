@@ -215,17 +215,57 @@ def standard_form(x, y, alpha, rotation) -> tuple[complex, complex]:
     return tuple(np.linalg.solve(m, p[1:] - p[0]))
 
 
+def cross(p: complex, q: complex) -> float:
+    return p.real * q.imag - p.imag * q.real
+
+
+def sheet_condition(x, y, alpha, rotation) -> float:
+    """cond₂ of [e^{iβ_j} − 1, e^{iα_j} − 1] by the 2×2 formula docs/synthesis.md gives the
+    sheet: √(t₁/t₂), t₁ the larger root of t² − F·t + |D|², t₂ = |D|²/t₁."""
+    turn = np.asarray(alpha)[1:] - alpha[0]
+    m = np.column_stack([np.exp(1j * np.asarray(rotation)) - 1.0, np.exp(1j * turn) - 1.0])
+    f, det = float(np.sum(np.abs(m) ** 2)), abs(m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0])
+    if det == 0.0:
+        return math.inf
+    t1 = 0.5 * (f + math.sqrt(max(f * f - 4.0 * det * det, 0.0)))
+    return t1 / det         # √(t₁/t₂) with t₂ = |D|²/t₁
+
+
 @settings(max_examples=EXAMPLES, deadline=None, derandomize=True)
 @given(task=poses, free=free_choices)
-def test_the_dyad_vectors_are_the_standard_forms(task, free):
+def test_the_sheets_standard_form_gives_the_same_design(task, free):
+    """docs/synthesis.md's "For the sheet": W, Z, U, S of the standard form (solved here by
+    numpy), then the pivots, lengths, coupler point, offset and crank and rocker angles by its
+    formulas, and its condition number: the reference's design, to condition × round-off."""
     x, y, alpha = (np.array(v) for v in task)
     design = motion_generation(x, y, alpha, crank_rotation=free[:2], rocker_rotation=free[2:])
+    condition = max(sheet_condition(x, y, alpha, free[:2]), sheet_condition(x, y, alpha, free[2:]))
+    if condition > SINGULAR_COND:       # near an exact singularity both are round-off
+        assert design["condition"] > SINGULAR_COND
+    else:
+        assert condition == pytest.approx(design["condition"], rel=1e-6)
     assume(not design["singular"] and not design["degenerate"])
     tol = design["condition"] * 1e-13 * size_of(design)
-    for (first, second), rotation in ((("W", "Z"), free[:2]), (("U", "S"), free[2:])):
-        w, z = standard_form(x, y, alpha, rotation)
-        assert complex(*design[first]) == pytest.approx(w, abs=tol)
-        assert complex(*design[second]) == pytest.approx(z, abs=tol)
+    (w, z), (u, s) = (standard_form(x, y, alpha, free[:2]), standard_form(x, y, alpha, free[2:]))
+    p1 = complex(x[0], y[0])
+    expected = {"W": w, "Z": z, "U": u, "S": s, "A": p1 - z, "B": p1 - s,
+                "A0": p1 - z - w, "B0": p1 - s - u}
+    for key, value in expected.items():
+        assert complex(*design[key]) == pytest.approx(value, abs=tol), key
+    # what is measured between the two dyads (Z − S, W + Z − U − S) loses the digits a short
+    # link cancels: size / shortest
+    tol *= size_of(design) / min(design[k] for k in "abcd")
+    b = abs(z - s)
+    assert [design[k] for k in "abcd"] == pytest.approx(
+        [abs(w), b, abs(u), abs(w + z - u - s)], abs=tol)
+    assert design["coupler_point"] == pytest.approx(
+        ((z * np.conj(z - s)).real / b, cross(z - s, z) / b), abs=tol)
+    assert angle_gap(design["coupler_offset"], alpha[0] - np.angle(z - s)) \
+        == pytest.approx(0.0, abs=tol / b)
+    assert angle_gap(design["theta2"], np.angle(w) + np.array([0.0, *free[:2]])) \
+        == pytest.approx([0.0] * 3, abs=tol / abs(w))
+    assert angle_gap(design["theta4"], np.angle(u) + np.array([0.0, *free[2:]])) \
+        == pytest.approx([0.0] * 3, abs=tol / abs(u))
 
 
 # --- no linkage ------------------------------------------------------------------------------
@@ -278,3 +318,47 @@ def test_the_branch_asked_for_is_checked():
         motion_generation(x, y, alpha, branch=2, **pivots)
     with pytest.raises(ValueError, match="crank"):
         motion_generation(x, y, alpha, rocker_pivot=(4.0, 0.0))
+
+
+# --- pylinkage, a third party ----------------------------------------------------------------
+
+def carried(point, x, y, alpha) -> np.ndarray:
+    """A point of the coupler, given at pose 1, at each pose (a rigid displacement)."""
+    p = np.asarray(x) + 1j * np.asarray(y)
+    return p + np.exp(1j * (np.asarray(alpha) - alpha[0])) * (complex(*point) - p[0])
+
+
+def test_pylinkage_burmester_dyads_are_the_same_four_bars():
+    """pylinkage 1.3's motion_generation_3_poses samples the Burmester centre-point curve and
+    pairs dyads (fixed pivot, moving pivot at pose 1). Given its fixed pivots, the circle
+    condition finds its moving pivots; given its dyads' rotations (its moving pivots carried
+    through the poses), the pose transform finds its fixed pivots. Its path_generation_with_
+    timing is not compared: it takes the crank angles as the coupler's rotations."""
+    synthesis = pytest.importorskip("pylinkage.synthesis")
+    rng = np.random.default_rng(38)
+    compared = 0
+    for _ in range(12):
+        x, y, alpha = rng.uniform(-3.0, 3.0, 3), rng.uniform(-3.0, 3.0, 3), \
+            rng.uniform(-1.5, 1.5, 3)
+        result = synthesis.motion_generation_3_poses(
+            [synthesis.Pose(*pose) for pose in zip(x, y, alpha)])
+        for theirs in result.raw_solutions[:5]:
+            fixed = (theirs.ground_pivot_a, theirs.ground_pivot_d)
+            moving = (theirs.crank_pivot_b, theirs.coupler_pivot_c)
+            spins = [np.angle((carried(m, x, y, alpha) - complex(*g))
+                              / (complex(*m) - complex(*g)))[1:] for g, m in zip(fixed, moving)]
+            by_pivots = motion_generation(x, y, alpha, crank_pivot=fixed[0],
+                                          rocker_pivot=fixed[1])
+            by_rotations = motion_generation(x, y, alpha, crank_rotation=spins[0],
+                                             rocker_rotation=spins[1])
+            lengths = [theirs.crank_length, theirs.coupler_length, theirs.rocker_length,
+                       theirs.ground_length]
+            for design in (by_pivots, by_rotations):
+                tol = max(ROUND_TRIP, design["condition"] * 1e-13) * max(lengths)
+                assert design["A0"] == pytest.approx(fixed[0], abs=tol)
+                assert design["B0"] == pytest.approx(fixed[1], abs=tol)
+                assert design["A"] == pytest.approx(moving[0], abs=tol)
+                assert design["B"] == pytest.approx(moving[1], abs=tol)
+                assert [design[k] for k in "abcd"] == pytest.approx(lengths, abs=tol)
+            compared += 1
+    assert compared >= 30
