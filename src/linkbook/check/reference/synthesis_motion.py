@@ -201,27 +201,29 @@ def motion_generation(x: Sequence[float], y: Sequence[float], alpha: Sequence[fl
     `crank_rotation`, `rocker_rotation`: the links' rotations from pose 1 (0 first);
     `branch` (+1 open, −1 crossed, 0 dead centre, per pose), `branch_defect`, `wrong_branch`,
     `grashof`; `singular`, `degenerate` (then everything is NaN) and `condition`, the larger
-    cond₂ of the two dyads' systems."""
+    of the two dyads' condition numbers (the standard form's, or the circle condition's)."""
     _check_branch(branch)
     points, turn = _poses(x, y, alpha)
-    alpha = _three(alpha, "alpha")
-    dyads, conditions = [], []
-    for rotation, pivot, name in ((crank_rotation, crank_pivot, "crank"),
-                                  (rocker_rotation, rocker_pivot, "rocker")):
-        if (rotation is None) == (pivot is None):
-            raise ValueError(f"the {name} needs either its rotations or its fixed pivot")
-        if pivot is not None:
-            fixed = complex(*pivot)
-            moving, condition = dyad_from_fixed_pivot(points, turn, fixed)
-            dyads.append((fixed, moving))
-        else:
-            rotation = np.concatenate([[0.0], _two(rotation, f"{name}_rotation")])
-            condition = standard_form_condition(turn, rotation)
-            solved = dyad_from_rotations(points, turn, rotation) \
-                if condition <= SINGULAR_COND else None
-            dyads.append(solved if solved is not None else (complex(math.nan, math.nan),) * 2)
-        conditions.append(condition)
-    return four_bar(points, alpha, dyads[0], dyads[1], max(conditions), branch)
+    crank, crank_condition = _dyad(points, turn, crank_rotation, crank_pivot, "crank")
+    rocker, rocker_condition = _dyad(points, turn, rocker_rotation, rocker_pivot, "rocker")
+    return four_bar(points, _three(alpha, "alpha"), crank, rocker,
+                    max(crank_condition, rocker_condition), branch)
+
+
+def _dyad(points: np.ndarray, turn: np.ndarray, rotation: Sequence[float] | None,
+          pivot: tuple[float, float] | None, name: str) -> tuple[tuple[complex, complex], float]:
+    """((G, M), condition) of one dyad from its rotations or its fixed pivot; G and M NaN
+    where its system is near-singular."""
+    if (rotation is None) == (pivot is None):
+        raise ValueError(f"the {name} needs either its rotations or its fixed pivot")
+    if pivot is not None:
+        fixed = complex(*pivot)
+        moving, condition = dyad_from_fixed_pivot(points, turn, fixed)
+        return (fixed, moving), condition
+    rotation = np.concatenate([[0.0], _two(rotation, f"{name}_rotation")])
+    condition = standard_form_condition(turn, rotation)
+    solved = dyad_from_rotations(points, turn, rotation) if condition <= SINGULAR_COND else None
+    return solved or (complex(math.nan, math.nan),) * 2, condition
 
 
 def _two(values: Sequence[float], name: str) -> np.ndarray:
