@@ -24,6 +24,8 @@ The package, by concern:
   drawing       the drawn guides and blocks of the sliders
   fourbar       four-bar loops: Grashof's class, the input's limit angles
   synthesis     function generation (issue 38): the four-bar through given (θ2, θ4) pairs
+  synthesis_motion  motion and path generation (issue 38): the four-bar through three poses
+  synthesis_slider  slider-crank function generation (issue 38): three (θ2, s) pairs
 """
 
 from __future__ import annotations

@@ -168,16 +168,21 @@ def _coefficients(a: float, b: float, c: float, d: float) -> np.ndarray:
     return np.array([d / a, d / c, (a * a - b * b + c * c + d * d) / (2.0 * a * c)])
 
 
+def assembly(pin, joint, pivot) -> np.ndarray:
+    """linkbook's dyad branch of a four-bar from its points (complex numbers or arrays): the
+    crank pin A, the coupler-rocker joint B and the rocker's pivot B0. The sign of
+    cross(B − B0, A − B0): +1 open, −1 crossed; 0 at a dead centre, where both meet (the cross
+    product below TANGENT of its sides' product, as the position reference takes it)."""
+    rocker, reach = np.asarray(joint) - pivot, np.asarray(pin) - pivot
+    cross = (np.conj(rocker) * reach).imag
+    flat = np.abs(cross) <= TANGENT * np.abs(rocker) * np.abs(reach)
+    return np.where(flat, 0.0, np.sign(cross))
+
+
 def _branches(a: float, c: float, d: float, theta2: np.ndarray, theta4: np.ndarray
               ) -> np.ndarray:
-    """linkbook's dyad branch of the linkage at each point: the sign of cross(B − B0, A − B0)
-    (+1 open, −1 crossed; 0 at a dead centre, where both meet: the cross product below TANGENT
-    of its sides' product, as the position reference takes it)."""
-    ax, ay = a * np.cos(theta2), a * np.sin(theta2)
-    bx, by = c * np.cos(theta4), c * np.sin(theta4)       # B − B0
-    cross = bx * ay - by * (ax - d)
-    flat = np.abs(cross) <= TANGENT * np.hypot(bx, by) * np.hypot(ax - d, ay)
-    return np.where(flat, 0.0, np.sign(cross))
+    """The assembly at each point of the linkage with A0 at the origin and B0 at (d, 0)."""
+    return assembly(a * np.exp(1j * theta2), d + c * np.exp(1j * theta4), d)
 
 
 def _transmission_at(a: float, b: float, c: float, d: float, theta2) -> np.ndarray:
