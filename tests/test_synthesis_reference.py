@@ -13,7 +13,7 @@ import os
 import numpy as np
 import pytest
 import scipy.linalg
-from hypothesis import event, given, settings, strategies as st
+from hypothesis import event, example, given, settings, strategies as st
 
 from conftest import published
 from linkbook.check.reference import solve
@@ -169,6 +169,8 @@ spans = st.one_of(st.floats(25.0, 150.0), st.floats(-150.0, -25.0))
 
 
 @settings(max_examples=EXAMPLES, deadline=None, derandomize=True)
+@example(name="inverse", spacing="equal", theta2_start=0.0, theta2_span=37.0, theta4_start=0.0,
+         theta4_span=-145.0, d=1.0)     # a change point at its dead centre at the first point
 @given(name=st.sampled_from(sorted(FUNCTIONS)), spacing=st.sampled_from(["chebyshev", "equal"]),
        theta2_start=st.floats(-180.0, 180.0), theta2_span=spans,
        theta4_start=st.floats(-180.0, 180.0), theta4_span=spans, d=st.floats(0.5, 200.0))
@@ -197,9 +199,12 @@ def test_the_design_passes_through_its_precision_points(name, spacing, theta2_st
         return
     side = int(design["branch"][design["branch"] != 0][0])
     event(f"branch {side:+d}")
-    bound = np.where(design["branch"] == 0, DEAD_CENTRE, ROUND_TRIP)
-    assert (misses[side] < bound).all()
-    assert misses[-side].max() > 1e-6
+    at_dead_centre = design["branch"] == 0
+    # At a dead centre the loop closes only within round-off: the position reference may find
+    # no assembly there (NaN), or one within √ε.
+    met = misses[side] < np.where(at_dead_centre, DEAD_CENTRE, ROUND_TRIP)
+    assert (met | (at_dead_centre & np.isnan(misses[side]))).all()
+    assert np.nanmax(misses[-side]) > 1e-6
 
 
 def test_a_branch_defect_is_named():
