@@ -17,7 +17,7 @@ from .model import DescriptionError
 # name -> number of arguments (None: one or more)
 FUNCTIONS = {"SQRT": 1, "ABS": 1, "SIN": 1, "COS": 1, "TAN": 1, "ASIN": 1, "ACOS": 1, "ATAN": 1,
              "ATAN2": 2, "RADIANS": 1, "DEGREES": 1, "PI": 0, "MIN": None, "MAX": None,
-             "IF": 3, "IFERROR": 2, "NA": 0}
+             "IF": 3, "IFERROR": 2, "NA": 0, "LN": 1, "LOG10": 1, "EXP": 1}
 _COMPARE = {ast.Gt: ">", ast.GtE: ">=", ast.Lt: "<", ast.LtE: "<=", ast.Eq: "=", ast.NotEq: "<>"}
 # What an expression may be (docs/language.md): the readers of an expression — Python's parser,
 # the writer here, the reference's reader — recurse once per level, so a text of thousands of
@@ -270,4 +270,4 @@ _EXCEL = {"SQRT": math.sqrt, "ABS": abs, "SIN": math.sin, "COS": math.cos, "TAN"
           "ASIN": math.asin, "ACOS": math.acos, "ATAN": math.atan,
           "ATAN2": lambda x, y: math.atan2(y, x), "RADIANS": math.radians,
           "DEGREES": math.degrees, "PI": lambda: math.pi, "MIN": min, "MAX": max,
-          "NA": _not_available}
+          "NA": _not_available, "LN": math.log, "LOG10": math.log10, "EXP": math.exp}

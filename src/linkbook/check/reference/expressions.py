@@ -85,6 +85,9 @@ _FUNCTIONS: dict[str, tuple[int | None, Callable]] = {
     "IF": (3, _if),
     "IFERROR": (2, _iferror),
     "NA": (0, lambda: np.asarray(math.nan)),
+    "LN": (1, _np1(np.log)),          # a synthesis task's function of x (docs/synthesis.md)
+    "LOG10": (1, _np1(np.log10)),
+    "EXP": (1, _np1(np.exp)),
 }
 
 
@@ -276,7 +279,7 @@ def _run(tree: tuple, env: Mapping[str, object], text: str):
 def evaluate(expr: object, env: Mapping[str, object]):
     """Value of an expression of the mechanism language: a number, or text in Excel syntax
     (symbols, numbers, + - * / ^, comparisons, parentheses and SQRT ABS SIN COS TAN ASIN ACOS
-    ATAN ATAN2(x, y) RADIANS DEGREES PI() MIN MAX IF IFERROR NA()) over env: {name: number or
+    ATAN ATAN2(x, y) RADIANS DEGREES PI() MIN MAX IF IFERROR NA() LN LOG10 EXP) over env: {name: number or
     array}. A float when every name it uses is a number, else an array. A domain error (SQRT of
     a negative, a division by zero, ...) gives NaN, as Excel shows an error; a malformed
     expression or an unknown name raises ValueError."""
