@@ -44,6 +44,7 @@ class FunctionTask:
     given: tuple[float, ...]
     ground: str                       # the ground length's parameter: an input
     designs: tuple[tuple[str, str], ...]   # (role, parameter symbol) for each of ROLES
+    output: str = ""                  # the model's key of the rocker's angle θ4 (fitted_to)
 
     def designed(self) -> dict[str, str]:
         """{parameter symbol: role} of the parameters the task designs."""
@@ -115,6 +116,37 @@ def _designed(table: dict, role: str, kinds: dict[str, str], where: str) -> str:
         raise InputError(f"{where}.designs.{role}", f"{symbol!r} must be a {want} parameter "
                                                     "of the mechanism")
     return symbol
+
+
+def fitted_to(task: FunctionTask, description: dict, origin: str) -> FunctionTask:
+    """The task with the key of its output angle: the mechanism must be the four-bar the task
+    designs, as docs/synthesis.md places it (A0 at the origin, B0 at (ground, 0), the crank
+    the input turning about A0, a dyad on the crank's pin and B0 with the coupler, the rocker
+    and the branch), else one line naming what does not fit."""
+    where = f"{origin}: synthesis"
+    steps = description.get("steps", [])
+    ground = description.get("ground", {})
+    crank = next((s for s in steps if s.get("type") == "crank"), None)
+    if crank is None or crank.get("length") != task.symbol("crank") or \
+            ground.get(crank.get("pivot")) not in ([0, 0], [0.0, 0.0]):
+        raise InputError(f"{where}.designs.crank", f"the mechanism's crank must turn about a "
+                                                   f"pivot at [0, 0] with length "
+                                                   f"{task.symbol('crank')!r}")
+    for step in steps:
+        if step.get("type") == "dyad" and step.get("p") == crank["point"] and \
+                step.get("p_length") == task.symbol("coupler") and \
+                step.get("q_length") == task.symbol("rocker") and \
+                step.get("branch") == task.symbol("branch") and \
+                ground.get(step.get("q")) in ([task.ground, 0], [task.ground, 0.0]):
+            column = step.get("columns", {}).get("theta_q")
+            key = column.get("key") if isinstance(column, dict) else None
+            from dataclasses import replace
+            return replace(task, output=key or f"theta_q_{step['point']}")
+    raise InputError(f"{where}.designs", "the mechanism needs a dyad on the crank's pin and "
+                                         f"a ground pivot at [{task.ground!r}, 0] with "
+                                         f"p_length {task.symbol('coupler')!r}, q_length "
+                                         f"{task.symbol('rocker')!r} and branch "
+                                         f"{task.symbol('branch')!r}")
 
 
 # ---------------------------------------------------------------- the writer's own design

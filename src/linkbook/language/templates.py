@@ -17,7 +17,7 @@ from .bundled import TEMPLATE_DIR, bundled, bundled_template_data
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
 from .expressions import always_an_error, value_of
 from .fields import check_nesting
-from .synthesis import FunctionTask, design, task_of
+from .synthesis import FunctionTask, design, fitted_to, task_of
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism, typed_unit)
 
@@ -224,6 +224,8 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         raise InputError(f"{origin}: parameters.{unknown[0]}",
                          f"is not a parameter of {mech.name}; it has {', '.join(mech.parameters)}")
     task = task_of(data, mech.parameters, origin)
+    if task is not None:
+        task = fitted_to(task, mech.description or {}, origin)
     designed = task.designed() if task else {}
     params = []
     for symbol, kind in mech.parameters.items():
