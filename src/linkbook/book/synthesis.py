@@ -125,13 +125,13 @@ def synthesis_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     rows = columns["j"]
     b.row = int(rows[-1][1:]) + 3
     _solution(b, task, columns, sums, d)
-    cells = dict(b.cells)
+    cells = {**b.cells, **{f"sum_{key}": cell for key, cell in sums.items()}}
     error = _error_table(ws, t, model, names, b.row + 2, fx, fx0, fx1)
     cells.update(error.pop("cells"))
     error.pop("rows")
     ws.freeze_panes = "A7"
     return {"sheet": SYNTHESIS, "inputs": inputs, "cells": cells,
-            "points": {k: tuple(v) for k, v in columns.items() if k != "j"},
+            "points": {k: tuple(v) for k, v in columns.items() if k not in ("j", "m3")},
             "error": {k: tuple(v) for k, v in error.items() if k != "k"},
             "task": {"kind": "function", "f": task.f, "spacing": task.spacing, "points": n,
                      "ground": task.ground, "designs": dict(task.designs),

@@ -60,6 +60,9 @@ def judge_book(wb, record: BuildRecord, values: dict, rules: Rules,
         j.checks += summary.check_assembly(j)
     if record.grid is not None:
         j.checks += grid.check_grid(j)
+    if record.synthesis is not None:
+        from .synthesis import check_synthesis
+        check_synthesis(j)
     return j.checks
 
 

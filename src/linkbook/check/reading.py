@@ -64,6 +64,8 @@ def inputs_of(wb, record: BuildRecord) -> dict[str, float]:
     ws = wb[layout.MECH]
     values = {}
     for symbol, info in record.inputs.items():
+        if info.designed:
+            continue            # a link to the Synthesis sheet: its value is the design's
         raw = ws[info.cell].value
         field = f"input {symbol} (cell {info.cell})"
         if ws[info.cell].data_type == "f":
@@ -78,8 +80,12 @@ def inputs_of(wb, record: BuildRecord) -> dict[str, float]:
             values[symbol] = check_value(field, info.kind, raw)
         except InputError as exc:
             raise UnusableFile(str(exc)) from None
+    if record.synthesis is not None:
+        from .synthesis import designed_values
+        values = designed_values(wb, record, values)
     try:
-        check_lengths_together(values, record.kinds(), "input ", written_in(record))
+        check_lengths_together({k: v for k, v in values.items() if not np.isnan(v)},
+                               record.kinds(), "input ", written_in(record))
     except InputError as exc:
         raise UnusableFile(str(exc)) from None
     return values
@@ -97,7 +103,8 @@ def mechanism_size(record: BuildRecord, params: dict[str, float]) -> float:
     """S: the sum of the input lengths and offsets and of the lengths the description writes as
     numbers (every frame fits in a circle that big)."""
     kinds = record.kinds()
-    size = sum(abs(v) for s, v in params.items() if kinds[s] in ("length", "offset"))
+    size = sum(abs(v) for s, v in params.items()
+               if kinds[s] in ("length", "offset") and not np.isnan(v))   # NaN: not designed
     return max(size + sum(abs(v) for v in written_in(record).values()), 1e-300)
 
 
