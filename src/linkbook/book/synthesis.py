@@ -131,7 +131,8 @@ def synthesis_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     error.pop("rows")
     ws.freeze_panes = "A7"
     return {"sheet": SYNTHESIS, "inputs": inputs, "cells": cells,
-            "points": {k: tuple(v) for k, v in columns.items() if k not in ("j", "m3")},
+            "points": {k: tuple(v) for k, v in columns.items()
+                       if k not in ("j", "m3") and not (k == "x" and given)},
             "error": {k: tuple(v) for k, v in error.items() if k != "k"},
             "task": {"kind": "function", "f": task.f, "spacing": task.spacing, "points": n,
                      "ground": task.ground, "designs": dict(task.designs),

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..base.record import BuildRecord
 from ..base.sheets import SYNTHESIS_WORDS as WORDS
-from .checks import ABS_TOL, Check, compare_exact
+from .checks import ABS_TOL, Check, Mismatch, compare_exact
 from .reading import number_at
 from .reference import evaluate
 from .reference import synthesis as ref
@@ -96,7 +96,13 @@ def designed_values(wb, record: BuildRecord, values: dict[str, float]) -> dict[s
     if record.synthesis is None:
         return values
     ground = values[record.synthesis.task["ground"]]
-    return {**values, **design_of(wb, record, ground).designed}
+    designed = design_of(wb, record, ground).designed
+    branch = record.synthesis.task["designs"]["branch"]
+    if math.isnan(designed[branch]):
+        # no linkage: its lengths NaN put every analysis cell at #N/A whichever branch the
+        # references are told, and they want ±1
+        designed[branch] = 1.0
+    return {**values, **designed}
 
 
 def solve_bound(result: dict, points: int) -> float:
@@ -193,9 +199,11 @@ def _check_solution(j, design: Design, solved, n: int) -> None:
     for key, value in eig.items():
         _run(j, key, syn.sheet, [cells[key]], [value], "rad" if key == "eig_phi" else "-",
              solved)
-    if res["condition"] <= ref.SINGULAR_COND:     # beyond it the condition has no digits
+    if res["condition"] <= ref.SINGULAR_COND:
         _run(j, "condition", syn.sheet, [cells["condition"]], [res["condition"]], "-",
              replace(solved, tol=max(solved.tol, SOLVE_MARGIN * EPS * res["condition"] ** 2)))
+    else:
+        _beyond(j, cells["condition"], ref.SINGULAR_COND)
     a, b, c = res["a"], res["b"], res["c"]
     for key, value, unit in (("a", a, "length"), ("c", c, "length"), ("b", b, "length"),
                              ("b2", b * b if math.isfinite(b) else
@@ -205,6 +213,20 @@ def _check_solution(j, design: Design, solved, n: int) -> None:
     mu = np.degrees(np.array(res["transmission"], dtype=float))
     for key, value in zip(("mu_min", "mu_max"), mu):
         _run(j, key, syn.sheet, [cells[key]], [value], "deg", solved)
+
+
+def _beyond(j, cell: str, limit: float) -> None:
+    """A near-singular system's condition: its digits are round-off (λmin is), so the cell
+    must only say it is beyond `limit` (half of it allowed for that round-off) or be #N/A
+    (λmin rounded to 0 or below)."""
+    sheet = j.record.synthesis.sheet
+    c = Check("synthesis", "condition", j.size)
+    c.cells, value = 1, j.got(sheet, [cell])[0]
+    c.judged.add((sheet, cell))
+    na = j.rules.is_error(value) and j.rules.error_code(value) == "#N/A"
+    if not na and not (isinstance(value, (int, float)) and value > limit / 2):
+        c.mismatches.append(Mismatch(sheet, cell, f"> {limit / 2:g} or #N/A", value))
+    j.checks.append(c)
 
 
 def _check_words(j, design: Design) -> None:

@@ -164,7 +164,9 @@ def precision_x(task: FunctionTask) -> np.ndarray:
 def design(task: FunctionTask, d: float) -> dict[str, float]:
     """{role: value} of the designed parameters, NaN where the design does not exist or cannot
     be used (a negative crank or rocker, a branch defect, a near-singular system)."""
-    nothing = {role: math.nan for role in ROLES}
+    # no linkage: its lengths NaN leave every analysis cell #N/A whichever branch it is
+    # given, and the references want a branch of ±1
+    nothing = {"crank": math.nan, "coupler": math.nan, "rocker": math.nan, "branch": 1.0}
     x = precision_x(task)
     y = np.array([task.f_of(v) for v in x])
     y0, y1 = task.f_of(task.x[0]), task.f_of(task.x[1])
