@@ -12,12 +12,10 @@ from ..base.record import BuildRecord, DamagedRecord
 from ..language.domain import (InputError, check_input, check_lengths_together, check_value,
                                check_written_lengths)
 
+from .cells import UnusableFile, number_at  # noqa: F401  (read from here by the others)
+
 # what reading a record that does not match its book raises (a key missing, a value mistyped)
 RECORD_ERRORS = (KeyError, IndexError, TypeError, ValueError, AttributeError)
-
-
-class UnusableFile(Exception):
-    """The file cannot be verified at all (exit 2)."""
 
 
 def read_book(path: Path):
@@ -120,13 +118,6 @@ def input_at(ws, cell: str, what: str, is_angle: bool) -> float:
         return check_input(f"{ws.title}!{cell}: {what}", number_at(ws, cell, what), is_angle)
     except InputError as exc:
         raise UnusableFile(str(exc)) from None
-
-
-def number_at(ws, cell: str, what: str) -> float:
-    v = ws[cell].value
-    if not isinstance(v, (int, float)) or isinstance(v, bool):
-        raise UnusableFile(f"{ws.title}!{cell}: {what} must be a number (got {v!r})")
-    return float(v)
 
 
 def formula_cells(wb) -> set[tuple[str, str]]:

@@ -16,7 +16,7 @@ import numpy as np
 from ..base.record import BuildRecord
 from ..base.sheets import SYNTHESIS_WORDS as WORDS
 from .checks import ABS_TOL, Check, Mismatch, compare_exact
-from .reading import number_at
+from .cells import number_at
 from .reference import evaluate
 from .reference import synthesis as ref
 
