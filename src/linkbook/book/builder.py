@@ -13,7 +13,7 @@ from . import package
 from . import workbook
 from .controls import Control
 from .stroke import grid_is_fine
-from ..base.sheets import GRID, MECH, STROKE
+from ..base.sheets import GRID, MECH, STROKE, SYNTHESIS
 from ..base.files import write_atomic
 from ..language.excel import one_group
 from ..language.model import COLUMN
@@ -48,7 +48,7 @@ def _print_setup(wb) -> None:
     """Page layout for printing and previews; the Mechanism sheet (inputs, current position and
     drawing side by side) prints one page wide, landscape, so no block is cut off."""
     from .pages import apply_print_setup
-    apply_print_setup(wb, fit_to_width=(MECH,))
+    apply_print_setup(wb, fit_to_width=(MECH, SYNTHESIS))
 
 
 def _angle_columns(built: workbook.Built):

@@ -23,6 +23,8 @@ from .style import (BOLD, BOX, DERIVED_FILL, INPUT_FILL, NOTE, TITLE, block_head
 from .summary import grashof_formula
 
 ERROR_STEPS = 40          # intervals of the structural-error table over the input range
+TABLE_COLUMN = 7          # the tables start in column G, right of the task and its solution
+HEAD_HEIGHT = 45.0        # points: a table's headers in up to three lines
 FREUDENSTEIN = ("Freudenstein's equation (Norton's form): K1·cos θ4 − K2·cos θ2 + K3 = "
                 "cos(θ2 − θ4), with K1 = d/a, K2 = d/c, K3 = (a² − b² + c² + d²)/(2ac).")
 CONVENTION = ("A0 at the origin, B0 at (d, 0); θ2 = angle of A0→A, θ4 = angle of B0→B, both "
@@ -87,6 +89,10 @@ class _Block:
         self.row += 1
 
 
+def _letters(cell: str) -> str:
+    return cell.rstrip("0123456789")
+
+
 def _det3(m: list[list[str]]) -> str:
     """The determinant of the 3×3 matrix of cells `m`, by the first row."""
     return (f"{m[0][0]}*({m[1][1]}*{m[2][2]}-{m[1][2]}*{m[2][1]})"
@@ -120,13 +126,13 @@ def synthesis_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     fx = lambda x: render(task.f_excel, lambda _: x)          # noqa: E731  f of a cell
     fx0 = b.add("f_x0", "f(x0)", "f(x0)", f"={fx('syn_x0')}", RATIO)
     fx1 = b.add("f_x1", "f(x1)", "f(x1)", f"={fx('syn_x1')}", RATIO)
-    columns, sums, given = _points_table(ws, t, model, names, b.row + 2, fx, fx0, fx1, d)
+    columns, sums, given = _points_table(ws, t, model, names, 7, fx, fx0, fx1, d)
     inputs.update(given)
-    rows = columns["j"]
-    b.row = int(rows[-1][1:]) + 3
+    b.row += 1
     _solution(b, task, columns, sums, d)
     cells = {**b.cells, **{f"sum_{key}": cell for key, cell in sums.items()}}
-    error = _error_table(ws, t, model, names, b.row + 2, fx, fx0, fx1)
+    error = _error_table(ws, t, model, names, int(sums["m11"][len(_letters(sums["m11"])):]) + 4,
+                         fx, fx0, fx1)
     cells.update(error.pop("cells"))
     error.pop("rows")
     ws.freeze_panes = "A7"
@@ -144,13 +150,15 @@ def _points_table(ws, t, model, names, head, fx, fx0, fx1, d):
     cells by key (the normal equations' entries) and the given x values' input cells."""
     task = t.synthesis
     n = task.points
-    ws[f"A{head - 1}"] = "Precision points and the rows of Freudenstein's equation"
-    ws[f"A{head - 1}"].font = BOLD
-    letter = {key: get_column_letter(i) for i, (key, _) in enumerate(POINT_COLUMNS, start=1)}
-    for i, (key, text) in enumerate(POINT_COLUMNS, start=1):
+    first_letter = get_column_letter(TABLE_COLUMN)
+    ws[f"{first_letter}{head - 1}"] = "Precision points and the rows of Freudenstein's equation"
+    ws[f"{first_letter}{head - 1}"].font = BOLD
+    letter = {key: get_column_letter(i) for i, (key, _) in enumerate(POINT_COLUMNS,
+                                                                       start=TABLE_COLUMN)}
+    ws.row_dimensions[head].height = HEAD_HEIGHT
+    for i, (key, text) in enumerate(POINT_COLUMNS, start=TABLE_COLUMN):
         put_head(ws, head, i, text)
-        if i > 5:
-            ws.column_dimensions[get_column_letter(i)].width = 14
+        ws.column_dimensions[get_column_letter(i)].width = 5 if key == "j" else 13
     first = head + 1
     columns: dict[str, list[str]] = {key: [] for key, _ in POINT_COLUMNS}
     given: dict[str, str] = {}
@@ -204,7 +212,7 @@ def _points_table(ws, t, model, names, head, fx, fx0, fx1, d):
                     else RATIO)
     last = first + n - 1
     sums = {}
-    put_text(ws, f"A{last + 1}", "Σ", BOLD)
+    put_text(ws, f"{first_letter}{last + 1}", "Σ", BOLD)
     for key in ("m11", "m12", "m13", "m22", "m23", "m33", "v1", "v2", "v3"):
         cell = f"{letter[key]}{last + 1}"
         set_formula(ws[cell], f"=SUM({letter[key]}{first}:{letter[key]}{last})")
@@ -226,11 +234,7 @@ def _solution(b: _Block, task: FunctionTask, columns, sums, d: str) -> None:
         s = sums
         rows = [[s["m11"], s["m12"], s["m13"], s["v1"]], [s["m12"], s["m22"], s["m23"], s["v2"]],
                 [s["m13"], s["m23"], s["m33"], s["v3"]]]
-    system = []
-    for i, row in enumerate(rows, start=1):
-        system.append([b.add(f"S{i}{k}", f"system row {i}: column {k}" if k < 4 else
-                             f"system row {i}: right-hand side", f"S{i}{k}", f"={cell}", RATIO)
-                       for k, cell in enumerate(row, start=1)])
+    system = _matrix(b, rows)
     # the condition of the rows [cos θ4, −cos θ2, 1]: the eigenvalues of MᵀM (the Σ row), a
     # symmetric 3×3, by the trigonometric formula
     s = sums
@@ -294,6 +298,27 @@ def _solution(b: _Block, task: FunctionTask, columns, sums, d: str) -> None:
               name=p.name)
 
 
+def _matrix(b: _Block, rows: list[list[str]]) -> list[list[str]]:
+    """The system as a 3×4 matrix of links (the coefficients of K1, K2, K3, the right-hand
+    side), one row of the sheet per equation; its cells by row."""
+    for k, text in enumerate(("× K1", "× K2", "× K3", "= r"), start=2):
+        put_head(b.ws, b.row, k, text)
+    b.row += 1
+    out = []
+    for i, row in enumerate(rows, start=1):
+        put_text(b.ws, f"A{b.row}", f"equation {i}")
+        out.append([])
+        for k, source in enumerate(row, start=1):
+            cell = f"{get_column_letter(k + 1)}{b.row}"
+            set_formula(b.ws[cell], f"={source}")
+            b.ws[cell].fill = DERIVED_FILL
+            b.ws[cell].number_format = number_format(RATIO)
+            b.cells[f"S{i}{k}"] = cell
+            out[-1].append(cell)
+        b.row += 1
+    return out
+
+
 def _mu(a: str, b: str, c: str, d: str, which: str) -> str:
     """The transmission angle in degrees where cos θ2 is at its largest or smallest over the
     input range (a multiple of 2π, or of π, inside it; else the nearer end): μ is monotone in
@@ -314,11 +339,15 @@ def _error_table(ws, t, model, names, head, fx, fx0, fx1) -> dict:
     (the designed linkage, as every sheet analyses it) against the desired one; the largest
     error and where."""
     task = t.synthesis
-    ws[f"A{head - 1}"] = (f"Structural error over the input range ({ERROR_STEPS + 1} values of "
-                          f"x): the designed linkage against the desired y = f(x)")
-    ws[f"A{head - 1}"].font = BOLD
-    letter = {key: get_column_letter(i) for i, (key, _) in enumerate(ERROR_COLUMNS, start=1)}
-    for i, (key, text) in enumerate(ERROR_COLUMNS, start=1):
+    first_letter = get_column_letter(TABLE_COLUMN)
+    ws[f"{first_letter}{head - 1}"] = (f"Structural error over the input range "
+                                       f"({ERROR_STEPS + 1} values of x): the designed linkage "
+                                       "against the desired y = f(x)")
+    ws[f"{first_letter}{head - 1}"].font = BOLD
+    letter = {key: get_column_letter(i) for i, (key, _) in enumerate(ERROR_COLUMNS,
+                                                                       start=TABLE_COLUMN)}
+    ws.row_dimensions[head].height = HEAD_HEIGHT
+    for i, (key, text) in enumerate(ERROR_COLUMNS, start=TABLE_COLUMN):
         put_head(ws, head, i, text)
     out: dict = {key: [] for key, _ in ERROR_COLUMNS}
     steps = Resolver(model, names, {})
@@ -343,16 +372,18 @@ def _error_table(ws, t, model, names, head, fx, fx0, fx1) -> dict:
     first, last = head + 1, head + 1 + ERROR_STEPS
     errors = f"{letter['error']}{first}:{letter['error']}{last}"
     xs = f"{letter['x']}{first}:{letter['x']}{last}"
-    r = last + 2
-    largest = f"I{r}"
-    put_text(ws, f"H{r}", "largest |structural error| [deg]")
+    label, value = (get_column_letter(TABLE_COLUMN + len(ERROR_COLUMNS) + k) for k in (1, 4))
+    r = head + 1
+    largest, where = f"{value}{r}", f"{value}{r + 1}"
+    put_text(ws, f"{label}{r}", "largest |structural error| [deg]", BOLD)
     set_formula(ws[largest], f"=MAX(MAX({errors}),-MIN({errors}))")
-    put_text(ws, f"H{r + 1}", "at x")
-    set_formula(ws[f"I{r + 1}"], f"=IF(MAX({errors})>=-MIN({errors}),"
-                                 f"INDEX({xs},MATCH(MAX({errors}),{errors},0)),"
-                                 f"INDEX({xs},MATCH(MIN({errors}),{errors},0)))")
+    put_text(ws, f"{label}{r + 1}", "at x", BOLD)
+    set_formula(ws[where], f"=IF(MAX({errors})>=-MIN({errors}),"
+                           f"INDEX({xs},MATCH(MAX({errors}),{errors},0)),"
+                           f"INDEX({xs},MATCH(MIN({errors}),{errors},0)))")
     ws[largest].number_format = number_format(DEG)
-    ws[f"I{r + 1}"].number_format = number_format(RATIO)
-    out["cells"] = {"largest_error": largest, "largest_error_x": f"I{r + 1}"}
+    ws[where].number_format = number_format(RATIO)
+    ws[largest].fill = ws[where].fill = DERIVED_FILL
+    out["cells"] = {"largest_error": largest, "largest_error_x": where}
     out["rows"] = (first, last)
     return out
