@@ -149,6 +149,7 @@ def _structural_error_chart(wb, syn: dict) -> None:
         _column_of(list(syn["inputs"][f"x_{j}"] for j in range(1, syn["task"]["points"] + 1))), \
         _column_of(syn["points"]["error"])
     points = _series(ws, x, error, rows, "precision points", markers=True, colour="C00000")
+    points.graphicalProperties.line.solidFill = None     # markers only: no line between them
     points.graphicalProperties.line.noFill = True
     chart.series.append(points)
     chart.width, chart.height = SWEEP_CHART_CM, 10

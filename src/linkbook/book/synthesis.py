@@ -24,7 +24,7 @@ from .summary import grashof_formula
 
 ERROR_STEPS = 40          # intervals of the structural-error table over the input range
 TABLE_COLUMN = 7          # the tables start in column G, right of the task and its solution
-HEAD_HEIGHT = 45.0        # points: a table's headers in up to three lines
+HEAD_HEIGHT = 30.0        # points: a table's headers in up to two lines
 FREUDENSTEIN = ("Freudenstein's equation (Norton's form): K1·cos θ4 − K2·cos θ2 + K3 = "
                 "cos(θ2 − θ4), with K1 = d/a, K2 = d/c, K3 = (a² − b² + c² + d²)/(2ac).")
 CONVENTION = ("A0 at the origin, B0 at (d, 0); θ2 = angle of A0→A, θ4 = angle of B0→B, both "
@@ -40,13 +40,13 @@ POINT_COLUMNS = (("j", "j"), ("x", "x_j"), ("y", "y_j = f(x_j)"), ("theta2_deg",
                  ("theta4", "θ4_j [rad]"), ("m1", "cos θ4_j"), ("m2", "−cos θ2_j"),
                  ("m3", "1"), ("r", "cos(θ2_j − θ4_j)"), ("residual", "residual"),
                  ("cross", "cross(B−B0, A−B0)"), ("branch", "branch"),
-                 ("generated", "θ4 by the position steps [rad]"),
+                 ("generated", "θ4 by the steps [rad]"),
                  ("error", "structural error [deg]"),
                  ("m11", "cos²θ4"), ("m12", "cos θ4·(−cos θ2)"), ("m13", "cos θ4·1"),
                  ("m22", "cos²θ2"), ("m23", "−cos θ2·1"), ("m33", "1·1"),
                  ("v1", "cos θ4·r"), ("v2", "−cos θ2·r"), ("v3", "1·r"))
 ERROR_COLUMNS = (("k", "k"), ("x", "x"), ("theta2_deg", "θ2 [deg]"), ("y", "y = f(x)"),
-                 ("desired", "θ4 desired [deg]"), ("generated", "θ4 by the position steps [rad]"),
+                 ("desired", "θ4 desired [deg]"), ("generated", "θ4 by the steps [rad]"),
                  ("error", "structural error [deg]"))
 
 
@@ -129,10 +129,11 @@ def synthesis_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     columns, sums, given = _points_table(ws, t, model, names, 7, fx, fx0, fx1, d)
     inputs.update(given)
     b.row += 1
+    # the error table's headers level with the solution's title: a tall row there is no gap
+    head = max(int(sums["m11"][len(_letters(sums["m11"])):]) + 4, b.row + 1)
     _solution(b, task, columns, sums, d)
     cells = {**b.cells, **{f"sum_{key}": cell for key, cell in sums.items()}}
-    error = _error_table(ws, t, model, names, int(sums["m11"][len(_letters(sums["m11"])):]) + 4,
-                         fx, fx0, fx1)
+    error = _error_table(ws, t, model, names, head, fx, fx0, fx1)
     cells.update(error.pop("cells"))
     error.pop("rows")
     ws.freeze_panes = "A7"
