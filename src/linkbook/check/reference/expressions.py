@@ -279,8 +279,8 @@ def _run(tree: tuple, env: Mapping[str, object], text: str):
 def evaluate(expr: object, env: Mapping[str, object]):
     """Value of an expression of the mechanism language: a number, or text in Excel syntax
     (symbols, numbers, + - * / ^, comparisons, parentheses and SQRT ABS SIN COS TAN ASIN ACOS
-    ATAN ATAN2(x, y) RADIANS DEGREES PI() MIN MAX IF IFERROR NA() LN LOG10 EXP) over env: {name: number or
-    array}. A float when every name it uses is a number, else an array. A domain error (SQRT of
+    ATAN ATAN2(x, y) RADIANS DEGREES PI() MIN MAX IF IFERROR NA() LN LOG10 EXP) over env:
+    {name: number or array}. A float when every name it uses is a number, else an array. A domain error (SQRT of
     a negative, a division by zero, ...) gives NaN, as Excel shows an error; a malformed
     expression or an unknown name raises ValueError."""
     if isinstance(expr, bool):
