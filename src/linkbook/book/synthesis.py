@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from openpyxl.utils import get_column_letter, quote_sheetname
 
-from ..base.sheets import SYNTHESIS, SYNTHESIS_WORDS as WORDS
-from ..language.excel import acos_or_na, render
+from ..base.sheets import DASH, SYNTHESIS, SYNTHESIS_WORDS as WORDS
+from ..language.excel import acos_or_na, in_domain_or_na, render
 from ..language.model import DEG, LENGTH, RAD, RATIO, Model
 from ..language.synthesis import DEAD_CENTRE, SINGULAR_COND, FunctionTask
 from ..language.templates import Template
@@ -240,18 +240,20 @@ def _solution(b: _Block, task: FunctionTask, columns, sums, d: str) -> None:
     # symmetric 3×3, by the trigonometric formula
     s = sums
     q = b.add("eig_mean", "trace(MᵀM)/3", "q", f"=({s['m11']}+{s['m22']}+{s['m33']})/3", RATIO)
+    spread = (f"(({s['m11']}-{q})^2+({s['m22']}-{q})^2+({s['m33']}-{q})^2"
+              f"+2*({s['m12']}^2+{s['m13']}^2+{s['m23']}^2))/6")
     p = b.add("eig_p", "spread of MᵀM's eigenvalues", "p",
-              f"=SQRT((({s['m11']}-{q})^2+({s['m22']}-{q})^2+({s['m33']}-{q})^2"
-              f"+2*({s['m12']}^2+{s['m13']}^2+{s['m23']}^2))/6)", RATIO)
+              f"={in_domain_or_na('SQRT', spread)}", RATIO)
     shifted = [[f"({s['m11']}-{q})", s["m12"], s["m13"]], [s["m12"], f"({s['m22']}-{q})",
                s["m23"]], [s["m13"], s["m23"], f"({s['m33']}-{q})"]]
     half = b.add("eig_r", "det((MᵀM − q·I)/p)/2", "ρ", f"=({_det3(shifted)})/{p}^3/2", RATIO)
-    phi = b.add("eig_phi", "ACOS(ρ)/3", "φ", f"=ACOS(MAX(-1,MIN(1,{half})))/3", RAD)
+    # ρ lies in [−1, 1]; rounding can put it a hair beyond, where the formula means ±1
+    phi = b.add("eig_phi", "ACOS(ρ)/3", "φ", f"={acos_or_na(f'MAX(-1,MIN(1,{half}))')}/3", RAD)
     big = b.add("eig_max", "largest eigenvalue of MᵀM", "λmax", f"={q}+2*{p}*COS({phi})", RATIO)
     small = b.add("eig_min", "smallest eigenvalue of MᵀM", "λmin",
                   f"={q}+2*{p}*COS({phi}+2*PI()/3)", RATIO)
     b.add("condition", "condition number cond₂(M) = √(λmax/λmin)", "cond₂",
-          f"=IF({small}>0,SQRT({big}/{small}),NA())", RATIO)
+          f"=IF({small}>0,{in_domain_or_na('SQRT', f'{big}/{small}')},NA())", RATIO)
     singular = f"{big}>{SINGULAR_COND ** 2:G}*{small}"
     b.add("system", "the system", "", f'=IF({singular},"{WORDS["singular"]}",'
                                       f'"{WORDS["solvable"]}")', "")
@@ -302,7 +304,7 @@ def _solution(b: _Block, task: FunctionTask, columns, sums, d: str) -> None:
 def _matrix(b: _Block, rows: list[list[str]]) -> list[list[str]]:
     """The system as a 3×4 matrix of links (the coefficients of K1, K2, K3, the right-hand
     side), one row of the sheet per equation; its cells by row."""
-    for k, text in enumerate(("× K1", "× K2", "× K3", "= r"), start=2):
+    for k, text in enumerate(("× K1", "× K2", "× K3", "r"), start=2):
         put_head(b.ws, b.row, k, text)
     b.row += 1
     out = []
@@ -372,16 +374,22 @@ def _error_table(ws, t, model, names, head, fx, fx0, fx1) -> dict:
             out[key].append(cell)
     first, last = head + 1, head + 1 + ERROR_STEPS
     errors = f"{letter['error']}{first}:{letter['error']}{last}"
-    xs = f"{letter['x']}{first}:{letter['x']}{last}"
     label, value = (get_column_letter(TABLE_COLUMN + len(ERROR_COLUMNS) + k) for k in (1, 4))
     r = head + 1
     largest, where = f"{value}{r}", f"{value}{r + 1}"
+    # x where |error| is the largest, else a dash: MIN skips the dashes and takes the first
+    # such x (x grows down the table)
+    at = get_column_letter(TABLE_COLUMN + len(ERROR_COLUMNS))
+    put_head(ws, head, TABLE_COLUMN + len(ERROR_COLUMNS), "x at the largest |error|")
+    for row, (x, e) in enumerate(zip(out["x"], out["error"]), start=first):
+        set_formula(ws[f"{at}{row}"], f'=IF(ABS({e})={largest},{x},"{DASH}")')
+        ws[f"{at}{row}"].number_format = number_format(RATIO)
+        out.setdefault("at_largest", []).append(f"{at}{row}")
+    at_largest = f"{at}{first}:{at}{last}"
     put_text(ws, f"{label}{r}", "largest |structural error| [deg]", BOLD)
     set_formula(ws[largest], f"=MAX(MAX({errors}),-MIN({errors}))")
     put_text(ws, f"{label}{r + 1}", "at x", BOLD)
-    set_formula(ws[where], f"=IF(MAX({errors})>=-MIN({errors}),"
-                           f"INDEX({xs},MATCH(MAX({errors}),{errors},0)),"
-                           f"INDEX({xs},MATCH(MIN({errors}),{errors},0)))")
+    set_formula(ws[where], f"=MIN({at_largest})")
     ws[largest].number_format = number_format(DEG)
     ws[where].number_format = number_format(RATIO)
     ws[largest].fill = ws[where].fill = DERIVED_FILL

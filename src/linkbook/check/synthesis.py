@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..base.record import BuildRecord
-from ..base.sheets import SYNTHESIS_WORDS as WORDS
+from ..base.sheets import DASH, SYNTHESIS_WORDS as WORDS
 from .checks import ABS_TOL, Check, Mismatch, compare_exact
 from .cells import number_at
 from .reference import evaluate
@@ -337,6 +337,17 @@ def _wrapped(degrees: np.ndarray) -> np.ndarray:
     return (np.asarray(degrees, dtype=float) + 180.0) % 360.0 - 180.0
 
 
+def _marked(j, sheet: str, cells: list[str], shown: list) -> None:
+    """A column that marks one row with its number and the others with a dash (or #N/A
+    throughout, NaN)."""
+    if all(isinstance(v, float) and math.isnan(v) for v in shown):
+        _run(j, "error table at_largest", sheet, cells, shown, "-")
+        return
+    c = Check("synthesis", "error table at_largest", j.size)
+    compare_exact(c, sheet, cells, j.got(sheet, cells), shown)
+    j.checks.append(c)
+
+
 def _check_error_table(j, design: Design) -> None:
     """The structural error table over the input range, its largest error and where."""
     syn = j.record.synthesis
@@ -354,12 +365,17 @@ def _check_error_table(j, design: Design) -> None:
                 "generated": generated, "error": error}
     units = {"x": "-", "theta2_deg": "deg", "y": "-", "desired": "deg", "generated": "rad",
              "error": "deg"}
-    for key, cells in syn.error.items():
-        _run(j, f"error table {key}", syn.sheet, list(cells), expected[key], units[key])
     if np.isfinite(error).all():
         at = int(np.argmax(np.abs(error)))
         largest, where = float(abs(error[at])), float(x[at])
     else:
         largest = where = math.nan
+    for key, cells in syn.error.items():
+        if key == "at_largest":        # x on the largest error's row, a dash elsewhere
+            shown = [float(x[k]) if k == at else DASH for k in range(len(x))] \
+                if math.isfinite(largest) else [math.nan] * len(x)
+            _marked(j, syn.sheet, list(cells), shown)
+            continue
+        _run(j, f"error table {key}", syn.sheet, list(cells), expected[key], units[key])
     _run(j, "largest error", syn.sheet, [syn.cells["largest_error"]], [largest], "deg")
     _run(j, "largest error at x", syn.sheet, [syn.cells["largest_error_x"]], [where], "-")
