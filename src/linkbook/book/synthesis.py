@@ -10,7 +10,7 @@ The checks' words are base.sheets.SYNTHESIS_WORDS, which verify reads too.
 """
 from __future__ import annotations
 
-from openpyxl.utils import get_column_letter, quote_sheetname
+from openpyxl.utils import get_column_letter
 
 from ..base.sheets import DASH, SYNTHESIS, SYNTHESIS_WORDS as WORDS
 from ..language.excel import acos_or_na, in_domain_or_na, render
@@ -70,8 +70,10 @@ class _Block:
         elif isinstance(value, str) and value.startswith("="):
             set_formula(cell, value)
             cell.fill = DERIVED_FILL
+        elif text:
+            put_text(ws, f"C{r}", value)
         else:
-            put_text(ws, f"C{r}", value) if text else setattr(cell, "value", value)
+            cell.value = value
         if unit and not text:
             cell.number_format = number_format(unit, self.t.length_unit)
             put_text(ws, f"D{r}", unit_text(unit, self.t.length_unit))
@@ -164,7 +166,6 @@ def _points_table(ws, t, model, names, head, fx, fx0, fx1, d):
     columns: dict[str, list[str]] = {key: [] for key, _ in POINT_COLUMNS}
     given: dict[str, str] = {}
     cramer = {"a": "syn_a", "c": "syn_c", "K1": "syn_K1", "K2": "syn_K2", "K3": "syn_K3"}
-    steps = Resolver(model, names, {t.mechanism.input_column: ""})
     for j in range(1, n + 1):
         r = first + j - 1
         c = {key: f"{letter[key]}{r}" for key in letter}
@@ -172,7 +173,8 @@ def _points_table(ws, t, model, names, head, fx, fx0, fx1, d):
                                   f"*COS((2*{c['j']}-1)*PI()/(2*{n}))",
                      "equal": f"=syn_x0+({c['j']}-1)*(syn_x1-syn_x0)/({n}-1)"}
         theta = f"RADIANS({c['theta2_deg']})"
-        steps.cells = {t.mechanism.input_column: c["theta2_deg"]}
+        # the position steps with this row's crank angle as their input: the designed linkage
+        steps = Resolver(model, names, {t.mechanism.input_column: c["theta2_deg"]})
         formulas = {
             "y": f"={fx(c['x'])}",
             "theta2_deg": f"=syn_theta2_start+({c['x']}-syn_x0)/(syn_x1-syn_x0)*syn_theta2_span",
@@ -353,11 +355,10 @@ def _error_table(ws, t, model, names, head, fx, fx0, fx1) -> dict:
     for i, (key, text) in enumerate(ERROR_COLUMNS, start=TABLE_COLUMN):
         put_head(ws, head, i, text)
     out: dict = {key: [] for key, _ in ERROR_COLUMNS}
-    steps = Resolver(model, names, {})
     for k in range(ERROR_STEPS + 1):
         r = head + 1 + k
         c = {key: f"{letter[key]}{r}" for key in letter}
-        steps.cells = {t.mechanism.input_column: c["theta2_deg"]}
+        steps = Resolver(model, names, {t.mechanism.input_column: c["theta2_deg"]})
         ws[c["k"]] = k
         for key, text in {
                 "x": f"=syn_x0+{c['k']}*(syn_x1-syn_x0)/{ERROR_STEPS}",

@@ -10,7 +10,7 @@ formulas are book/synthesis.py's; the independent reference is check/reference/s
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -140,7 +140,6 @@ def fitted_to(task: FunctionTask, description: dict, origin: str) -> FunctionTas
                 ground.get(step.get("q")) in ([task.ground, 0], [task.ground, 0.0]):
             column = step.get("columns", {}).get("theta_q")
             key = column.get("key") if isinstance(column, dict) else None
-            from dataclasses import replace
             return replace(task, output=key or f"theta_q_{step['point']}")
     raise InputError(f"{where}.designs", "the mechanism needs a dyad on the crank's pin and "
                                          f"a ground pivot at [{task.ground!r}, 0] with "
