@@ -196,3 +196,31 @@ def test_a_designed_parameter_has_no_value_and_cannot_be_set():
     t = from_data("function-log10", _data())
     with pytest.raises(InputError, match="--set a2: a2 is designed by"):
         with_overrides(t, ["a2=30"])
+
+
+OUTCOMES = [
+    ("crossed", {"theta2": [60, 120], "theta4": [270, -45]}),
+    ("branch defect", {"theta2": [0, 300], "theta4": [30, 200]}),
+    ("negative rocker", {"f": "x^2", "x": [1, 3], "theta2": [6, -40], "theta4": [7, 20],
+                         "points": 6}),
+    ("least squares, ill-conditioned", {"f": "x^2", "x": [1, 3], "theta2": [-152, -40],
+                                        "theta4": [-152, -20], "points": 6}),
+    ("given x", {"spacing": [1.5, 3, 6, 9.5], "points": 4}),
+    ("near-singular", {"theta2": [0, 90], "theta4": [0, 1e-6]}),
+]
+
+
+@pytest.mark.parametrize("what, task", OUTCOMES, ids=[o[0] for o in OUTCOMES])
+def test_every_outcome_verifies(tmp_path, what, task):
+    """verify on books whose tasks end each way: every cell the reference's, or #N/A where
+    there is no design (the analysis sheets too)."""
+    data = _data(**task)
+    path = tmp_path / "task.xlsx"
+    builder.build_file(from_data("task", data), path)
+    report = verify(path)
+    assert report.status == 0, [(c.block, c.name, c.mismatches[:2]) for c in report.checks
+                                if not c.ok]
+    expected = _reference(data["synthesis"])
+    usable = not expected["singular"] and expected["a"] > 0 and expected["c"] > 0 \
+        and not expected["branch_defect"]
+    assert math.isnan(report.inputs["a2"]) != usable
