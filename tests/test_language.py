@@ -86,7 +86,7 @@ BAD = [
     ("an unknown step type", _step("B", "type", "triad"), ["type", "must be one of"]),
     ("an expression that does not parse", _step("B", "p_length", "a3*(a4"),
      ["(dyad B).p_length", "is not an expression"]),
-    ("an unknown function", _step("B", "p_length", "EXP(a3)"), ["unknown function EXP"]),
+    ("an unknown function", _step("B", "p_length", "COSH(a3)"), ["unknown function COSH"]),
     ("a dyad over one point twice", _step("B", "q", "A"), ["(dyad B).q", "must differ"]),
     ("a point frame of one point", _step("C", "frame", ["A", "A"]),
      ["(point C).frame", "two different points"]),

@@ -745,7 +745,8 @@ def _list(verbose: bool) -> int:
         print(f"{t.name:24} {t.title}  [{steps}]")
         if verbose:
             for p in t.parameters:
-                print(f"    {p.symbol:12} = {p.value:<10g} {p.unit:4} {p.label}")
+                made = f" (designed by {p.designed_by})" if p.designed_by else ""
+                print(f"    {p.symbol:12} = {p.value:<10g} {p.unit:4} {p.label}{made}")
     return 0
 
 

@@ -109,6 +109,23 @@ def _inputs(book: Book) -> list[dict]:
              "unit": _text(book, layout.MECH, f"D{row}")} for row in rows]
 
 
+def _synthesis(book: Book) -> dict | None:
+    """A synthesis book's design as its Synthesis sheet states it: the designed lengths and
+    branch, the checks in words, Grashof's class and the largest structural error."""
+    syn = book.record.synthesis
+    if syn is None:
+        return None
+
+    def cell(key: str):
+        return _plain(book.values.get((syn.sheet, syn.cells[key])))
+    return {"f": syn.task["f"], "points": syn.task["points"], "spacing": syn.task["spacing"],
+            "designed": {f"{role} {syn.task['designs'][role]}": cell(f"designed_{role}")
+                         for role in ("crank", "coupler", "rocker", "branch")},
+            "system": cell("system"), "lengths": cell("lengths"), "branch": cell("defect"),
+            "grashof": cell("grashof"), "largest_error": cell("largest_error"),
+            "largest_error_x": cell("largest_error_x")}
+
+
 def _numbered(book: Book, base: str, suffix: str = ""):
     """Summary keys of the 1st, 2nd, … transmission angle or four-bar loop (summary_prefix)."""
     i = 1
@@ -250,7 +267,7 @@ def summary(book: Book) -> dict:
         "transmission_angles": transmissions,
         "not_closing": number(not_closing[1]) if not_closing else 0,
         "gaps": _gaps(book), "peaks": _peaks(book), "force_peaks": _force_peaks(book),
-        "force_summary": _force_summary(book)}
+        "force_summary": _force_summary(book), "synthesis": _synthesis(book)}
 
 
 def _g(x) -> str:
@@ -273,6 +290,8 @@ def lines(data: dict) -> list[str]:
         value = _g(r["value"]) if number(r["value"]) is not None else str(r["value"])
         out += _fit(f"  {r['symbol']:{width}} {value:>12} {r['unit']:7} {r['quantity']}",
                     width + 24)
+    if data.get("synthesis"):
+        out += ["", *_synthesis_lines(data["synthesis"])]
     if data["fourbar_loops"]:
         out += ["", "Four-bar loops"]
         for r in data["fourbar_loops"]:
@@ -306,4 +325,17 @@ def lines(data: dict) -> list[str]:
         for r in data["force_summary"]:
             value = _g(r["value"]) if number(r["value"]) is not None else str(r["value"])
             out += _fit(f"  {r['what']:44} {value:>12} {r['unit']}")
+    return out
+
+
+def _synthesis_lines(syn: dict) -> list[str]:
+    def shown(x) -> str:
+        return _g(x) if number(x) is not None else str(x)
+    out = _fit(f"Synthesis: y = {syn['f']}, {syn['points']} {syn['spacing']} precision points")
+    out += _fit("  designed: " + ", ".join(f"{k} = {shown(v)}"
+                                           for k, v in syn["designed"].items()))
+    for key in ("system", "lengths", "branch", "grashof"):
+        out += _fit(f"  {key}: {syn[key]}")
+    out += _fit(f"  largest structural error: {shown(syn['largest_error'])} deg at x = "
+                f"{shown(syn['largest_error_x'])}")
     return out

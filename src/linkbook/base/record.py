@@ -170,10 +170,13 @@ def _json(value):
 # ---------------------------------------------------------------- the parts
 @_frozen
 class Input(Part):
-    """A named input cell on the Mechanism sheet: a length, an angle, a branch, a rate."""
+    """A named input cell on the Mechanism sheet: a length, an angle, a branch, a rate. A
+    designed parameter's row (`designed`) holds a link to its named cell on the Synthesis
+    sheet: a formula, not an input; its value is the synthesis's."""
     cell: str = _entry(_str)
     kind: str = _entry(_str)
     name: str = _entry(_str)
+    designed: bool | None = _entry(_optional(_bool), None)
 
 
 @_frozen
@@ -322,6 +325,19 @@ class Frames(Part):
 
 
 @_frozen
+class Synthesis(Part):
+    """The Synthesis sheet (book/synthesis.py): the task as built (`task`: kind, f, spacing,
+    points, ground, designs, output), its input cells by key, every result's cell by key, the
+    precision points' columns and the structural error's columns."""
+    sheet: str = _entry(_str)
+    task: dict = _entry(_object)
+    inputs: dict[str, str] = _entry(_cells)
+    cells: dict[str, str] = _entry(_cells)
+    points: dict[str, tuple[str, ...]] = _entry(_map(_list(_str)))
+    error: dict[str, tuple[str, ...]] = _entry(_map(_list(_str)))
+
+
+@_frozen
 class ControlSpec(Part):
     """A form control (scroll bar, spin button) linked to `cell`, counting in whole numbers."""
     kind: str = _entry(_str)
@@ -358,6 +374,7 @@ class BuildRecord(Part):
     grid: GridTable | None = _entry(_optional(_part(GridTable)), None)
     stroke: GridTable | None = _entry(_optional(_part(GridTable)), None)
     frames: Frames | None = _entry(_optional(_part(Frames)), None)
+    synthesis: Synthesis | None = _entry(_optional(_part(Synthesis)), None)
 
     @classmethod
     def from_json(cls, data) -> "BuildRecord":
@@ -374,7 +391,7 @@ class BuildRecord(Part):
     def sheets(self) -> set[str]:
         """Every sheet the record names."""
         parts = [self.position, self.sweep, self.motion, self.forces, self.grid, self.stroke,
-                 self.frames,
+                 self.frames, self.synthesis,
                  *self.numbers_only]
         named = {p.sheet for p in parts if p is not None}
         if self.frames is not None:

@@ -11,6 +11,20 @@ from .record import FORMAT_VERSION, BuildRecord  # noqa: F401  (the version: the
 MECH, SWEEP, MOTION_SHEET, CHARTS, GRID, STROKE, META = (
     "Mechanism", "Sweep", "Motion", "Charts", "Grid", "Stroke sweep", "linkbook")
 FORCES_SHEET = "Forces"
+SYNTHESIS = "Synthesis"
+# The Synthesis sheet's checks in words (book/synthesis.py writes them, verify expects them)
+SYNTHESIS_WORDS = {
+    "singular": "near-singular (cond₂ > 10⁶): nothing is designed",
+    "solvable": "solvable",
+    "positive": "both positive",
+    "crank negative": "crank a < 0: its pin lies beyond A0 (the crank turned 180°); not analysed",
+    "rocker negative": "rocker c < 0: its pin lies beyond B0 (the rocker turned 180°); "
+                       "not analysed",
+    "both negative": "a < 0 and c < 0: both pins lie beyond their pivots; not analysed",
+    "defect": "branch defect: the points need both assemblies, no one linkage passes "
+              "through all",
+    "no defect": "no branch defect",
+}
 DRAWING_COLUMNS = ("N", "O")   # x and y of the joints table and of the links the drawing plots
 JOINT_COLUMN = "M"             # the joints table's joint names: the drawing's labels read them
 DASH = "—"     # "no value here" in text cells (SMALL, MIN, MAX and COUNT skip text)

@@ -13,7 +13,7 @@ from . import package
 from . import workbook
 from .controls import Control
 from .stroke import grid_is_fine
-from ..base.sheets import GRID, MECH, STROKE
+from ..base.sheets import GRID, MECH, STROKE, SYNTHESIS
 from ..base.files import write_atomic
 from ..language.excel import is_direction
 from ..language.model import COLUMN
@@ -89,7 +89,7 @@ def _print_setup(built: workbook.Built) -> None:
     from .pages import apply_print_setup
     forces = built.meta.get("forces")
     kept = {forces["sheet"]: [summary_rows(forces)]} if forces else {}
-    apply_print_setup(built.workbook, fit_to_width=(MECH,), keep_together=kept)
+    apply_print_setup(built.workbook, fit_to_width=(MECH, SYNTHESIS), keep_together=kept)
 
 
 def _angle_columns(built: workbook.Built):

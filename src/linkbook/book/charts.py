@@ -167,6 +167,33 @@ def add_charts(built: Built, t: Template, model: Model) -> None:
         _force_charts(wb, t, model, meta, row)
     if "grid" in meta:
         _family_chart(wb, t, model, meta)
+    if "synthesis" in meta:
+        _structural_error_chart(wb, meta["synthesis"])
+
+
+def _column_of(cells) -> tuple[str, tuple[int, int]]:
+    """The column letter and first and last rows of a column's cells, top to bottom."""
+    letter = cells[0].rstrip("0123456789")
+    return letter, (int(cells[0][len(letter):]), int(cells[-1][len(letter):]))
+
+
+def _structural_error_chart(wb, syn: dict) -> None:
+    """The Synthesis sheet's structural error against x over the range, the precision points
+    marked (where it is zero), beside the table it plots."""
+    ws = wb[syn["sheet"]]
+    chart = _chart("Structural error: generated − desired output", "x", "error [deg]")
+    (x, rows), (error, _) = _column_of(syn["error"]["x"]), _column_of(syn["error"]["error"])
+    chart.series.append(_series(ws, x, error, rows, "structural error"))
+    (x, rows), (error, _) = _column_of(syn["points"]["x"]) if "x" in syn["points"] else \
+        _column_of(list(syn["inputs"][f"x_{j}"] for j in range(1, syn["task"]["points"] + 1))), \
+        _column_of(syn["points"]["error"])
+    points = _series(ws, x, error, rows, "precision points", markers=True, colour="C00000")
+    points.graphicalProperties.line.solidFill = None     # markers only: no line between them
+    points.graphicalProperties.line.noFill = True
+    chart.series.append(points)
+    chart.width, chart.height = SWEEP_CHART_CM, 10
+    letter, (first, _) = _column_of(syn["error"]["error"])
+    ws.add_chart(chart, f"{get_column_letter(column_index_from_string(letter) + 2)}{first + 2}")
 
 
 def _drawing(wb, t, model: Model, meta: dict) -> None:

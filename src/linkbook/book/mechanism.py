@@ -16,7 +16,7 @@ from openpyxl.worksheet.datavalidation import DataValidation
 from ..base.sheets import MECH, MOTION_SHEET
 from ..language.domain import INPUT_ANGLE_LIMIT
 from ..language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, constant_name, position_name
-from ..language.model import CONSTANT, DEG, Model
+from ..language.model import CONSTANT, DEG, LENGTH, Model
 from .resolve import Resolver
 from ..language.templates import Template
 from .controls import control_record
@@ -46,6 +46,11 @@ def inputs_block(wb, ws, t: Template, model: Model):
         put_text(ws, f"A{row}", p.label)
         wrap_in(ws, f"A{row}")
         put_text(ws, f"B{row}", p.symbol)
+        names[p.symbol] = p.name
+        if p.designed_by:
+            inputs[p.symbol] = _designed_link(ws, row, p, t.length_unit)
+            row += 1
+            continue
         value = ws[f"C{row}"]
         value.value = int(p.value) if p.kind == BRANCH_KIND else p.value
         value.fill = INPUT_FILL
@@ -57,7 +62,6 @@ def inputs_block(wb, ws, t: Template, model: Model):
         ws.add_data_validation(dv)
         dv.add(f"C{row}")
         define_name(wb, p.name, MECH, f"C{row}")
-        names[p.symbol] = p.name
         inputs[p.symbol] = {"cell": f"C{row}", "name": p.name, "kind": p.kind}
         row += 1
     constants: dict[str, dict] = {}
@@ -84,6 +88,18 @@ def inputs_block(wb, ws, t: Template, model: Model):
             constants[q.key] = {"cell": f"C{row}", "name": name, "unit": q.unit}
             row += 1
     return names, inputs, constants, row
+
+
+def _designed_link(ws, row: int, p, length_unit: str) -> dict:
+    """A designed parameter's row: a link to its named cell on the Synthesis sheet, shaded as
+    derived, never an input; its record names that cell and the link."""
+    c = ws[f"C{row}"]
+    set_formula(c, f"={p.name}")
+    c.fill = DERIVED_FILL
+    c.number_format = "0" if p.kind == BRANCH_KIND else number_format(LENGTH, length_unit)
+    put_text(ws, f"D{row}", p.unit)
+    put_text(ws, f"E{row}", f"designed: {p.name}", NOTE)
+    return {"cell": f"C{row}", "name": p.name, "kind": p.kind, "designed": True}
 
 
 # The inputs' label column: wide enough for a usual label on one line (a label wrapped into a

@@ -101,20 +101,27 @@ def summary_block(ws, t: Template, model: Model, names: dict, sweep: dict, row: 
     return cells
 
 
+def grashof_formula(g: str, c: str, k: str, r: str) -> str:
+    """Grashof's class, as Excel text, of a four-bar of ground g, crank c, coupler k and rocker
+    r (cells or expressions)."""
+    links = f"{g},{c},{k},{r}"
+    shortest, longest = f"MIN({links})", f"MAX({links})"
+    others = f"({g}+{c}+{k}+{r}-{shortest}-{longest})"
+    return (f'IF({shortest}+{longest}>{others}*(1+1E-12),"non-Grashof: triple rocker",'
+            f'IF({shortest}+{longest}>={others}*(1-1E-12),"change point",'
+            f'IF({shortest}={g},"Grashof: double crank",IF({shortest}={c},'
+            f'"Grashof: crank-rocker",IF({shortest}={k},"Grashof: double rocker",'
+            f'"Grashof: rocker-crank")))))')
+
+
 def _fourbar_summary(add, fb, n: str, resolve) -> None:
     what = f"four-bar loop {fb.name}"
     g = add(f"fb{n}_ground", f"{what}: ground link", "=" + render(fb.ground, resolve), LENGTH)
     c = add(f"fb{n}_crank", f"{what}: input crank", "=" + render(fb.crank, resolve), LENGTH)
     k = add(f"fb{n}_coupler", f"{what}: coupler", "=" + render(fb.coupler, resolve), LENGTH)
     r = add(f"fb{n}_rocker", f"{what}: output link", "=" + render(fb.rocker, resolve), LENGTH)
-    links = f"{g},{c},{k},{r}"
-    shortest, longest = f"MIN({links})", f"MAX({links})"
-    others = f"({g}+{c}+{k}+{r}-{shortest}-{longest})"
-    add(f"grashof{n}", f"{what}: Grashof class",
-        f'=IF({shortest}+{longest}>{others}*(1+1E-12),"non-Grashof: triple rocker",'
-        f'IF({shortest}+{longest}>={others}*(1-1E-12),"change point",'
-        f'IF({shortest}={g},"Grashof: double crank",IF({shortest}={c},"Grashof: crank-rocker",'
-        f'IF({shortest}={k},"Grashof: double rocker","Grashof: rocker-crank")))))', kind="text")
+    add(f"grashof{n}", f"{what}: Grashof class", "=" + grashof_formula(g, c, k, r),
+        kind="text")
     ground_angle = render(fb.ground_angle, resolve)
     for name, length in (("stretched", f"({k}+{r})"), ("folded", f"ABS({k}-{r})")):
         cosine = f"({g}^2+{c}^2-{length}^2)/(2*{g}*{c})"

@@ -20,7 +20,7 @@ from openpyxl.utils import column_index_from_string
 from ..base import __version__
 from ..base.record import BuildRecord
 from ..base.sheets import (CHARTS, FORCES_SHEET, FORMAT_VERSION, GRID, MECH, META, MOTION_SHEET,
-                           STROKE, SWEEP, write_meta)
+                           STROKE, SWEEP, SYNTHESIS, write_meta)
 from ..language.forces import FORCE
 from ..language.model import COLUMN, MOTION, Model
 from ..language.templates import Template
@@ -32,6 +32,7 @@ from .motion import motion_table
 from .stroke import grid_is_fine, stroke_row, stroke_sheet
 from .style import set_formula, top_align_tall_rows
 from .summary import summary_block
+from .synthesis import synthesis_sheet
 from .sweep import default_window, degree_formula, radian_window, sweep_numbers_only, sweep_table
 
 
@@ -58,6 +59,7 @@ def build(t: Template) -> Built:
     ws_sweep = wb.create_sheet(SWEEP)
     ws_motion = wb.create_sheet(MOTION_SHEET) if model.of_role(MOTION) else None
     ws_forces = wb.create_sheet(FORCES_SHEET) if model.of_role(FORCE) else None
+    ws_synthesis = wb.create_sheet(SYNTHESIS, 1) if t.synthesis is not None else None
     wb.create_sheet(CHARTS)     # filled by charts.add_charts once values are known
     meta = {"format": FORMAT_VERSION, "linkbook": __version__, "template": t.name,
             "mechanism": t.mechanism.name, "title": t.title, "length_unit": t.length_unit,
@@ -66,6 +68,8 @@ def build(t: Template) -> Built:
         meta["description"] = t.mechanism.description
 
     names, meta["inputs"], meta["constants"], next_row = inputs_block(wb, ws_mech, t, model)
+    if ws_synthesis is not None:
+        meta["synthesis"] = synthesis_sheet(wb, ws_synthesis, t, model, names)
     meta["position"] = position_block(wb, ws_mech, t, model, names)
     meta["sweep"] = sweep_table(ws_sweep, t, model, names)
     if ws_motion is not None:

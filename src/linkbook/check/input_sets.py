@@ -89,7 +89,8 @@ def other_sets(solver, record: BuildRecord, params: dict[str, float], angles: np
             values = draw(record, solver.mechanism.input_kind, params, seed, number, shrink)
             if values is not None and np.array_equal(_assembled(solver, values, angles), own):
                 sets.append(InputSet(number, values,
-                                     [s for s in values if values[s] != params[s]]))
+                                     [s for s in values if values[s] != params[s]
+                                      and not record.inputs[s].designed]))
                 break
         else:
             sets.append(InputSet(number, dict(params), [], skipped=(
@@ -117,17 +118,34 @@ def draw(record: BuildRecord, input_kind: str, params: dict[str, float], seed: i
         u = rng.uniform(-1.0, 1.0)
         out[symbol] = _moved(kinds[symbol], params[symbol], scales.get(symbol), u,
                              shrink if kinds[symbol] in GEOMETRIC else 1.0)
+    _redesigned(record, params, out)
     speed, accel = MOTION_SYMBOLS[input_kind]
     if params.get(accel) == 0 and speed in out:     # an acceleration of the speed's scale
         per = 1.0 if input_kind == ANGLE_KIND else mechanism_size(record, out)
         out[accel] = _round(out[speed] ** 2 / per * (1.0 + SPREAD * rng.uniform(-1.0, 1.0)))
     try:
         for symbol, value in out.items():
-            check_value(symbol, kinds[symbol], value)
-        check_lengths_together(out, kinds, "", written_in(record))
+            if not record.inputs[symbol].designed:     # the design's: NaN where there is none
+                check_value(symbol, kinds[symbol], value)
+        check_lengths_together({s: v for s, v in out.items() if not math.isnan(v)}, kinds, "",
+                               written_in(record))
     except InputError:
         return None
     return out
+
+
+def _redesigned(record: BuildRecord, params: dict[str, float], out: dict[str, float]) -> None:
+    """A synthesis book's designed parameters follow its inputs, never drawn: function
+    generation's coefficients K1, K2, K3 do not depend on the ground length d, so the designed
+    lengths scale with it and the branch stays. The task's own inputs (x0, x1, the ranges, on
+    the Synthesis sheet) are not moved yet: a set writes the Mechanism sheet's inputs only."""
+    if record.synthesis is None:
+        return
+    ground = record.synthesis.task["ground"]
+    ratio = out[ground] / params[ground]
+    for symbol, info in record.inputs.items():
+        if info.designed:
+            out[symbol] = params[symbol] * (ratio if info.kind == LENGTH_KIND else 1.0)
 
 
 def _moved(kind: str, value: float, natural: float | None, u: float, shrink: float) -> float:

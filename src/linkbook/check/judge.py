@@ -42,6 +42,9 @@ def judge_book(wb, record: BuildRecord, values: dict, rules: Rules,
     from . import drawing, grid, summary
     solver = Reference(record)
     params = inputs_of(wb, record)
+    if record.synthesis is not None:
+        from .synthesis import as_designed
+        params = as_designed(wb, record, values, params)
     j = Judging(wb, record, values, rules, solver, solver.mechanism.build(), params,
                 mechanism_size(record, params), own_inputs=own_inputs)
     _check_sweep(j)
@@ -60,6 +63,9 @@ def judge_book(wb, record: BuildRecord, values: dict, rules: Rules,
         j.checks += summary.check_assembly(j)
     if record.grid is not None:
         j.checks += grid.check_grid(j)
+    if record.synthesis is not None:
+        from .synthesis import check_synthesis
+        check_synthesis(j)
     return j.checks
 
 

@@ -12,12 +12,10 @@ from ..base.record import BuildRecord, DamagedRecord
 from ..language.domain import (InputError, check_input, check_lengths_together, check_value,
                                check_written_lengths)
 
+from .cells import UnusableFile, number_at  # noqa: F401  (read from here by the others)
+
 # what reading a record that does not match its book raises (a key missing, a value mistyped)
 RECORD_ERRORS = (KeyError, IndexError, TypeError, ValueError, AttributeError)
-
-
-class UnusableFile(Exception):
-    """The file cannot be verified at all (exit 2)."""
 
 
 def read_book(path: Path):
@@ -64,6 +62,8 @@ def inputs_of(wb, record: BuildRecord) -> dict[str, float]:
     ws = wb[layout.MECH]
     values = {}
     for symbol, info in record.inputs.items():
+        if info.designed:
+            continue            # a link to the Synthesis sheet: its value is the design's
         raw = ws[info.cell].value
         field = f"input {symbol} (cell {info.cell})"
         if ws[info.cell].data_type == "f":
@@ -78,8 +78,12 @@ def inputs_of(wb, record: BuildRecord) -> dict[str, float]:
             values[symbol] = check_value(field, info.kind, raw)
         except InputError as exc:
             raise UnusableFile(str(exc)) from None
+    if record.synthesis is not None:
+        from .synthesis import designed_values
+        values = designed_values(wb, record, values)
     try:
-        check_lengths_together(values, record.kinds(), "input ", written_in(record))
+        check_lengths_together({k: v for k, v in values.items() if not np.isnan(v)},
+                               record.kinds(), "input ", written_in(record))
     except InputError as exc:
         raise UnusableFile(str(exc)) from None
     return values
@@ -97,7 +101,8 @@ def mechanism_size(record: BuildRecord, params: dict[str, float]) -> float:
     """S: the sum of the input lengths and offsets and of the lengths the description writes as
     numbers (every frame fits in a circle that big)."""
     kinds = record.kinds()
-    size = sum(abs(v) for s, v in params.items() if kinds[s] in ("length", "offset"))
+    size = sum(abs(v) for s, v in params.items()
+               if kinds[s] in ("length", "offset") and not np.isnan(v))   # NaN: not designed
     return max(size + sum(abs(v) for v in written_in(record).values()), 1e-300)
 
 
@@ -113,13 +118,6 @@ def input_at(ws, cell: str, what: str, is_angle: bool) -> float:
         return check_input(f"{ws.title}!{cell}: {what}", number_at(ws, cell, what), is_angle)
     except InputError as exc:
         raise UnusableFile(str(exc)) from None
-
-
-def number_at(ws, cell: str, what: str) -> float:
-    v = ws[cell].value
-    if not isinstance(v, (int, float)) or isinstance(v, bool):
-        raise UnusableFile(f"{ws.title}!{cell}: {what} must be a number (got {v!r})")
-    return float(v)
 
 
 def formula_cells(wb) -> set[tuple[str, str]]:

@@ -37,6 +37,9 @@ def check_assembly(j: Judging) -> list[Check]:
     slack = _edge_slack(model, j.ref, closes)
     c = Check("summary", "geometry", j.size)
     for key, info in j.record.summary.items():
+        if isinstance(expected[key], float) and math.isnan(expected[key]):
+            j.compare(c, layout.MECH, [info.cell], np.array([math.nan]), info.unit)  # #N/A
+            continue
         compare_exact(c, layout.MECH, [info.cell], j.got(layout.MECH, [info.cell]),
                       [expected[key]], [slack.get(key, 0.0)], [info.unit])
     checks.append(c)
@@ -132,6 +135,14 @@ def _summary_expected(model, solver, params, ref, closes, starts, ends,
         out[f"{n}_min"], out[f"{n}_max"] = _extreme(m, np.min), _extreme(m, np.max)
     for i, (g, c, k, r) in enumerate(solver.fourbar_loops(params)):
         n = summary_prefix("", i + 1)
+        if not all(math.isfinite(v) for v in (g, c, k, r)):
+            # a synthesis that designed no linkage: #N/A for its lengths and Grashof class
+            out.update({f"fb{n}_ground": g, f"fb{n}_crank": c, f"fb{n}_coupler": k,
+                        f"fb{n}_rocker": r, f"grashof{n}": math.nan})
+            # the limit angles' cells catch every error as "none": there are none
+            out.update({f"limit{n}_{name}_{end}": "none" for name in ("stretched", "folded")
+                        for end in (1, 2)})
+            continue
         out.update({f"fb{n}_ground": g, f"fb{n}_crank": c, f"fb{n}_coupler": k,
                     f"fb{n}_rocker": r, f"grashof{n}": generic.grashof_class(g, c, k, r)})
         for name, length in (("stretched", k + r), ("folded", abs(k - r))):

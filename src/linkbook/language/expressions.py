@@ -17,7 +17,8 @@ from .model import DescriptionError
 # name -> number of arguments (None: one or more)
 FUNCTIONS = {"SQRT": 1, "ABS": 1, "SIN": 1, "COS": 1, "TAN": 1, "ASIN": 1, "ACOS": 1, "ATAN": 1,
              "ATAN2": 2, "RADIANS": 1, "DEGREES": 1, "PI": 0, "MIN": None, "MAX": None,
-             "IF": 3, "IFERROR": 2, "NA": 0, "AND": None, "OR": None, "NOT": 1, "SIGN": 1}
+             "IF": 3, "IFERROR": 2, "NA": 0, "AND": None, "OR": None, "NOT": 1, "SIGN": 1,
+             "LN": 1, "LOG10": 1, "EXP": 1}
 # the functions whose value is TRUE or FALSE, as a comparison's
 LOGICAL = ("AND", "OR", "NOT")
 _COMPARE = {ast.Gt: ">", ast.GtE: ">=", ast.Lt: "<", ast.LtE: "<=", ast.Eq: "=", ast.NotEq: "<>"}
@@ -275,4 +276,5 @@ _EXCEL = {"SQRT": math.sqrt, "ABS": abs, "SIN": math.sin, "COS": math.cos, "TAN"
           "ATAN2": lambda x, y: math.atan2(y, x), "RADIANS": math.radians,
           "DEGREES": math.degrees, "PI": lambda: math.pi, "MIN": min, "MAX": max,
           "NA": _not_available, "SIGN": lambda x: float((x > 0) - (x < 0)),
-          "AND": lambda *a: all(a), "OR": lambda *a: any(a), "NOT": lambda x: not x}
+          "AND": lambda *a: all(a), "OR": lambda *a: any(a), "NOT": lambda x: not x,
+          "LN": math.log, "LOG10": math.log10, "EXP": math.exp}

@@ -176,6 +176,8 @@ _KEYWORDS = {
     "pattern": lambda value, want, part: not isinstance(value, str) or
     re.search(want, value) is not None,
     "exclusiveMinimum": _number_check(lambda value, want: value > want),
+    "minimum": _number_check(lambda value, want: value >= want),
+    "maximum": _number_check(lambda value, want: value <= want),
     "const": lambda value, want, part: _equal(value, want),
     "enum": lambda value, want, part: any(_equal(value, option) for option in want),
     "anyOf": lambda value, want, part: any(_fits(value, sub) for sub in want),

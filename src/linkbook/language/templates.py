@@ -17,6 +17,7 @@ from .bundled import TEMPLATE_DIR, bundled, bundled_template_data
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
 from .expressions import always_an_error, value_of
 from .fields import check_nesting
+from .synthesis import FunctionTask, design, fitted_to, task_of
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism, typed_unit)
 
@@ -38,6 +39,9 @@ class Parameter:
     unit: str
     name: str        # the workbook-scoped defined name of its cell
     value: float
+    # the template field whose formula the cell holds ("synthesis.designs.crank"): a designed
+    # parameter's named cell is a formula on the Synthesis sheet, not an input; "" for an input
+    designed_by: str = ""
 
 
 @dataclass(frozen=True)
@@ -69,9 +73,16 @@ class Template:
     position: float                      # the current-position input angle, degrees
     grid_values: tuple[float, ...] = ()  # values of mechanism.grid's parameter across the grid
     stroke_step: float = 1.0             # fine sweep under the grid, degrees
+    synthesis: FunctionTask | None = None   # the task that designs some parameters
 
     def values(self) -> dict[str, float]:
         return {p.symbol: p.value for p in self.parameters}
+
+    def known_values(self) -> dict[str, float]:
+        """values() without a designed parameter the task leaves undesigned (NaN): the
+        template's checks skip what reads it; the book shows #N/A there."""
+        return {p.symbol: p.value for p in self.parameters
+                if not (p.designed_by and math.isnan(p.value))}
 
     def parameter(self, symbol: str) -> Parameter:
         for p in self.parameters:
@@ -212,6 +223,10 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
     if unknown:
         raise InputError(f"{origin}: parameters.{unknown[0]}",
                          f"is not a parameter of {mech.name}; it has {', '.join(mech.parameters)}")
+    task = task_of(data, mech.parameters, origin)
+    if task is not None:
+        task = fitted_to(task, mech.description or {}, origin)
+    designed = task.designed() if task else {}
     params = []
     for symbol, kind in mech.parameters.items():
         field = f"{origin}: parameters.{symbol}"
@@ -233,6 +248,14 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
                    else "must be text")
         if problem:
             raise InputError(f"{field}.name", f"{excel_name!r} {problem}")
+        if symbol in designed:
+            if "value" in entry:
+                raise InputError(f"{field}.value", f"{symbol} is designed by "
+                                                   f"synthesis.designs.{designed[symbol]}; "
+                                                   "leave its value out")
+            params.append(Parameter(symbol, kind, label, unit, excel_name, math.nan,
+                                    f"synthesis.designs.{designed[symbol]}"))
+            continue
         if "value" not in entry:
             raise InputError(f"{field}.value", "is missing")
         value = (parse_list(f"{field}.value", kind, entry["value"])[0]
@@ -263,9 +286,22 @@ def from_data(name: str, data: dict, origin: str = "template") -> Template:
         name=name, title=_need(data, "title", origin), source=_optional_text(data, "source", origin),
         description=_optional_text(data, "description", origin), mechanism=mech, length_unit=length_unit,
         parameters=tuple(params), sweep=sweep, position=position, grid_values=grid_values,
-        stroke_step=stroke_step)
+        stroke_step=stroke_step, synthesis=task)
+    template = with_design(template)
     check_sweep(template, origin)
     return template
+
+
+def with_design(t: Template) -> Template:
+    """The template with its designed parameters' values designed anew from its task and its
+    ground length (NaN where there is no usable design)."""
+    if t.synthesis is None:
+        return t
+    values = design(t.synthesis, t.values()[t.synthesis.ground])
+    roles = t.synthesis.designed()
+    return replace(t, parameters=tuple(
+        replace(p, value=values[roles[p.symbol]]) if p.symbol in roles else p
+        for p in t.parameters))
 
 
 def check_schema(data: dict, origin: str) -> None:
@@ -323,8 +359,8 @@ def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template"
     if t.mechanism.grid and t.mechanism.parameters[t.mechanism.grid[0]] in (LENGTH_KIND,
                                                                                OFFSET_KIND):
         grid_values = tuple(v * factor for v in grid_values)
-    out = replace(t, parameters=tuple(params), sweep=sweep, position=position,
-                  grid_values=grid_values, length_unit=unit)
+    out = with_design(replace(t, parameters=tuple(params), sweep=sweep, position=position,
+                              grid_values=grid_values, length_unit=unit))
     check_sweep(out)
     return out
 
@@ -399,7 +435,7 @@ def check_step_lengths(t: Template) -> None:
     """Every length a step takes (a side, a rod, a crank), evaluated with the book's values,
     must be positive: the loop cannot be assembled with a zero or negative one, and a book
     built so would be #N/A all through. A length of the swept input is checked by the sweep."""
-    values = t.values()
+    values = t.known_values()
     for field, raw in t.mechanism.lengths:
         value = value_of(raw, values)
         if value is None or value > 0:
@@ -414,7 +450,7 @@ def check_loads(t: Template) -> None:
     """No mass, inertia, load or gravity an error on every row with the book's values (NA(),
     1/0): a book of forces that are all errors, which the reference reads as #N/A where the
     book shows #DIV/0!, or as numbers where the loads were meant to be."""
-    values = t.values()
+    values = t.known_values()
     for field, raw in t.mechanism.loads:
         if always_an_error(raw, values):
             raise InputError(field, f"{raw!r} is an error (#N/A, #DIV/0!, #NUM!) on every row "
@@ -428,7 +464,7 @@ def check_sweep(t: Template, origin: str = "", step_field: str = "sweep.step") -
     length positive (check_step_lengths), no load an error throughout (check_loads). Called after
     every change to a template. `origin` names the template file, `step_field` where the step
     came from (the file's sweep.step, --step)."""
-    values = t.values()
+    values = t.known_values()
     if t.mechanism.grid:
         values = {**values, **{f"{t.mechanism.grid[0]}[{i}]": v
                                for i, v in enumerate(t.grid_values)}}
@@ -499,6 +535,9 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
             raise InputError(f"{names['set']} {key}", f"unknown parameter{more}")
         p = values[key]
         field = f"{names['set']} {key}"
+        if p.designed_by:
+            raise InputError(field, f"{key} is designed by {p.designed_by}; change the task "
+                                    "instead")
         if t.mechanism.grid and key == t.mechanism.grid[0]:
             grid_values = parse_list(field, p.kind, raw)
             values[key] = replace(p, value=grid_values[0])
@@ -507,13 +546,16 @@ def with_overrides(t: Template, assignments: list[str] = (), step: float | None 
     if branch is not None:
         if "branch" not in values:
             raise InputError(names["branch"], f"{t.name} has no assembly branch to choose")
+        if values["branch"].designed_by:
+            raise InputError(names["branch"], f"the branch is designed by "
+                                              f"{values['branch'].designed_by}")
         if branch not in BRANCH_WORDS:
             raise InputError(names["branch"], f"must be open or crossed (got {branch!r})")
         values["branch"] = replace(values["branch"], value=BRANCH_WORDS[branch])
     sweep = t.sweep
     if step is not None:
         sweep = replace(sweep, step=parse_number(names["step"], step))
-    out = replace(t, parameters=tuple(values[s] for s in values), sweep=sweep,
-                  grid_values=grid_values)
+    out = with_design(replace(t, parameters=tuple(values[s] for s in values), sweep=sweep,
+                              grid_values=grid_values))
     check_sweep(out, step_field=names["step"] if step is not None else "sweep.step")
     return out

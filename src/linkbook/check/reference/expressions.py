@@ -105,6 +105,9 @@ _FUNCTIONS: dict[str, tuple[int | None, Callable]] = {
     "OR": (None, _logical(np.logical_or)),
     "NOT": (1, _not),
     "SIGN": (1, _np1(np.sign)),
+    "LN": (1, _np1(np.log)),          # a synthesis task's function of x (docs/synthesis.md)
+    "LOG10": (1, _np1(np.log10)),
+    "EXP": (1, _np1(np.exp)),
 }
 
 
@@ -296,10 +299,10 @@ def _run(tree: tuple, env: Mapping[str, object], text: str):
 def evaluate(expr: object, env: Mapping[str, object]):
     """Value of an expression of the mechanism language: a number, or text in Excel syntax
     (symbols, numbers, + - * / ^, comparisons, parentheses and SQRT ABS SIN COS TAN ASIN ACOS
-    ATAN ATAN2(x, y) RADIANS DEGREES PI() MIN MAX IF IFERROR NA() AND OR NOT SIGN) over env:
-    {name: number or array}. A float when every name it uses is a number, else an array. A
-    domain error (SQRT of a negative, a division by zero, ...) gives NaN, as Excel shows an
-    error; a malformed expression or an unknown name raises ValueError."""
+    ATAN ATAN2(x, y) RADIANS DEGREES PI() MIN MAX IF IFERROR NA() AND OR NOT SIGN LN LOG10
+    EXP) over env: {name: number or array}. A float when every name it uses is a number, else an
+    array. A domain error (SQRT of a negative, a division by zero, ...) gives NaN, as Excel shows
+    an error; a malformed expression or an unknown name raises ValueError."""
     if isinstance(expr, bool):
         raise ValueError(f"expected a number or an expression, got {expr!r}")
     if isinstance(expr, (int, float)):
