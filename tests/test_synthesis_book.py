@@ -145,7 +145,7 @@ def test_editing_a_task_input_in_the_book_redesigns_and_verifies(tmp_path):
     assert report.status == 0, [(c.block, c.name, c.mismatches[:2]) for c in report.checks
                                 if not c.ok]
     before = _reference(_data()["synthesis"])["a"]
-    after = _reference(_data(theta2=[285, 100])["synthesis"])["a"]
+    after = _reference(_data(theta2=[30, 100])["synthesis"])["a"]
     assert report.inputs["a2"] == pytest.approx(after, rel=1e-9) and abs(after - before) > 1
 
 

@@ -159,11 +159,11 @@ def column_width(text: str, bold: bool = False) -> float:
     return math.ceil(text_width(text, bold) * 10 - 1e-9) / 10
 
 
-def label_lines(text: str, width: float) -> list[str]:
+def label_lines(text: str, width: float, bold: bool = False) -> list[str]:
     """`text` broken between words as a cell `width` wide shows it (no word split)."""
     lines: list[str] = []
     for word in text.split():
-        if lines and text_width(f"{lines[-1]} {word}") <= width:
+        if lines and text_width(f"{lines[-1]} {word}", bold) <= width:
             lines[-1] += f" {word}"
         else:
             lines.append(word)
@@ -186,6 +186,19 @@ def fit_labels(ws, row: int, letters, heads: int | None = None) -> None:
             label.alignment = Alignment(wrap_text=True, vertical="top")
             lines = max(lines, len(label_lines(str(label.value), width)))
     ws.row_dimensions[row].height = LINE_HEIGHT * lines
+
+
+def fit_heads(ws, row: int, letters) -> None:
+    """Widen each column of a row of bold headers so its longest word fits whole, and make the
+    row tall enough for the header that wraps to the most lines."""
+    lines = 1
+    for letter in letters:
+        dim, head = ws.column_dimensions[letter], ws[f"{letter}{row}"]
+        text = str(head.value or "")
+        dim.width = width = max([dim.width or 12] + [column_width(w, bold=True)
+                                                     for w in text.split()])
+        lines = max(lines, len(label_lines(text, width, bold=True)))
+    ws.row_dimensions[row].height = max(ws.row_dimensions[row].height or 0, LINE_HEIGHT * lines)
 
 
 def put_head(ws, row: int, col: int, value: str) -> None:

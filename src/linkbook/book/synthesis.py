@@ -18,8 +18,9 @@ from ..language.model import DEG, LENGTH, RAD, RATIO, Model
 from ..language.synthesis import DEAD_CENTRE, SINGULAR_COND, FunctionTask
 from ..language.templates import Template
 from .resolve import Resolver
-from .style import (BOLD, BOX, DERIVED_FILL, INPUT_FILL, NOTE, TITLE, block_head,
-                    define_name, number_format, put_head, put_text, set_formula, unit_text)
+from .style import (BOLD, BOX, DERIVED_FILL, INPUT_FILL, NOTE, TITLE, block_head, column_width,
+                    define_name, fit_heads, number_format, put_head, put_text, set_formula,
+                    unit_text)
 from .summary import grashof_formula
 
 ERROR_STEPS = 40          # intervals of the structural-error table over the input range
@@ -138,6 +139,7 @@ def synthesis_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     error = _error_table(ws, t, model, names, head, fx, fx0, fx1)
     cells.update(error.pop("cells"))
     error.pop("rows")
+    _fit(ws, head)
     ws.freeze_panes = "A7"
     return {"sheet": SYNTHESIS, "inputs": inputs, "cells": cells,
             "points": {k: tuple(v) for k, v in columns.items()
@@ -146,6 +148,18 @@ def synthesis_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
             "task": {"kind": "function", "f": task.f, "spacing": task.spacing, "points": n,
                      "ground": task.ground, "designs": dict(task.designs),
                      "output": task.output}}
+
+
+def _fit(ws, error_head: int) -> None:
+    """Column A as wide as its longest label (the block's quantities), and the two tables'
+    headers whole: no label clipped on screen or on paper."""
+    labels = [c.value for (c,) in ws.iter_rows(min_row=8, min_col=1, max_col=1)
+              if isinstance(c.value, str) and not c.font.b]
+    ws.column_dimensions["A"].width = max([ws.column_dimensions["A"].width or 12] +
+                                          [column_width(text) for text in labels])
+    for row in (7, error_head):
+        fit_heads(ws, row, [get_column_letter(c) for c in range(TABLE_COLUMN, ws.max_column + 1)
+                            if isinstance(ws.cell(row, c).value, str)])
 
 
 def _points_table(ws, t, model, names, head, fx, fx0, fx1, d):
