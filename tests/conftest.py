@@ -1,12 +1,18 @@
-"""Shared test helpers: building templates in memory and the published acceptance data."""
+"""Shared test helpers: building templates in memory, the published acceptance data, the
+size of the property tests (hypothesis profiles) and the applications a test needs."""
 from __future__ import annotations
 
+import importlib.util
+import os
+import shutil
+import subprocess
 import sys
 import tomllib
 from functools import lru_cache
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
@@ -18,6 +24,27 @@ from linkbook.check.verifier import check_book  # noqa: E402
 
 
 PUBLISHED = ROOT / "tests" / "data" / "published.toml"
+UNO_PYTHON = "/usr/bin/python3"         # the Python LibreOffice's bridge (python3-uno) is for
+
+
+# ---------------------------------------------------------------- how many random examples
+# One setting sizes every property test: `pytest --hypothesis-profile=fast` (the fast tier),
+# none (the default, CI's) or `--hypothesis-profile=thorough` (a long run before a release).
+# A test names its count at the default profile with examples(n); the profile scales it. Every
+# profile is hypothesis' own CI profile (derandomized: the same examples here and in CI, no
+# deadline, no example database), loaded here whether or not CI is set.
+SCALE = {"fast": 0.05, "default": 1.0, "thorough": 5.0}
+for _name, _scale in SCALE.items():
+    settings.register_profile(_name, derandomize=True, deadline=None, database=None,
+                              print_blob=True, suppress_health_check=[HealthCheck.too_slow],
+                              max_examples=round(100 * _scale))
+settings.load_profile("default")        # --hypothesis-profile, if given, is loaded after this
+
+
+def examples(at_default: int) -> int:
+    """A property test's example count: `at_default` at the default profile, scaled by the
+    profile chosen (never below one)."""
+    return max(1, round(at_default * settings.default.max_examples / 100))
 
 
 @lru_cache(maxsize=None)
@@ -68,3 +95,57 @@ def pytest_terminal_summary(terminalreporter):
         terminalreporter.write_line(
             f"{family:24} {TALLY[(family, 'examples')]:5d} examples, "
             f"{TALLY[(family, 'with rows that cannot close')]:5d} with rows that cannot close")
+
+
+# ---------------------------------------------------------------- applications a test needs
+def _python_can_import(python: str, module: str) -> bool:
+    return Path(python).is_file() and subprocess.run(
+        [python, "-c", f"import {module}"], capture_output=True).returncode == 0
+
+
+def _importable(module: str):
+    return lambda: importlib.util.find_spec(module) is not None
+
+
+# name -> (what it is, what installs it, whether this machine has it)
+APPLICATIONS = {
+    "libreoffice": ("LibreOffice (soffice)", ".ci/run's apt-get: libreoffice-calc-nogui",
+                    lambda: bool(shutil.which("soffice") or shutil.which("libreoffice"))),
+    "uno": ("LibreOffice's Python bridge", ".ci/run's apt-get: python3-uno",
+            lambda: _python_can_import(UNO_PYTHON, "uno")),
+    "pdftoppm": ("pdftoppm", ".ci/run's apt-get: poppler-utils",
+                 lambda: bool(shutil.which("pdftoppm"))),
+    "gnumeric": ("Gnumeric (ssconvert)", ".ci/run's apt-get: gnumeric",
+                 lambda: bool(shutil.which("ssconvert"))),
+    "strace": ("strace", ".ci/run's apt-get: strace", lambda: bool(shutil.which("strace"))),
+    "ironcalc": ("IronCalc (ironcalc)", "pip install '.[test]'", _importable("ironcalc")),
+    "pylinkage": ("pylinkage", "pip install '.[test]'", _importable("pylinkage")),
+    "pandas": ("pandas", "pip install '.[test]'", _importable("pandas")),
+    "calamine": ("python-calamine", "pip install '.[test]'", _importable("python_calamine")),
+    "ffmpeg": ("imageio-ffmpeg", "pip install '.[test]'", _importable("imageio_ffmpeg")),
+    "lxml": ("lxml", "pip install '.[test]' (openxml-audit's)", _importable("lxml")),
+}
+
+
+@lru_cache(maxsize=None)
+def _have(name: str) -> bool:
+    return APPLICATIONS[name][2]()
+
+
+def _need(*names: str) -> None:
+    """Skip the test without any of these applications, saying which; under CI (the variable
+    CI set, as .ci/run sets it) fail instead: a check that did not run never passes there."""
+    missing = [n for n in names if not _have(n)]
+    if not missing:
+        return
+    reason = "needs " + ", ".join(APPLICATIONS[n][0] for n in missing)
+    if os.environ.get("CI"):
+        pytest.fail(f"CI {reason} (" + "; ".join(APPLICATIONS[n][1] for n in missing) + ")",
+                    pytrace=False)
+    pytest.skip(reason)
+
+
+@pytest.fixture(scope="session")
+def needs():
+    """needs("libreoffice", "pdftoppm"): see _need(); usable in fixtures of any scope."""
+    return _need

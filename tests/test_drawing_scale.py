@@ -6,7 +6,6 @@ all of its 10 × 10 squares; the edited book's mapped coordinates (what the char
 lie inside the frame."""
 from __future__ import annotations
 
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -69,12 +68,10 @@ def _spacing(lines: list[float], png) -> float:
 
 
 @pytest.fixture(scope="module")
-def rendered(tmp_path_factory):
+def rendered(needs, tmp_path_factory):
     """Each bundled book, as built and with its first length doubled, printed to PNG pages
     (only the sheets with drawings: Mechanism and Charts)."""
-    if not office.soffice_path() or not shutil.which("pdftoppm"):
-        pytest.skip("LibreOffice and pdftoppm are needed")
-    pytest.importorskip("PIL")
+    needs("libreoffice", "pdftoppm")
     tmp = tmp_path_factory.mktemp("scale")
     out = {}
     for name in _bundled():

@@ -1,14 +1,13 @@
 """LibreOffice as the real spreadsheet: recalculation against the independent reference, cached
 values written into the file, page setup and PNG previews.
 
-Tests that need soffice are skipped when it is missing, except under CI (CI set), where a
-missing LibreOffice is a failure: .ci/run installs it, so its absence there is a broken build.
+Tests that need soffice are skipped when it is missing (conftest's `needs`), except under CI
+(CI set), where a missing LibreOffice is a failure: .ci/run installs it, so its absence there is a broken build.
 """
 from __future__ import annotations
 
 import os
 import re
-import shutil
 import struct
 import subprocess
 import sys
@@ -41,18 +40,6 @@ from linkbook.base.sheets import MECH, SWEEP  # noqa: E402
 
 REL_TOL = 1e-9          # LibreOffice stores 15 significant digits
 NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")      # cannot turn fully: #N/A rows
-
-
-def require_soffice() -> None:
-    """Skip without LibreOffice, but fail under CI, which must have it."""
-    missing = [tool for tool, found in (("soffice", office.soffice_path()),
-                                        ("pdftoppm", shutil.which("pdftoppm"))) if not found]
-    if not missing:
-        return
-    reason = f"needs LibreOffice and poppler-utils ({', '.join(missing)} not found)"
-    if os.environ.get("CI"):
-        pytest.fail(f"CI {reason}: .ci/run must install libreoffice-calc-nogui poppler-utils")
-    pytest.skip(reason)
 
 
 # ---------------------------------------------------------------- helpers
@@ -315,10 +302,10 @@ def test_print_setup_keeps_charts_whole():
 
 # ---------------------------------------------------------------- with LibreOffice
 @pytest.fixture(scope="module")
-def lo_books(tmp_path_factory):
+def lo_books(needs, tmp_path_factory):
     """(Built, path, LibreOffice values) for the four-bar on its defaults and non-Grashof, and
     for the boom driven by a linear actuator (an input that is a length)."""
-    require_soffice()
+    needs("libreoffice", "pdftoppm")
     return {case: _built_and_values(name, sets, tmp_path_factory.mktemp(case))
             for case, name, sets in (("default", "fourbar", ()),
                                      ("non-grashof", "fourbar", NON_GRASHOF),
@@ -326,8 +313,8 @@ def lo_books(tmp_path_factory):
 
 
 @pytest.mark.libreoffice
-def test_errors_as_libreoffice_caches_them(tmp_path):
-    require_soffice()
+def test_errors_as_libreoffice_caches_them(needs, tmp_path):
+    needs("libreoffice", "pdftoppm")
     wb = Workbook()
     ws = wb.active
     for i, f in enumerate(["=NA()", "=1/0", "=ACOS(2)", '="a"+1', '="abc"', "=1/3",
@@ -345,10 +332,10 @@ def test_errors_as_libreoffice_caches_them(tmp_path):
 
 
 @pytest.mark.libreoffice
-def test_stale_cached_values_are_recalculated(tmp_path):
+def test_stale_cached_values_are_recalculated(needs, tmp_path):
     """A wrong cached value and no fullCalcOnLoad: LibreOffice's default profile keeps the 42
     (measured); the private profile (OOXMLRecalcMode = 0) must recalculate."""
-    require_soffice()
+    needs("libreoffice", "pdftoppm")
     assert office.recalculated_values(stale_book(tmp_path))[("Sheet", "B1")] == 6.0
 
 
@@ -472,8 +459,8 @@ def test_cached_values_round_trip(lo_books, tmp_path):
 
 
 @pytest.mark.libreoffice
-def test_cached_book_with_charts_prints(tmp_path):
-    require_soffice()
+def test_cached_book_with_charts_prints(needs, tmp_path):
+    needs("libreoffice", "pdftoppm")
     path = _book_with_charts("fourbar", tmp_path)
     values = office.recalculated_values(path)
     out = tmp_path / "fourbar-cached.xlsx"
@@ -488,8 +475,8 @@ def test_cached_book_with_charts_prints(tmp_path):
 @pytest.mark.libreoffice
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["fourbar", "pump"])
-def test_preview_pages_are_pictures(name, tmp_path, monkeypatch):
-    require_soffice()
+def test_preview_pages_are_pictures(needs, name, tmp_path, monkeypatch):
+    needs("libreoffice", "pdftoppm")
     book = _book_with_charts(name, tmp_path)
     scratch = _private_tempdir(monkeypatch, tmp_path)
     pages = preview.preview(book, tmp_path / "png", dpi=30)
@@ -521,8 +508,8 @@ def test_a_sheet_alone_is_the_only_visible_one_and_prints_no_other(tmp_path):
 
 @pytest.mark.libreoffice
 @pytest.mark.slow
-def test_preview_prints_the_chosen_sheets_named_by_sheet_with_the_pdf(tmp_path, capsys):
-    require_soffice()
+def test_preview_prints_the_chosen_sheets_named_by_sheet_with_the_pdf(needs, tmp_path, capsys):
+    needs("libreoffice", "pdftoppm")
     book = _book_with_charts("fourbar", tmp_path)
     out = tmp_path / "pictures"
     assert cli.main(["preview", str(book), "--sheet", "Drawing data", "--sheet", "Mechanism",

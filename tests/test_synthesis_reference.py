@@ -334,11 +334,12 @@ def test_the_transmission_angle_range_is_the_position_references():
 
 # --- pylinkage, a third party ---------------------------------------------------------------
 
-def test_pylinkage_designs_the_same_linkage():
+def test_pylinkage_designs_the_same_linkage(needs):
     """pylinkage 1.3's function_generation (Freudenstein by scipy: exact at three pairs, least
     squares beyond) gives the same lengths where it accepts a design (it refuses negative
     lengths)."""
-    synthesis = pytest.importorskip("pylinkage.synthesis")
+    needs("pylinkage")
+    from pylinkage import synthesis
     rng = np.random.default_rng(38)
     compared = 0
     for n in (3, 3, 3, 5, 5, 7) * 50:

@@ -200,12 +200,11 @@ def test_build_refuses_a_grid_beyond_excels_columns(tmp_path, capsys):
 
 @pytest.mark.libreoffice
 @pytest.mark.parametrize("name", BUNDLED)
-def test_libreoffice_recalculates_every_bundled_book_like_the_reference(name, tmp_path):
+def test_libreoffice_recalculates_every_bundled_book_like_the_reference(needs, name, tmp_path):
     """The real application: a full recalculation in LibreOffice, every formula cell against the
     reference (1e-9 relative: LibreOffice stores 15 significant digits)."""
-    from test_office import require_soffice
     from linkbook.check.verifier import verify
-    require_soffice()
+    needs("libreoffice")
     path = tmp_path / f"{name}.xlsx"
     builder.build_file(templates.load(name), path)
     report = verify(path, "libreoffice")
