@@ -7,7 +7,6 @@ Tests that need ssconvert are skipped when it is missing (conftest's `needs`), e
 from __future__ import annotations
 
 import json
-import os
 import re
 import subprocess
 import sys
@@ -15,6 +14,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from conftest import examples
 from openpyxl import Workbook
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -199,7 +199,7 @@ def test_gnumeric_recalculates_unit_variants_like_the_reference(needs, name, uni
     assert report.formula_cells == report.cells > 0
 
 
-GNUMERIC_EXAMPLES = int(os.environ.get("LINKBOOK_GNUMERIC_EXAMPLES", "2"))
+GNUMERIC_EXAMPLES = examples(2)
 
 
 @pytest.mark.gnumeric

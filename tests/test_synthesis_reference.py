@@ -8,19 +8,18 @@ reference's placement, a third-party solver, or a formula of the specification w
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 import pytest
 import scipy.linalg
 from hypothesis import event, given, settings, strategies as st
 
-from conftest import published
+from conftest import examples, published
 from linkbook.check.reference import solve
 from linkbook.check.reference.synthesis import (SINGULAR_COND, function_generation,
                                                 precision_angles, precision_points)
 
-EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
+EXAMPLES = examples(100)
 ROUND_TRIP = 1e-9          # rad: the designed linkage meets its precision points
 # ... except at a dead centre (A, B, B0 in line: a double root of the position), where the
 # lengths' round-off ε moves the output by √ε: there 1e-7.

@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from openpyxl.workbook.defined_name import DefinedName
 
-from conftest import built
+from conftest import built, examples
 from linkbook.base import safety
 from linkbook.base import xlsx
 from test_engine import build_book, edge_book
@@ -473,7 +473,7 @@ def _matched_height_and_open(text: str) -> tuple[int, int]:
     return height, len(stack)
 
 
-@settings(max_examples=300, deadline=None, derandomize=True)
+@settings(max_examples=examples(300), deadline=None, derandomize=True)
 @given(st.text(alphabet="()xé+", max_size=80))
 def test_nesting_is_the_height_of_matched_pairs_plus_brackets_never_closed(text):
     """Outside strings, a formula's nesting is how deep its matched brackets go, and a bracket
