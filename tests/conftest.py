@@ -7,6 +7,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 import tomllib
 from functools import lru_cache
 from pathlib import Path
@@ -149,3 +150,35 @@ def _need(*names: str) -> None:
 def needs():
     """needs("libreoffice", "pdftoppm"): see _need(); usable in fixtures of any scope."""
     return _need
+
+
+# ---------------------------------------------------------------- waiting on what a process does
+HANG_GUARD_S = 300      # only a hung process takes this long, however loaded the machine
+
+
+def wait_until(happened, what: str, guard_s: float = HANG_GUARD_S) -> None:
+    """Poll `happened()` until it is true: a test waits on an event (a file a child writes, a
+    process gone), never on a delay a loaded machine overruns. Fails after `guard_s`, which
+    only a hang reaches."""
+    give_up = time.monotonic() + guard_s
+    while not happened():
+        if time.monotonic() > give_up:
+            pytest.fail(f"{what} did not happen within {guard_s} s", pytrace=False)
+        time.sleep(0.02)
+
+
+def gone(pid: int) -> bool:
+    """The process has ended: no such process, or a zombie (an orphan is reaped by whoever
+    adopts it, when it gets to it)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except FileNotFoundError:
+        return True
+    return state in ("Z", "X")
+
+
+def said_pids(path: Path, count: int) -> list[int] | None:
+    """The `count` process ids a shell wrote to `path` with one echo, once the line is whole."""
+    text = path.read_text() if path.exists() else ""
+    return [int(w) for w in text.split()] if text.endswith("\n") and \
+        len(text.split()) == count else None
