@@ -42,6 +42,10 @@ for _name, _scale in SCALE.items():
 settings.load_profile("default")        # --hypothesis-profile, if given, is loaded after this
 
 
+def pytest_report_header(config):
+    return f"hypothesis profile: {settings.get_current_profile_name()} (tests/conftest.py)"
+
+
 def examples(at_default: int) -> int:
     """A property test's example count: `at_default` at the default profile, scaled by the
     profile chosen (never below one)."""
@@ -62,6 +66,28 @@ def template(name: str, sets=(), step=None, branch=None) -> templates.Template:
 def built(name: str, sets: tuple = (), step=None, branch=None):
     """(Built, values) of a template with overrides, evaluated by the vector engine."""
     return builder.make(template(name, sets, step, branch))
+
+
+@pytest.fixture(scope="session")
+def bundled_books(tmp_path_factory) -> dict[str, Path]:
+    """name -> every bundled template's book as `linkbook build NAME` writes it, built once for
+    the whole run. Read them; a test that changes a book or writes beside it copies it first."""
+    folder = tmp_path_factory.mktemp("bundled")
+    books = {}
+    for path in templates.bundled():
+        books[path.stem] = folder / f"{path.stem}.xlsx"
+        builder.build_file(templates.load(path.stem), books[path.stem])
+    return books
+
+
+@pytest.fixture(scope="session")
+def recalculated_by_libreoffice(needs, bundled_books, tmp_path_factory) -> dict[str, Path]:
+    """name -> the bundled book as LibreOffice recalculated and saved it (office.recalculate),
+    every book in one run of soffice."""
+    needs("libreoffice")
+    from linkbook.engine import office
+    out = tmp_path_factory.mktemp("recalculated")
+    return dict(zip(bundled_books, office.recalculate_all(bundled_books.values(), out)))
 
 
 def formula_cells(wb) -> set[tuple[str, str]]:

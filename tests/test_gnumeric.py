@@ -149,11 +149,12 @@ def test_gnumeric_computes_the_sweep_and_motion_as_the_reference(needs, case, tm
 
 @pytest.mark.gnumeric
 @pytest.mark.parametrize("name", BUNDLED)
-def test_gnumeric_recalculates_every_bundled_book_like_the_reference(needs, name, tmp_path, capsys):
+def test_gnumeric_recalculates_every_bundled_book_like_the_reference(needs, name, bundled_books,
+                                                                     capsys):
     """Every formula cell of every bundled book, recalculated by Gnumeric, agrees with the
     reference (1e-9 relative, as LibreOffice)."""
     needs("gnumeric")
-    path = _book(name, tmp_path)
+    path = bundled_books[name]
     status = main(["verify", str(path), "--engine", "gnumeric", "--json"])
     [report] = json.loads(capsys.readouterr().out)
     assert report["engine"] == "gnumeric" and report["status"] == status
@@ -163,10 +164,10 @@ def test_gnumeric_recalculates_every_bundled_book_like_the_reference(needs, name
 
 @pytest.mark.gnumeric
 @pytest.mark.parametrize("name", BUNDLED)
-def test_gnumeric_reads_every_bundled_book_and_its_charts(needs, name, tmp_path):
+def test_gnumeric_reads_every_bundled_book_and_its_charts(needs, name, bundled_books, tmp_path):
     """Gnumeric loads each book with no warning but the known ones, and keeps every chart."""
     needs("gnumeric")
-    path = _book(name, tmp_path)
+    path = bundled_books[name]
     out = tmp_path / "gnumeric.xlsx"
     run = subprocess.run([office.ssconvert_path(), str(path), str(out)],
                          capture_output=True, text=True, timeout=300)

@@ -175,6 +175,19 @@ def test_silent_soffice_failure_is_an_error(monkeypatch, tmp_path):
     assert not any(scratch.iterdir()), "a temporary folder was left behind"
 
 
+def test_books_of_one_name_are_not_recalculated_in_one_run(monkeypatch, tmp_path):
+    """One run of soffice writes each book as NAME.xlsx into one folder: two books of one name
+    would come back as one, so they are refused before soffice starts."""
+    monkeypatch.setattr(office, "soffice_path", lambda: str(tmp_path / "never-run"))
+    books = [tmp_path / "a" / "x.xlsx", tmp_path / "b" / "x.xlsx"]
+    for book in books:
+        book.parent.mkdir()
+        Workbook().save(book)
+    with pytest.raises(ValueError, match="same name"):
+        office.recalculate_all(books, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
 def test_hanging_soffice_is_ended_with_its_children(monkeypatch, tmp_path):
     """soffice is a launcher: a time-out must end soffice.bin too, not only the script."""
     child_pid = tmp_path / "child.pid"

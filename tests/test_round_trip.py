@@ -39,10 +39,9 @@ pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def built(tmp_path_factory) -> Path:
-    folder = tmp_path_factory.mktemp("built")
-    for name in BUNDLED:
-        builder.build_file(template(name), folder / f"{name}.xlsx")
+def built(bundled_books) -> Path:
+    """The folder of every bundled book (conftest's, built once for the run)."""
+    [folder] = {p.parent for p in bundled_books.values()}
     return folder
 
 
@@ -55,7 +54,7 @@ def saved_by_libreoffice(needs, built, tmp_path_factory) -> Path:
     with tempfile.TemporaryDirectory(prefix="linkbook-profile-") as profile:
         subprocess.run([office.soffice_path(), f"-env:UserInstallation={Path(profile).as_uri()}",
                         "--headless", "--norestore", "--convert-to", "xlsx", "--outdir",
-                        str(out), *sorted(str(p) for p in built.glob("*.xlsx"))],
+                        str(out), *sorted(str(built / f"{name}.xlsx") for name in BUNDLED)],
                        check=True, stdin=subprocess.DEVNULL, capture_output=True, timeout=600)
     return out
 
@@ -64,7 +63,7 @@ def saved_by_libreoffice(needs, built, tmp_path_factory) -> Path:
 def saved_by_gnumeric(needs, built, tmp_path_factory) -> Path:
     needs("gnumeric")
     out = tmp_path_factory.mktemp("gnumeric")
-    for book in sorted(built.glob("*.xlsx")):
+    for book in sorted(built / f"{name}.xlsx" for name in BUNDLED):
         subprocess.run([office.ssconvert_path(), "--recalc", str(book), str(out / book.name)],
                        check=True, stdin=subprocess.DEVNULL, capture_output=True, timeout=300)
     return out
