@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from conftest import checks_of, examples, formula_cells, published
@@ -27,7 +27,17 @@ from linkbook.language.mechanisms import ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, O
 from test_properties import dimensions, in_load_domain
 from test_properties import with_values as dimensioned
 
-EXAMPLES = examples(100)
+EXAMPLES = examples(40)
+# What the random test found at 100 examples a family, kept as it runs fewer (a derandomized run
+# of another size draws other examples): family -> the drawn values. The inverted slider-crank
+# with only the block's mass and no gravity: every row's power terms are rounding (~1e-16).
+FOUND = {
+    "inverted-slider-crank": {
+        "a1": 100.0, "a2": 40.0, "a4": 30.0, "branch": 1.0, "u2": 15.0, "v2": 2.0, "d4": 45.0,
+        "phi4": 0.0, "g_angle": 0.0, "omega_in": 10.0, "alpha_in": 0.0, "m2": 0.0, "I2": 0.0,
+        "m3": 1.0, "I3": 0.0, "m4": 0.0, "I4": 0.0, "FAx": 0.0, "FAy": 0.0, "T4": 0.0,
+        "g": 0.0},
+}
 DATA = Path(__file__).resolve().parent / "data" / "forces"
 FAMILIES = ["fourbar", "slider-crank", "toggle-press", "boom-cylinder", "watt-sixbar",
             "inverted-slider-crank", "pump", "rocker-block"]
@@ -342,6 +352,8 @@ def test_random_masses_and_loads_match_the_reference_and_balance_power(family):
         assert_verified(built, computed)
         balanced.append(assert_power_balance(t, built, computed))
 
+    if family in FOUND:
+        check = example(FOUND[family])(check)
     check()
     assert sum(balanced) > EXAMPLES, balanced    # rows with forces, not only unassembled books
 

@@ -22,7 +22,7 @@ from linkbook.language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, 
                                           MOTION_SYMBOLS, NOT_NEGATIVE_KINDS, OFFSET_KIND,
                                           RATE_KIND)
 
-EXAMPLES = examples(100)
+EXAMPLES = examples(40)
 TALLY: Counter = Counter()
 FAMILIES = sorted(p.stem for p in templates.bundled())
 
