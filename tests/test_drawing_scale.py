@@ -73,7 +73,7 @@ def rendered(needs, tmp_path_factory):
     (only the sheets with drawings: Mechanism and Charts)."""
     needs("libreoffice", "pdftoppm")
     tmp = tmp_path_factory.mktemp("scale")
-    out = {}
+    books = {}
     for name in _bundled():
         t = template(name)
         doubled = _first_length(t)
@@ -88,11 +88,15 @@ def rendered(needs, tmp_path_factory):
                     ws.sheet_state = "hidden"
             path = tmp / f"{name}-{'doubled' if edit else 'built'}.xlsx"
             wb.save(path)
-            pdf = office.to_pdf(path, tmp / "pdf")
-            stem = tmp / "png" / path.stem
-            stem.parent.mkdir(exist_ok=True)
-            subprocess.run(["pdftoppm", "-png", "-r", str(DPI), str(pdf), str(stem)], check=True)
-            out[(name, edit)] = (path, b.meta, sorted(stem.parent.glob(f"{path.stem}-*.png")))
+            books[(name, edit)] = (path, b.meta)
+    # every book printed in one run of LibreOffice (one start-up, not one a book)
+    pdfs = office.to_pdf_all([path for path, _ in books.values()], tmp / "pdf")
+    out = {}
+    for ((name, edit), (path, meta)), pdf in zip(books.items(), pdfs):
+        stem = tmp / "png" / path.stem
+        stem.parent.mkdir(exist_ok=True)
+        subprocess.run(["pdftoppm", "-png", "-r", str(DPI), str(pdf), str(stem)], check=True)
+        out[(name, edit)] = (path, meta, sorted(stem.parent.glob(f"{path.stem}-*.png")))
     return out
 
 

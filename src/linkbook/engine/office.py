@@ -186,7 +186,12 @@ def recalculate_all(paths, outdir) -> list[Path]:
 
 def to_pdf(path, outdir) -> Path:
     """Print every visible sheet (and its charts) to PDF, as the workbook's page setup says."""
-    return _convert([Path(path)], Path(outdir), PDF_FILTER, ".pdf")[0]
+    return to_pdf_all([path], outdir)[0]
+
+
+def to_pdf_all(paths, outdir) -> list[Path]:
+    """to_pdf() of several books in one run of soffice, in the order given."""
+    return _convert([Path(p) for p in paths], Path(outdir), PDF_FILTER, ".pdf")
 
 
 # ---------------------------------------------------------------- reading values back
