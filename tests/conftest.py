@@ -46,10 +46,10 @@ def pytest_report_header(config):
     return f"hypothesis profile: {settings.get_current_profile_name()} (tests/conftest.py)"
 
 
-def examples(at_default: int) -> int:
+def examples(at_default: int, at_least: int = 1) -> int:
     """A property test's example count: `at_default` at the default profile, scaled by the
-    profile chosen (never below one)."""
-    return max(1, round(at_default * settings.default.max_examples / 100))
+    profile chosen, never below `at_least` (what the test's own sanity checks need)."""
+    return max(at_least, round(at_default * settings.default.max_examples / 100))
 
 
 @lru_cache(maxsize=None)
