@@ -134,8 +134,8 @@ def test_every_bundled_book_animates(books, tmp_path, name, capsys):
         assert gif.convert("RGB").tobytes() != first, "the mechanism does not move"
 
 
-def test_mp4(books, tmp_path):
-    pytest.importorskip("imageio_ffmpeg")
+def test_mp4(needs, books, tmp_path):
+    needs("ffmpeg")
     out = tmp_path / "fourbar.mp4"
     assert cli.main(["animate", str(books["fourbar"]), "-o", str(out), "--size", "200",
                      "--step", "30"]) == 0

@@ -256,11 +256,12 @@ def _reads(rect, key) -> bool:
 
 @pytest.mark.slow        # IronCalc on every book
 @pytest.mark.parametrize("name", BUNDLED)
-def test_ironcalc_computes_every_bundled_book_as_linkbook_does(name, tmp_path):
+def test_ironcalc_computes_every_bundled_book_as_linkbook_does(needs, name, tmp_path):
     """A fourth application as a smoke test: no #NAME?, and every chain of cells where
     IronCalc differs from linkbook starts at a formula that shows one of IronCalc's own
     defects as IronCalc reads it back (the cells downstream differ because they read it)."""
-    ironcalc = pytest.importorskip("ironcalc")
+    needs("ironcalc")
+    import ironcalc
     path = tmp_path / f"{name}.xlsx"
     b = builder.build_file(templates.load(name), path)
     _, ours = built(name)
@@ -292,14 +293,12 @@ def test_every_drawing_and_chart_part_declares_its_prefixes_on_its_root(tmp_path
             assert "xmlns:" not in xml[root_end:], name
 
 
-def test_gnumeric_imports_every_chart(tmp_path):
+def test_gnumeric_imports_every_chart(needs, tmp_path):
     """Gnumeric itself (ssconvert) reads the book's charts: one graph object per chart."""
     import gzip
-    import shutil
     import subprocess
     import zipfile
-    if not shutil.which("ssconvert"):
-        pytest.skip("Gnumeric's ssconvert is not installed")
+    needs("gnumeric")
     book, out = tmp_path / "fourbar.xlsx", tmp_path / "fourbar.gnumeric"
     builder.build_file(templates.load("fourbar"), book)
     subprocess.run(["ssconvert", str(book), str(out)], check=True, capture_output=True,

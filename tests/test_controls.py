@@ -10,9 +10,7 @@
 from __future__ import annotations
 
 import json
-import os
 import re
-import shutil
 import subprocess
 import zipfile
 from pathlib import Path
@@ -20,14 +18,13 @@ from pathlib import Path
 import numpy as np
 import openpyxl
 import pytest
-from conftest import template
+from conftest import UNO_PYTHON, template
 
 from linkbook.book import builder
 from linkbook.book import package
 from linkbook.check import verifier
 from linkbook.book.controls import Control
 
-UNO_PYTHON = "/usr/bin/python3"
 PROBE = Path(__file__).with_name("uno_probe.py")
 BUNDLED = sorted(p.stem for p in Path(__file__).resolve().parents[1].glob("templates/*.toml"))
 
@@ -133,19 +130,6 @@ def test_controls_added_to_a_sheet_without_relationships(tmp_path):
 
 
 # ---------------------------------------------------------------- LibreOffice's own view
-def require_uno() -> None:
-    """Skip without LibreOffice's Python bridge, but fail under CI, which must have it."""
-    found = shutil.which("soffice") and subprocess.run(
-        [UNO_PYTHON, "-c", "import uno"], capture_output=True).returncode == 0 \
-        if Path(UNO_PYTHON).exists() else False
-    if found:
-        return
-    reason = "needs LibreOffice and its Python bridge (soffice, python3-uno)"
-    if os.environ.get("CI"):
-        pytest.fail(f"CI {reason}: .ci/run must install libreoffice-calc-nogui python3-uno")
-    pytest.skip(reason)
-
-
 def _probe(path: Path, moves, cells) -> dict:
     run = subprocess.run([UNO_PYTHON, str(PROBE), str(path), "Mechanism", json.dumps(moves),
                           json.dumps(cells)], capture_output=True, text=True, timeout=240)
@@ -166,8 +150,8 @@ def _expected_joints(built, inputs: dict, angle: float) -> dict[str, tuple[float
 @pytest.mark.libreoffice
 @pytest.mark.parametrize("name, values", [("fourbar", False), ("pump", False), ("fourbar", True)],
                          ids=["fourbar", "pump", "fourbar-values"])
-def test_libreoffice_moves_the_drawing_with_the_controls(tmp_path, name, values):
-    require_uno()
+def test_libreoffice_moves_the_drawing_with_the_controls(needs, tmp_path, name, values):
+    needs("libreoffice", "uno")
     path, built = _build(tmp_path, name, values=values)
     records = built.meta["controls"]["Mechanism"]
     joints = built.meta["position"]["joints"]

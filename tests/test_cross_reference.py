@@ -8,11 +8,11 @@ template's expression equals the one the old solver finds from the ram's reversa
 from __future__ import annotations
 
 import math
-import os
 from functools import lru_cache
 
 import numpy as np
 import pytest
+from conftest import examples
 from hypothesis import HealthCheck, given, settings
 
 import legacy_reference
@@ -25,7 +25,7 @@ from test_properties import dimensions
 # the fast tier leaves it out
 pytestmark = pytest.mark.slow
 
-EXAMPLES = int(os.environ.get("LINKBOOK_CROSS_EXAMPLES", "60"))
+EXAMPLES = examples(60)
 ANGLES = np.arange(0.0, 360.0, 7.5)
 
 

@@ -105,9 +105,9 @@ PUMP_1000 = ",".join(f"{20 + i * 0.05:g}" for i in range(1000))
     (["pump", "--set", f"s1={PUMP_1000}"], "verify reads at most 512 MiB"),
 ], ids=["step 0.001", "step 0.000344", "step 0.005", "pump, 1000 adjustments"])
 def test_a_book_too_big_for_verify_or_memory_is_refused_up_front(tmp_path, capsys, args, limit):
-    started = time.perf_counter()
+    started = time.process_time()       # CPU time: another process's load does not count
     refused(tmp_path, capsys, args, "book size", limit)
-    assert time.perf_counter() - started < 30
+    assert time.process_time() - started < 30
 
 
 def test_a_pump_with_excels_most_columns_is_refused_up_front():

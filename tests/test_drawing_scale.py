@@ -6,7 +6,6 @@ all of its 10 × 10 squares; the edited book's mapped coordinates (what the char
 lie inside the frame."""
 from __future__ import annotations
 
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -69,14 +68,12 @@ def _spacing(lines: list[float], png) -> float:
 
 
 @pytest.fixture(scope="module")
-def rendered(tmp_path_factory):
+def rendered(needs, tmp_path_factory):
     """Each bundled book, as built and with its first length doubled, printed to PNG pages
     (only the sheets with drawings: Mechanism and Charts)."""
-    if not office.soffice_path() or not shutil.which("pdftoppm"):
-        pytest.skip("LibreOffice and pdftoppm are needed")
-    pytest.importorskip("PIL")
+    needs("libreoffice", "pdftoppm")
     tmp = tmp_path_factory.mktemp("scale")
-    out = {}
+    books = {}
     for name in _bundled():
         t = template(name)
         doubled = _first_length(t)
@@ -91,11 +88,15 @@ def rendered(tmp_path_factory):
                     ws.sheet_state = "hidden"
             path = tmp / f"{name}-{'doubled' if edit else 'built'}.xlsx"
             wb.save(path)
-            pdf = office.to_pdf(path, tmp / "pdf")
-            stem = tmp / "png" / path.stem
-            stem.parent.mkdir(exist_ok=True)
-            subprocess.run(["pdftoppm", "-png", "-r", str(DPI), str(pdf), str(stem)], check=True)
-            out[(name, edit)] = (path, b.meta, sorted(stem.parent.glob(f"{path.stem}-*.png")))
+            books[(name, edit)] = (path, b.meta)
+    # every book printed in one run of LibreOffice (one start-up, not one a book)
+    pdfs = office.to_pdf_all([path for path, _ in books.values()], tmp / "pdf")
+    out = {}
+    for ((name, edit), (path, meta)), pdf in zip(books.items(), pdfs):
+        stem = tmp / "png" / path.stem
+        stem.parent.mkdir(exist_ok=True)
+        subprocess.run(["pdftoppm", "-png", "-r", str(DPI), str(pdf), str(stem)], check=True)
+        out[(name, edit)] = (path, meta, sorted(stem.parent.glob(f"{path.stem}-*.png")))
     return out
 
 

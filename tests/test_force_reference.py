@@ -8,20 +8,19 @@ reference's motion implies."""
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from conftest import published
+from conftest import examples, published
 from si_motion import SIMotion, inline_piston
 from linkbook.check.forces import forces
 from linkbook.check.reference import solve
 from linkbook.language import templates
 
-EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "25"))
+EXAMPLES = examples(25, at_least=5)     # the fast tier's five, as before the profiles
 MM = 1e-3
 
 

@@ -1,13 +1,12 @@
 """Gnumeric as a second real spreadsheet: `verify --engine gnumeric` recalculates a copy with
 `ssconvert --recalc` and judges it by the rules the LibreOffice engine is judged by.
 
-Tests that need ssconvert are skipped when it is missing, except under CI (CI set), where a
-missing Gnumeric is a failure: .ci/run installs it.
+Tests that need ssconvert are skipped when it is missing (conftest's `needs`), except under CI
+(CI set), where a missing Gnumeric is a failure: .ci/run installs it.
 """
 from __future__ import annotations
 
 import json
-import os
 import re
 import subprocess
 import sys
@@ -15,6 +14,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from conftest import examples
 from openpyxl import Workbook
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -46,16 +46,6 @@ KNOWN_WARNINGS = (
     re.compile(r"Unexpected element 'showSerName' in state : "),
     re.compile(r"\tchartSpace -> chart -> plotArea -> scatterChart -> ser -> dLbls"),
 )
-
-def require_ssconvert() -> None:
-    """Skip without Gnumeric, but fail under CI, which must have it."""
-    if office.ssconvert_path():
-        return
-    reason = "needs Gnumeric (ssconvert not found)"
-    if os.environ.get("CI"):
-        pytest.fail(f"CI {reason}: .ci/run must install gnumeric")
-    pytest.skip(reason)
-
 
 def _book(name: str, folder: Path, sets=()) -> Path:
     path = folder / f"{name}.xlsx"
@@ -104,10 +94,10 @@ def test_an_unknown_application_is_refused(tmp_path):
 
 # ---------------------------------------------------------------- with Gnumeric
 @pytest.mark.gnumeric
-def test_errors_as_gnumeric_computes_them(tmp_path):
+def test_errors_as_gnumeric_computes_them(needs, tmp_path):
     """Gnumeric writes its errors with Excel's codes, and where LibreOffice differs from Excel
     (SQRT(-1), ATAN2(0, 0)) Gnumeric gives Excel's answer."""
-    require_ssconvert()
+    needs("gnumeric")
     wb = Workbook()
     formulas = ["=NA()", "=1/0", "=ACOS(2)", '="a"+1', '="abc"', "=1/3", "=NOSUCH()",
                 "=ATAN2(0,0)", "=SQRT(-1)", '=IF(1,"",1)', "=1=1"]
@@ -127,20 +117,20 @@ def test_errors_as_gnumeric_computes_them(tmp_path):
 
 
 @pytest.mark.gnumeric
-def test_stale_cached_values_are_recalculated(tmp_path):
+def test_stale_cached_values_are_recalculated(needs, tmp_path):
     """A wrong cached value and no fullCalcOnLoad: --recalc must compute it again."""
-    require_ssconvert()
+    needs("gnumeric")
     from test_office import stale_book
     assert office.recalculated_values(stale_book(tmp_path), "gnumeric")[("Sheet", "B1")] == 6.0
 
 
 @pytest.mark.gnumeric
 @pytest.mark.parametrize("case", ["default", "non-grashof", "boom"])
-def test_gnumeric_computes_the_sweep_and_motion_as_the_reference(case, tmp_path):
+def test_gnumeric_computes_the_sweep_and_motion_as_the_reference(needs, case, tmp_path):
     """The sheets that use no function Gnumeric lacks: every formula cell of the sweep table
     and of the motion sheet, judged by verify's rules, and the sweep columns against the
     reference directly."""
-    require_ssconvert()
+    needs("gnumeric")
     from test_office import _sweep_against_reference
     name, sets = {"default": ("fourbar", ()), "non-grashof": ("fourbar", NON_GRASHOF),
                   "boom": ("boom-cylinder", ())}[case]
@@ -163,11 +153,12 @@ def test_gnumeric_computes_the_sweep_and_motion_as_the_reference(case, tmp_path)
 
 @pytest.mark.gnumeric
 @pytest.mark.parametrize("name", BUNDLED)
-def test_gnumeric_recalculates_every_bundled_book_like_the_reference(name, tmp_path, capsys):
+def test_gnumeric_recalculates_every_bundled_book_like_the_reference(needs, name, bundled_books,
+                                                                     capsys):
     """Every formula cell of every bundled book, recalculated by Gnumeric, agrees with the
     reference (1e-9 relative, as LibreOffice)."""
-    require_ssconvert()
-    path = _book(name, tmp_path)
+    needs("gnumeric")
+    path = bundled_books[name]
     status = main(["verify", str(path), "--engine", "gnumeric", "--json"])
     [report] = json.loads(capsys.readouterr().out)
     assert report["engine"] == "gnumeric" and report["status"] == status
@@ -177,10 +168,10 @@ def test_gnumeric_recalculates_every_bundled_book_like_the_reference(name, tmp_p
 
 @pytest.mark.gnumeric
 @pytest.mark.parametrize("name", BUNDLED)
-def test_gnumeric_reads_every_bundled_book_and_its_charts(name, tmp_path):
+def test_gnumeric_reads_every_bundled_book_and_its_charts(needs, name, bundled_books, tmp_path):
     """Gnumeric loads each book with no warning but the known ones, and keeps every chart."""
-    require_ssconvert()
-    path = _book(name, tmp_path)
+    needs("gnumeric")
+    path = bundled_books[name]
     out = tmp_path / "gnumeric.xlsx"
     run = subprocess.run([office.ssconvert_path(), str(path), str(out)],
                          capture_output=True, text=True, timeout=300)
@@ -203,8 +194,8 @@ UNIT_VARIANTS = [("fourbar", "in"), ("jansen", "m"), ("boom-cylinder", "cm"), ("
 
 @pytest.mark.gnumeric
 @pytest.mark.parametrize("name,unit", UNIT_VARIANTS, ids=[f"{n}-{u}" for n, u in UNIT_VARIANTS])
-def test_gnumeric_recalculates_unit_variants_like_the_reference(name, unit, tmp_path):
-    require_ssconvert()
+def test_gnumeric_recalculates_unit_variants_like_the_reference(needs, name, unit, tmp_path):
+    needs("gnumeric")
     path = tmp_path / f"{name}-{unit}.xlsx"
     builder.build_file(templates.with_unit(templates.load(name), unit), path)
     report = verifier.verify(path, "gnumeric")
@@ -213,15 +204,15 @@ def test_gnumeric_recalculates_unit_variants_like_the_reference(name, unit, tmp_
     assert report.formula_cells == report.cells > 0
 
 
-GNUMERIC_EXAMPLES = int(os.environ.get("LINKBOOK_GNUMERIC_EXAMPLES", "2"))
+GNUMERIC_EXAMPLES = examples(2)
 
 
 @pytest.mark.gnumeric
 @pytest.mark.parametrize("family", BUNDLED)
-def test_gnumeric_recalculates_random_dimensions_like_the_reference(family, tmp_path):
+def test_gnumeric_recalculates_random_dimensions_like_the_reference(needs, family, tmp_path):
     """Random dimensions of every bundled mechanism (test_properties' draws: crossed branches,
     non-Grashof linkages, loops that close over part of the sweep), recalculated by Gnumeric."""
-    require_ssconvert()
+    needs("gnumeric")
     from hypothesis import HealthCheck, given, settings
     from test_properties import dimensions, with_values
     base = templates.load(family)

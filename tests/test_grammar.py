@@ -13,7 +13,7 @@ import re
 
 import pytest
 import schedula as sh
-from conftest import built
+from conftest import built, examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -130,7 +130,7 @@ def expressions():
     return st.recursive(atom, extend, max_leaves=8)
 
 
-@settings(max_examples=1500, deadline=None, derandomize=True,
+@settings(max_examples=examples(1500), deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
 @given(expressions())
 def test_grammar_reads_random_formulas_as_formulas_does_or_declines(expression):
@@ -158,7 +158,7 @@ def in_grammar():
     return st.recursive(atom, extend, max_leaves=10)
 
 
-@settings(max_examples=800, deadline=None, derandomize=True,
+@settings(max_examples=examples(800), deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
 @given(in_grammar())
 def test_grammar_reads_formulas_of_its_grammar_as_formulas_does(expression):

@@ -13,7 +13,7 @@ import numpy as np
 import openpyxl
 import pytest
 
-from conftest import template
+from conftest import examples, template
 from linkbook.apps import cli
 from linkbook.base.sheets import read_meta, read_record
 from linkbook.book import builder
@@ -190,10 +190,10 @@ def test_random_books_agree_at_their_other_set(family, tmp_path):
     """A book of random dimensions, rates and loads (test_properties' draws), untouched,
     agrees at verify's other input set as at its own (or that set is said not judged)."""
     from hypothesis import HealthCheck, assume, given, settings
-    from test_properties import EXAMPLES, dimensions, through_a_pivot, with_values
+    from test_properties import dimensions, through_a_pivot, with_values
     base = templates.load(family)
 
-    @settings(max_examples=max(EXAMPLES // 4, 3), deadline=None, derandomize=True,
+    @settings(max_examples=examples(25, at_least=3), deadline=None, derandomize=True,
               suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
     @given(dimensions(base))
     def check(values):

@@ -11,7 +11,7 @@ import tomllib
 
 import pytest
 
-from conftest import ROOT, checks_of, formula_cells
+from conftest import checks_of, examples, formula_cells, ROOT
 from linkbook.book import builder
 from linkbook.engine import evaluator as engine
 from linkbook.language import templates
@@ -369,7 +369,7 @@ def test_every_option_on_random_dimensions():
     from hypothesis import HealthCheck, given, settings
     from hypothesis import strategies as st
 
-    @settings(max_examples=30, deadline=None, derandomize=True,
+    @settings(max_examples=examples(30), deadline=None, derandomize=True,
               suppress_health_check=[HealthCheck.too_slow])
     @given(st.fixed_dictionaries({
         "a2": st.floats(5, 60), "a3": st.floats(20, 120), "a4": st.floats(20, 120),

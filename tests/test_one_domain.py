@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import copy
 import math
-import os
 import tomllib
 
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 import linkbook
-from conftest import ROOT
+from conftest import examples, ROOT
 from linkbook.base.errors import InputError
 from linkbook.book import builder
 from linkbook.check.reference.expressions import evaluate
@@ -61,7 +60,7 @@ def test_the_spellings_python_alone_reads_are_refused():
 
 
 @given(st.text(alphabet="0123456789._eE+-*/ xob()a2١０ａj", min_size=1, max_size=12))
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 def test_random_spellings_the_writer_accepts_the_reference_reads_alike(text):
     try:
         built = _built(text)
@@ -79,7 +78,7 @@ def test_random_spellings_the_writer_accepts_the_reference_reads_alike(text):
 # (a number verify would not read, an error on every row, a comparison). Every
 # template build accepts must give a book its own verify passes; the rest are refused in one
 # line (InputError) before anything is written.
-EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "30"))
+EXAMPLES = examples(30)
 FOURBAR = tomllib.loads((ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8"))
 OWN_NAMES = ["theta12_now", "TO_METRES", "to_metres", "speed_fluctuation", "k_rpm_in", "K_Gamma"]
 COLUMNS = ["xB", "yC", "theta12", "xA"]

@@ -21,7 +21,7 @@ from pathlib import Path
 import openpyxl
 import pytest
 
-from conftest import ROOT, template
+from conftest import HANG_GUARD_S, ROOT, gone, said_pids, template, wait_until
 from linkbook.book import builder
 from linkbook.apps import cli
 from linkbook.base import sheets as layout
@@ -97,7 +97,7 @@ def _stopped_midway(tmp_path: Path, module: str, function: str, argv: list[str],
         assert proc.stdout.readline().strip() == "ready", proc.stderr.read()
         midway = _hidden_files(tmp_path)
         proc.send_signal(signum)
-        _, err = proc.communicate(timeout=120)
+        _, err = proc.communicate(timeout=HANG_GUARD_S)
     finally:
         if proc.poll() is None:
             proc.kill()
@@ -355,34 +355,26 @@ def test_a_signal_while_libreoffice_runs_ends_it_too(tmp_path):
     launcher's child): Ctrl-C reaches only us, and we end its whole process group."""
     from linkbook.engine import office
     pids = tmp_path / "pids"
-    script = f"sleep 120 & echo $$ $! > {pids}; wait"
+    script = f"sleep {2 * HANG_GUARD_S} & echo $$ $! > {pids}; wait"   # outlives the guard
+    interrupted = []
 
     def interrupt(signum, frame):
-        raise KeyboardInterrupt
+        """Ctrl-C once the shell and its child are both running (they said so), and only once."""
+        if not interrupted and said_pids(pids, 2):
+            interrupted.append(True)
+            raise KeyboardInterrupt
     before = signal.signal(signal.SIGALRM, interrupt)
     try:
-        signal.setitimer(signal.ITIMER_REAL, 1.0)
+        signal.setitimer(signal.ITIMER_REAL, 0.05, 0.05)
         with pytest.raises(KeyboardInterrupt):
             office._run(["sh", "-c", script], "sleeping")
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, before)
-    left = [pid for pid in map(int, pids.read_text().split()) if _running(pid)]
-    for pid in left:                      # a failure of this test leaves nothing running
-        with contextlib.suppress(ProcessLookupError):
-            os.kill(pid, signal.SIGKILL)
-    assert not left
-
-
-def _running(pid: int) -> bool:
-    """Alive, not a zombie (an orphan is reaped by whoever adopts it, when it gets to it)."""
-    import time
-    for _ in range(50):
-        try:
-            state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-        except FileNotFoundError:
-            return False
-        if state in ("Z", "X"):
-            return False
-        time.sleep(0.1)
-    return True
+    try:
+        for pid in said_pids(pids, 2):
+            wait_until(lambda: gone(pid), f"the end of process {pid}")
+    finally:
+        for pid in said_pids(pids, 2):    # a failure of this test leaves nothing running
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGKILL)

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import openpyxl
 import pytest
+from conftest import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from openpyxl.comments import Comment
@@ -104,7 +105,7 @@ _VALUE = st.one_of(st.none(), st.booleans(), st.integers(-10**17, 10**17),
                    _TEXT.map(lambda t: package.Formula("=" + repr(t).replace("'", '"'))))
 
 
-@settings(max_examples=150, derandomize=True, deadline=None,
+@settings(max_examples=examples(150), derandomize=True, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(cells=st.dictionaries(st.tuples(st.integers(1, 40), st.integers(1, 30)),
                              st.tuples(_VALUE, st.sampled_from(["", "0.00", "0.0##"])),

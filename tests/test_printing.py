@@ -4,8 +4,6 @@ one line (a label wrapped into a second line that Calibri or Carlito draws on on
 half-empty row after each inertia and torque input)."""
 from __future__ import annotations
 
-import os
-import shutil
 from pathlib import Path
 
 import pytest
@@ -43,15 +41,11 @@ def test_the_input_labels_are_on_one_line(name):
 @pytest.mark.slow
 @pytest.mark.libreoffice
 @pytest.mark.parametrize("name", ["pump", "toggle-press", "jansen", "watt-sixbar"])
-def test_the_mechanism_sheet_prints_on_one_page(tmp_path, name):
+def test_the_mechanism_sheet_prints_on_one_page(needs, tmp_path, name):
     """LibreOffice's own print of the sheet: one page (these four printed on two before)."""
     from linkbook.apps.preview import preview
     from linkbook.book import builder
-    from linkbook.engine import office
-    if not office.soffice_path() or not shutil.which("pdftoppm"):
-        if os.environ.get("CI"):
-            pytest.fail("CI needs soffice and pdftoppm: .ci/run installs them")
-        pytest.skip("needs soffice and pdftoppm")
+    needs("libreoffice", "pdftoppm")
     path = tmp_path / f"{name}.xlsx"
     builder.build_file(templates.with_overrides(templates.load(name), [], None, None), path)
     pages = preview(path, tmp_path / "pages", dpi=20, sheets=["Mechanism"])
@@ -60,15 +54,11 @@ def test_the_mechanism_sheet_prints_on_one_page(tmp_path, name):
 
 @pytest.mark.slow
 @pytest.mark.libreoffice
-def test_a_five_degree_fourbar_prints_on_at_most_thirty_pages(tmp_path):
+def test_a_five_degree_fourbar_prints_on_at_most_thirty_pages(needs, tmp_path):
     """The bundled four-bar (5°, forces): every visible sheet, as LibreOffice prints it."""
     from linkbook.apps.preview import preview
     from linkbook.book import builder
-    from linkbook.engine import office
-    if not office.soffice_path() or not shutil.which("pdftoppm"):
-        if os.environ.get("CI"):
-            pytest.fail("CI needs soffice and pdftoppm: .ci/run installs them")
-        pytest.skip("needs soffice and pdftoppm")
+    needs("libreoffice", "pdftoppm")
     path = tmp_path / "fourbar.xlsx"
     builder.build_file(templates.with_overrides(templates.load("fourbar"), [], None, None), path)
     pages = preview(path, tmp_path / "pages", dpi=20)

@@ -5,7 +5,6 @@ fast vector engine; the counts are printed at the end of the run."""
 from __future__ import annotations
 
 import dataclasses
-import os
 from collections import Counter
 
 import numpy as np
@@ -13,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from conftest import checks_of, formula_cells
+from conftest import checks_of, examples, formula_cells
 from linkbook.book import builder
 from linkbook.check.reference import solve
 from linkbook.language import templates
@@ -23,7 +22,7 @@ from linkbook.language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, 
                                           MOTION_SYMBOLS, NOT_NEGATIVE_KINDS, OFFSET_KIND,
                                           RATE_KIND)
 
-EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
+EXAMPLES = examples(40, at_least=5)     # the fast tier's five, as before the profiles
 TALLY: Counter = Counter()
 FAMILIES = sorted(p.stem for p in templates.bundled())
 
@@ -122,7 +121,7 @@ def test_every_step_type_is_covered():
     assert used == set(STEP_KEYS), set(STEP_KEYS) - used
 
 
-MAGNITUDE_EXAMPLES = int(os.environ.get("LINKBOOK_MAGNITUDE_EXAMPLES", "60"))
+MAGNITUDE_EXAMPLES = examples(60)
 
 
 def scaled(t: templates.Template, factor: float) -> templates.Template:

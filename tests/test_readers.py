@@ -41,11 +41,11 @@ def _backend_in_use(use_lxml: str) -> bool:
 
 
 @pytest.fixture(scope="module")
-def books(tmp_path_factory) -> dict[str, dict[str, Path]]:
+def books(needs, tmp_path_factory) -> dict[str, dict[str, Path]]:
     """backend -> template name -> every bundled book, built by `linkbook build --all
-    --values` in a process of its own."""
-    if not _backend_in_use("True"):
-        pytest.skip("lxml is not installed: the two builds would be the same")
+    --values` in a process of its own (with lxml and without: without it they are the same)."""
+    needs("lxml")
+    assert _backend_in_use("True"), "openpyxl does not use lxml though it is installed"
     assert not _backend_in_use("False"), "OPENPYXL_LXML=False did not turn lxml off"
     made = {}
     for backend, use_lxml in BACKENDS.items():
@@ -144,10 +144,9 @@ def _same_value(got, expected) -> bool:
 
 
 @pytest.mark.parametrize("engine", ["openpyxl", "calamine"])
-def test_pandas_reads_every_table_whole(books, engine):
-    pd = pytest.importorskip("pandas")
-    if engine == "calamine":
-        pytest.importorskip("python_calamine")
+def test_pandas_reads_every_table_whole(needs, books, engine):
+    needs("pandas", *(["calamine"] if engine == "calamine" else []))
+    import pandas as pd
     for backend, path in _all_books(books):
         expected = _cells(path, data_only=True)
         frames = pd.read_excel(path, sheet_name=None, header=None, engine=engine)

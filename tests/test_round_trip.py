@@ -14,7 +14,6 @@ changes in the file is pinned at the end, as docs/applications.md describes it.
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import tempfile
 import zipfile
@@ -22,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import template
+from conftest import UNO_PYTHON, template
 from linkbook.apps.cli import main
 from linkbook.book import builder
 from linkbook.check.verifier import report_of
@@ -30,7 +29,6 @@ from linkbook.engine import office
 
 ROOT = Path(__file__).resolve().parents[1]
 BUNDLED = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
-UNO_PYTHON = "/usr/bin/python3"
 EDITOR = Path(__file__).with_name("uno_edit.py")
 # An edit a user makes: one length and one mass (the new values keep every mechanism assembled
 # where it was).
@@ -40,59 +38,42 @@ EDITS = {"fourbar": {"a2": 30.0, "m3": 0.9}, "slider-crank": {"a2": 45.0, "m3": 
 pytestmark = pytest.mark.slow
 
 
-def _require(application: str) -> None:
-    """Skip without the application, but fail under CI, which must have it."""
-    found = office.soffice_path() if application == "libreoffice" else office.ssconvert_path()
-    if found:
-        return
-    reason = f"needs {application}"
-    if os.environ.get("CI"):
-        pytest.fail(f"CI {reason}: .ci/run must install it")
-    pytest.skip(reason)
-
-
 @pytest.fixture(scope="module")
-def built(tmp_path_factory) -> Path:
-    folder = tmp_path_factory.mktemp("built")
-    for name in BUNDLED:
-        builder.build_file(template(name), folder / f"{name}.xlsx")
+def built(bundled_books) -> Path:
+    """The folder of every bundled book (conftest's, built once for the run)."""
+    [folder] = {p.parent for p in bundled_books.values()}
     return folder
 
 
 @pytest.fixture(scope="module")
-def saved_by_libreoffice(built, tmp_path_factory) -> Path:
+def saved_by_libreoffice(needs, built, tmp_path_factory) -> Path:
     """Every book through one `soffice --convert-to xlsx`, with a new profile of the default
     settings (the user's command; no recalculation forced on load)."""
-    _require("libreoffice")
+    needs("libreoffice")
     out = tmp_path_factory.mktemp("libreoffice")
     with tempfile.TemporaryDirectory(prefix="linkbook-profile-") as profile:
         subprocess.run([office.soffice_path(), f"-env:UserInstallation={Path(profile).as_uri()}",
                         "--headless", "--norestore", "--convert-to", "xlsx", "--outdir",
-                        str(out), *sorted(str(p) for p in built.glob("*.xlsx"))],
+                        str(out), *sorted(str(built / f"{name}.xlsx") for name in BUNDLED)],
                        check=True, stdin=subprocess.DEVNULL, capture_output=True, timeout=600)
     return out
 
 
 @pytest.fixture(scope="module")
-def saved_by_gnumeric(built, tmp_path_factory) -> Path:
-    _require("gnumeric")
+def saved_by_gnumeric(needs, built, tmp_path_factory) -> Path:
+    needs("gnumeric")
     out = tmp_path_factory.mktemp("gnumeric")
-    for book in sorted(built.glob("*.xlsx")):
+    for book in sorted(built / f"{name}.xlsx" for name in BUNDLED):
         subprocess.run([office.ssconvert_path(), "--recalc", str(book), str(out / book.name)],
                        check=True, stdin=subprocess.DEVNULL, capture_output=True, timeout=300)
     return out
 
 
 @pytest.fixture(scope="module")
-def edited_in_libreoffice(built, tmp_path_factory) -> dict[str, tuple[Path, dict]]:
+def edited_in_libreoffice(needs, built, tmp_path_factory) -> dict[str, tuple[Path, dict]]:
     """name -> (the book saved by LibreOffice's API after its EDITS were typed, the values
     LibreOffice shows in the edited cells)."""
-    _require("libreoffice")
-    if not Path(UNO_PYTHON).is_file() or subprocess.run(
-            [UNO_PYTHON, "-c", "import uno"], capture_output=True).returncode:
-        if os.environ.get("CI"):
-            pytest.fail("CI needs LibreOffice's Python bridge: .ci/run installs python3-uno")
-        pytest.skip("needs LibreOffice's Python bridge (python3-uno)")
+    needs("libreoffice", "uno")
     from linkbook.check.reading import read_book
     out = tmp_path_factory.mktemp("edited")
     books = {}

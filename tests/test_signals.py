@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import ROOT, template
+from conftest import HANG_GUARD_S, ROOT, template
 from linkbook.book import builder
 
 # The console script pip writes, with one line said before the entry point is called.
@@ -75,7 +75,7 @@ def _deliver(folder: Path, argv: list[str], signum: int, delay: float):
         if not ended_first:
             os.kill(proc.pid, signum)
             os.kill(proc.pid, signal.SIGCONT)
-        _, err = proc.communicate(timeout=120)
+        _, err = proc.communicate(timeout=HANG_GUARD_S)
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -8,19 +8,18 @@ reference's placement, a third-party solver, or a formula of the specification w
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 import pytest
 import scipy.linalg
 from hypothesis import event, example, given, settings, strategies as st
 
-from conftest import published
+from conftest import examples, published
 from linkbook.check.reference import solve
 from linkbook.check.reference.synthesis import (SINGULAR_COND, function_generation,
                                                 precision_angles, precision_points)
 
-EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
+EXAMPLES = examples(100)
 ROUND_TRIP = 1e-9          # rad: the designed linkage meets its precision points
 # ... except at a dead centre (A, B, B0 in line: a double root of the position), where the
 # lengths' round-off ε moves the output by √ε: there 1e-7.
@@ -339,11 +338,12 @@ def test_the_transmission_angle_range_is_the_position_references():
 
 # --- pylinkage, a third party ---------------------------------------------------------------
 
-def test_pylinkage_designs_the_same_linkage():
+def test_pylinkage_designs_the_same_linkage(needs):
     """pylinkage 1.3's function_generation (Freudenstein by scipy: exact at three pairs, least
     squares beyond) gives the same lengths where it accepts a design (it refuses negative
     lengths)."""
-    synthesis = pytest.importorskip("pylinkage.synthesis")
+    needs("pylinkage")
+    from pylinkage import synthesis
     rng = np.random.default_rng(38)
     compared = 0
     for n in (3, 3, 3, 5, 5, 7) * 50:

@@ -88,9 +88,8 @@ def test_every_text_field_is_a_string_cell(tmp_path, payload):
 
 
 @pytest.mark.libreoffice
-def test_libreoffice_shows_the_text(tmp_path):
-    from test_office import require_soffice
-    require_soffice()
+def test_libreoffice_shows_the_text(needs, tmp_path):
+    needs("libreoffice")
     payload = PAYLOADS[0]
     path = _build(tmp_path, payload)
     values = office.recalculated_values(path)

@@ -10,7 +10,7 @@ import openpyxl
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from conftest import ROOT, checks_of
+from conftest import checks_of, examples, ROOT
 
 from linkbook.book import builder
 from linkbook.apps import cli
@@ -88,7 +88,7 @@ def test_a_length_written_as_a_number_cannot_be_converted(tmp_path, capsys):
 
 
 @pytest.mark.slow        # every template in every unit
-@settings(max_examples=20, deadline=None, derandomize=True,
+@settings(max_examples=examples(20), deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
 @given(name=st.sampled_from(BUNDLED), unit=st.sampled_from(list(templates.LENGTH_UNITS)))
 def test_every_template_in_every_unit_verifies(name, unit):

@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from openpyxl.workbook.defined_name import DefinedName
 
-from conftest import built
+from conftest import built, examples
 from linkbook.base import safety
 from linkbook.base import xlsx
 from test_engine import build_book, edge_book
@@ -311,22 +311,20 @@ ACCEPTED_EDITS = {
 
 @pytest.mark.libreoffice
 @pytest.mark.parametrize("edit", sorted(ACCEPTED_EDITS))
-def test_libreoffice_reads_an_accepted_edit_as_verify_does(tmp_path, fourbar_bytes, capsys,
+def test_libreoffice_reads_an_accepted_edit_as_verify_does(needs, tmp_path, fourbar_bytes, capsys,
                                                            edit):
     """The judge: LibreOffice recalculates with what it reads, and verify compares that with
     the reference computed from what verify read."""
-    from test_office import require_soffice
-    require_soffice()
+    needs("libreoffice")
     path = _damaged(tmp_path, fourbar_bytes, *ACCEPTED_EDITS[edit])
     code, last = _verify(path, capsys, "--engine", "libreoffice")
     assert code == 0 and ALL_AGREE.match(last), last
 
 
 @pytest.mark.libreoffice
-def test_libreoffice_reads_the_scoped_name_verify_refuses(tmp_path, fourbar_bytes, capsys):
+def test_libreoffice_reads_the_scoped_name_verify_refuses(needs, tmp_path, fourbar_bytes, capsys):
     """Why the shadowing name is refused: the application's formulas on Sweep read a_3."""
-    from test_office import require_soffice
-    require_soffice()
+    needs("libreoffice")
     added = _scoped("a_2", "'Mechanism'!$C$9")
     path = _damaged(tmp_path, fourbar_bytes, "xl/workbook.xml", FIRST_NAME, FIRST_NAME + added)
     from linkbook.engine import office
@@ -475,7 +473,7 @@ def _matched_height_and_open(text: str) -> tuple[int, int]:
     return height, len(stack)
 
 
-@settings(max_examples=300, deadline=None, derandomize=True)
+@settings(max_examples=examples(300), deadline=None, derandomize=True)
 @given(st.text(alphabet="()xé+", max_size=80))
 def test_nesting_is_the_height_of_matched_pairs_plus_brackets_never_closed(text):
     """Outside strings, a formula's nesting is how deep its matched brackets go, and a bracket

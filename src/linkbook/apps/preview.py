@@ -8,7 +8,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from ..engine.office import OfficeFailed, OfficeUnavailable, _run, to_pdf
+from ..engine.office import OfficeFailed, OfficeUnavailable, _run, to_pdf_all
 
 PREVIEW_DPI = 110          # a table's small print stays readable
 
@@ -31,12 +31,15 @@ def preview(path, outdir, dpi: int = PREVIEW_DPI, sheets: list[str] | None = Non
     outdir.mkdir(parents=True, exist_ok=True)
     stem = path.stem
     with tempfile.TemporaryDirectory(prefix="linkbook-pdf-") as tmp:
-        whole = to_pdf(_only_sheets(path, chosen, Path(tmp, "all")), tmp)
+        names = [f"{stem}-{_file_word(sheet)}" for sheet in chosen]
+        copies = [_only_sheets(path, chosen, Path(tmp, "all"))] + [
+            _only_sheets(path, [sheet], Path(tmp, name), name)
+            for sheet, name in zip(chosen, names)]
+        # every copy printed in one run of soffice: one start-up, not one a sheet
+        whole, *pdfs = to_pdf_all(copies, tmp)
         shutil.move(str(whole), outdir / f"{stem}.pdf")
         out = []
-        for sheet in chosen:
-            name = f"{stem}-{_file_word(sheet)}"
-            pdf = to_pdf(_only_sheets(path, [sheet], Path(tmp, name)), tmp)
+        for sheet, name, pdf in zip(chosen, names, pdfs):
             pictures = Path(tmp, "png", name)
             pictures.mkdir(parents=True)
             code, detail = _run([pdftoppm, "-png", "-r", str(dpi), str(pdf),
@@ -79,11 +82,13 @@ def _sheet_name(tag: str) -> str:
     return unescape(re.search(r'\bname="([^"]*)"', tag).group(1))
 
 
-def _only_sheets(path: Path, sheets: list[str], folder: Path) -> Path:
-    """A copy of the book, byte for byte but for its workbook part, in which only `sheets` are
-    visible (the first of them active): LibreOffice prints visible sheets only."""
+def _only_sheets(path: Path, sheets: list[str], folder: Path, name: str | None = None) -> Path:
+    """A copy of the book (named `name`.xlsx, or as the book), byte for byte but for its
+    workbook part, in which only `sheets` are visible (the first of them active): LibreOffice
+    prints visible sheets only. No page prints the file's name (its footer: the sheet, the
+    page)."""
     folder.mkdir(parents=True, exist_ok=True)
-    copy = folder / path.name
+    copy = folder / (f"{name}.xlsx" if name else path.name)
     with zipfile.ZipFile(path) as src, zipfile.ZipFile(copy, "w", zipfile.ZIP_DEFLATED) as dst:
         for item in src.infolist():
             data = src.read(item.filename)

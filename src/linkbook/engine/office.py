@@ -95,43 +95,51 @@ def _profile():
         yield Path(tmp).as_uri()
 
 
-def _convert(path: Path, outdir: Path, target: str, suffix: str) -> Path:
-    """soffice --convert-to TARGET into a scratch folder, then move the result into outdir."""
+def _convert(paths: list[Path], outdir: Path, target: str, suffix: str) -> list[Path]:
+    """soffice --convert-to TARGET of every book in one run (one start-up for them all) into a
+    scratch folder, then move the results into outdir."""
     exe = _require_soffice()
     with _profile() as profile:
-        return _made_by("LibreOffice", path, outdir, suffix, lambda source, scratch: [
+        return _made_by("LibreOffice", paths, outdir, suffix, lambda sources, scratch: [
             exe, f"-env:UserInstallation={profile}", "--headless", "--norestore",
             "--nolockcheck", "--calc", "--convert-to", target, "--outdir", str(scratch),
-            str(source)])
+            *map(str, sources)])
 
 
 def _gnumeric_recalculate(path: Path, outdir: Path) -> Path:
     """ssconvert --recalc: every formula computed by Gnumeric, saved as .xlsx (Excel 2007+)."""
     exe = _require_ssconvert()
-    return _made_by("Gnumeric", path, outdir, ".xlsx", lambda source, scratch: [
-        exe, "--recalc", "--export-type=Gnumeric_Excel:xlsx2", str(source),
-        str(scratch / (source.stem + ".xlsx"))])
+    return _made_by("Gnumeric", [path], outdir, ".xlsx", lambda sources, scratch: [
+        exe, "--recalc", "--export-type=Gnumeric_Excel:xlsx2", str(sources[0]),
+        str(scratch / (sources[0].stem + ".xlsx"))])[0]
 
 
-def _made_by(application: str, path: Path, outdir: Path, suffix: str, command) -> Path:
-    """Run `command(source, scratch folder)`, which writes STEM+suffix into the scratch folder,
-    and move that file into outdir."""
-    path = Path(path).resolve()
-    if not path.is_file():
-        raise FileNotFoundError(path)
+def _made_by(application: str, paths: list[Path], outdir: Path, suffix: str,
+             command) -> list[Path]:
+    """Run `command(sources, scratch folder)`, which writes each STEM+suffix into the scratch
+    folder, and move those files into outdir."""
+    paths = [Path(p).resolve() for p in paths]
+    for path in paths:
+        if not path.is_file():
+            raise FileNotFoundError(path)
+    if len({p.stem for p in paths}) < len(paths):
+        raise ValueError("books of the same name would convert to one file: convert them apart")
     outdir = Path(outdir)
-    out = outdir / (path.stem + suffix)
-    if out.resolve() == path:               # the application's copy is not the file we wrote
-        raise ValueError(f"{out} would replace its own source: choose another outdir")
+    outs = [outdir / (path.stem + suffix) for path in paths]
+    for out, path in zip(outs, paths):
+        if out.resolve() == path:           # the application's copy is not the file we wrote
+            raise ValueError(f"{out} would replace its own source: choose another outdir")
     outdir.mkdir(parents=True, exist_ok=True)
+    names = ", ".join(path.name for path in paths)
     with tempfile.TemporaryDirectory(prefix="linkbook-out-") as scratch:
-        code, detail = _run(command(path, Path(scratch)), f"converting {path.name}")
-        made = Path(scratch, out.name)
-        if not made.is_file() or made.stat().st_size == 0:
-            raise OfficeFailed(f"{application} could not convert {path.name} to {suffix} "
-                               f"(exit {code}){': ' + _last_line(detail) if detail else ''}")
-        shutil.move(str(made), out)
-    return out
+        code, detail = _run(command(paths, Path(scratch)), f"converting {names}")
+        for out, path in zip(outs, paths):
+            made = Path(scratch, out.name)
+            if not made.is_file() or made.stat().st_size == 0:
+                raise OfficeFailed(f"{application} could not convert {path.name} to {suffix} "
+                                   f"(exit {code}){': ' + _last_line(detail) if detail else ''}")
+            shutil.move(str(made), out)
+    return outs
 
 
 def _last_line(detail: str) -> str:
@@ -167,12 +175,23 @@ def recalculate(path, outdir, application: str = "libreoffice") -> Path:
         return _gnumeric_recalculate(Path(path), Path(outdir))
     if application != "libreoffice":
         raise ValueError(f"no application {application!r}: one of {', '.join(APPLICATIONS)}")
-    return _convert(Path(path), Path(outdir), XLSX_FILTER, ".xlsx")
+    return _convert([Path(path)], Path(outdir), XLSX_FILTER, ".xlsx")[0]
+
+
+def recalculate_all(paths, outdir) -> list[Path]:
+    """recalculate() in LibreOffice of several books in one run of soffice (one start-up, not
+    one a book): each saved as .xlsx into outdir, in the order given."""
+    return _convert([Path(p) for p in paths], Path(outdir), XLSX_FILTER, ".xlsx")
 
 
 def to_pdf(path, outdir) -> Path:
     """Print every visible sheet (and its charts) to PDF, as the workbook's page setup says."""
-    return _convert(Path(path), Path(outdir), PDF_FILTER, ".pdf")
+    return to_pdf_all([path], outdir)[0]
+
+
+def to_pdf_all(paths, outdir) -> list[Path]:
+    """to_pdf() of several books in one run of soffice, in the order given."""
+    return _convert([Path(p) for p in paths], Path(outdir), PDF_FILTER, ".pdf")
 
 
 # ---------------------------------------------------------------- reading values back
