@@ -8,7 +8,6 @@ kinematic reference, never from the writer."""
 from __future__ import annotations
 
 import math
-import os
 import tomllib
 from pathlib import Path
 
@@ -16,6 +15,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+
+from conftest import examples
 
 from linkbook.base.errors import InputError
 from linkbook.base.sheets import SYNTHESIS, SYNTHESIS_WORDS
@@ -27,7 +28,7 @@ from linkbook.language.templates import from_data, with_overrides
 
 ROOT = Path(__file__).resolve().parents[1]
 TEMPLATE = ROOT / "templates" / "function-log10.toml"
-EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "8"))
+EXAMPLES = examples(8)
 
 
 def _data(**task) -> dict:

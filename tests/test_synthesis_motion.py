@@ -10,18 +10,19 @@ numpy, or a third party's design.
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 import pytest
 from hypothesis import assume, event, given, settings, strategies as st
+
+from conftest import examples
 
 from linkbook.check.reference import solve
 from linkbook.check.reference.synthesis import SINGULAR_COND
 from linkbook.check.reference.synthesis_motion import (DEGENERATE, motion_generation,
                                                        path_generation)
 
-EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
+EXAMPLES = examples(100)
 ROUND_TRIP = 1e-9       # of the linkage's size (positions) or rad (the coupler's angle)
 # ... except at a dead centre (a double root of the position), where the lengths' round-off ε
 # moves the joint by √ε.

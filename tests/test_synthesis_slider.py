@@ -7,17 +7,18 @@ Expected values never come from the module under test.
 from __future__ import annotations
 
 import math
-import os
 
 import numpy as np
 import pytest
 from hypothesis import assume, event, given, settings, strategies as st
 
+from conftest import examples
+
 from linkbook.check.reference import solve
 from linkbook.check.reference.synthesis import SINGULAR_COND
 from linkbook.check.reference.synthesis_slider import slider_crank_function_generation
 
-EXAMPLES = int(os.environ.get("LINKBOOK_PROPERTY_EXAMPLES", "100"))
+EXAMPLES = examples(100)
 ROUND_TRIP = 1e-9       # of the largest |s_j|
 DEAD_CENTRE = 1e-7      # ... at a dead centre (a double root), √ε
 
