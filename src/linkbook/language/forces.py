@@ -33,6 +33,7 @@ from .bodies import GROUND, METRES, METRES_REF, Body, BodiesAndLoads
 from .excel import ZERO, cross, guard, lin, mul, sq
 from .mechanisms import FORCE_ROLE, TO_METRES
 from .model import NEWTON, NEWTON_METRE, DescriptionError, Quantity
+from .steps import STEPS
 
 FORCE = FORCE_ROLE           # the model's role of a force column (sheet Forces)
 
@@ -58,7 +59,6 @@ class ForceWriter:
 
     # ------------------------------------------------------------------ the whole analysis
     def run(self) -> None:
-        from .steps import STEPS
         known = self.known
         known.find()
         self.bodies, self.fixed, self.crank_joints = known.bodies, known.fixed, known.crank_joints
