@@ -2,6 +2,8 @@
 bodies the description implies (numbered as the textbook numbers links), their masses placed at
 their centres, gravity and the loads the description names (docs/language.md, "Mass, gravity
 and loads"). The writer (forces.py) solves the groups; this part says what is known of them.
+Each step type says what it makes of the bodies in its own module (steps package, `topology`:
+its links, its carried point, its block); here they are gathered and merged.
 """
 from __future__ import annotations
 
@@ -14,6 +16,8 @@ from .expressions import expression
 from .fields import as_table
 from .mechanisms import TO_METRES
 from .model import ACCEL, LENGTH, DescriptionError
+from .steps import STEPS
+from .steps.step_type import Block
 
 GROUND = 1
 # what can make a value another error than #N/A: a division (but by a whole number), a power
@@ -44,9 +48,39 @@ class Body:
 
 
 class BodiesAndLoads:
-    """The force writer's first half: the bodies and their known loads. It reads the writer's
-    state (the compiler `c`, the motion writer `w`, `entries`, `loads`, `dynamics`, `centres`)
-    and calls the writer's `add` and `holders` (forces.ForceWriter)."""
+    """The force writer's first half, a value it holds: the bodies the steps and the links
+    make, and their known loads. It reads the compiler `c` and the motion writer `w`, and
+    writes its columns (the centres of mass) through `add`, the force writer's, which keeps
+    their place in the sheet."""
+
+    def __init__(self, compiler, motion, add):
+        self.c, self.w, self.add = compiler, motion, add
+        self.model, self.field = compiler.model, compiler.field
+        data = compiler.data
+        self.entries = data.get("bodies") or []
+        self.loads = data.get("loads") or []
+        self.dynamics = as_table(f"{self.field}.dynamics", data.get("dynamics") or {})
+        self.centres: dict[str, tuple[str, str]] = {}     # "G3": (x, y) texts
+        length_input = f"{{{compiler.input_key}}}" if compiler.swept else None
+        self.made = [(rec, STEPS[rec["type"]].topology(rec, length_input))
+                     for rec in compiler.records]
+        # (END, N) of the dyad side that is the linear actuator's length
+        self.actuator = next((m.actuator for _, m in self.made if m.actuator is not None), None)
+        self.bodies: list[Body] = []
+        self.fixed: set[str] = set()
+        self.crank_joints: list[str] | None = None
+
+    def holders(self, point: str) -> list[Body]:
+        return [b for b in self.bodies if point in b.joints]
+
+    def find(self) -> None:
+        """The moving bodies, numbered, and the ground's points (`fixed`)."""
+        self.bodies = self._bodies()
+
+    def load(self) -> None:
+        """Each body's weight and inertia, then the loads the description names."""
+        self._masses()
+        self._loads()
 
     def expr(self, where: str, raw: object) -> str:
         """A mass, an inertia or a load as formula text, #N/A where its value is an error (a
@@ -62,35 +96,10 @@ class BodiesAndLoads:
             known |= self.c.swept | {q.key for q in self.model.quantities}
         return expression(where, raw, known)
 
-    def _actuator(self) -> tuple[str, str] | None:
-        """(END, N) of the dyad side that is the linear actuator's length."""
-        if not self.c.swept:
-            return None
-        for rec in self.c.records:
-            if rec["type"] != "dyad":
-                continue
-            for end, side in (("p", "p_length"), ("q", "q_length")):
-                if rec[side].text == f"{{{self.c.input_key}}}":
-                    return rec[end], rec["point"]
-        return None
-
-    def _sliding_points(self) -> list[tuple[str, set[str]]]:
-        """Each point a block slides with, and the points of its guide (a slide's pivot and
-        point, a slot's points, the link of a slider's moving line)."""
-        out = []
-        for rec in self.c.records:
-            if rec["type"] == "slide":
-                out.append((rec["p"], {rec["pivot"], rec["point"]}))
-            elif rec["type"] == "slot":
-                out.append((rec["point"], {rec["slot_through"], *rec["frame"]}))
-            elif rec["type"] == "slider" and rec["along"]:
-                out.append((rec["point"], {*rec["along"], rec["through"]}))
-        return out
-
     def _drawn(self) -> list[list[str]]:
         """The `links` entries as rigid sets: a sliding point drawn on its guide (an entry
-        holding a point of the guide) is no joint of it."""
-        sliding = self._sliding_points()
+        holding a point of the links it slides on) is no joint of it."""
+        sliding = [(m.block.point, m.block.beside) for _, m in self.made if m.block is not None]
         drawn = []
         for link in self.c.data.get("links") or []:
             joints = list(dict.fromkeys(map(str, link)))
@@ -102,27 +111,23 @@ class BodiesAndLoads:
 
     def _links(self) -> list[list[str]]:
         """The rigid sets the description implies, in the textbook's order: its `links`, then
-        the steps' own (a crank and the cranks on its pivot, a dyad's sides, a slider's rod, a
-        slide's link)."""
+        the steps' own (the cranks on one pivot are one link), but the actuator's side."""
         drawn = self._drawn()
         implied, crank = [], None
-        for rec in self.c.records:
-            kind, n = rec["type"], rec.get("point")
-            if kind == "crank" and crank is None:
-                crank = [rec["pivot"], n]
-                implied.append(crank)
-            elif kind == "crank" and rec["pivot"] != crank[0]:
-                raise DescriptionError(rec["field"], "force analysis: a second crank on another "
-                                                     "pivot (not supported)")
-            elif kind == "crank":
-                crank.append(n)
-            elif kind == "dyad":
-                implied += [[rec[e], n] for e in ("p", "q")
-                            if {rec[e], n} != set(self.actuator or ())]
-            elif kind == "slider":
-                implied.append([rec["p"], n])
-            elif kind == "slide":
-                implied.append([rec["pivot"], n])
+        for rec, made in self.made:
+            if made.crank:
+                (pivot, point), = made.links
+                if crank is None:
+                    crank = [pivot, point]
+                    implied.append(crank)
+                elif pivot != crank[0]:
+                    raise DescriptionError(rec["field"], "force analysis: a second crank on "
+                                                         "another pivot (not supported)")
+                else:
+                    crank.append(point)
+                continue
+            implied += [list(link) for link in made.links
+                        if set(link) != set(self.actuator or ())]
         self.crank_joints = crank
         return drawn + implied
 
@@ -130,26 +135,25 @@ class BodiesAndLoads:
         groups = [Body(list(j), rank) for rank, j in enumerate(self._links())]
         groups = _merged(groups)
         fixed = set(self.c.ground)
-        for rec in self.c.records:
-            if rec["type"] == "point":
-                a, b = rec["frame"]
-                host = [g for g in groups if g.holds(a, b)]
-                if a in fixed and b in fixed:
-                    fixed.add(rec["point"])
-                elif host:
-                    host[0].joints.append(rec["point"])
-                else:
-                    raise DescriptionError(rec["field"], f"force analysis: the point "
-                                                         f"{rec['point']} is carried by "
-                                                         f"{a}→{b}, which is no rigid link"
-                                                         f"{self._vector_hint(a, b)}")
+        for rec, made in self.made:
+            if made.carried is None:
+                continue
+            point, a, b = made.carried
+            host = [g for g in groups if g.holds(a, b)]
+            if a in fixed and b in fixed:
+                fixed.add(point)
+            elif host:
+                host[0].joints.append(point)
+            else:
+                raise DescriptionError(rec["field"], f"force analysis: the point {point} is "
+                                                     f"carried by {a}→{b}, which is no rigid "
+                                                     f"link{self._vector_hint(a, b)}")
         groups = [g for g in _merged(groups) if not set(g.joints) <= fixed]
         self.fixed = fixed
         crank = next((g for g in groups if self.crank_joints and
                       set(self.crank_joints) <= set(g.joints)), None)
         bodies = ([crank] if crank else []) + [g for g in groups if g is not crank]
-        bodies += [self._block(rec) for rec in self.c.records
-                   if rec["type"] in ("slider", "slide", "slot")]
+        bodies += [self._block(m.block) for _, m in self.made if m.block is not None]
         for number, b in enumerate(bodies, start=GROUND + 1):
             b.number = number
         return bodies
@@ -157,20 +161,17 @@ class BodiesAndLoads:
     def _vector_hint(self, a: str, b: str) -> str:
         """Where a vector step measures the frame a→b (a slotted link written as the direction
         from its pivot to a pin), how to make it a link."""
-        if any(rec["type"] == "vector" and {rec["from"], rec["to"]} == {a, b}
-               for rec in self.c.records):
+        if any(m.turns is not None and set(m.turns) == {a, b} for _, m in self.made):
             return " (a slotted link turned by a vector step: write it as a slide step)"
         return ""
 
-    def _block(self, rec: dict) -> Body:
-        """The block a sliding step makes: its point, its guide, its line and its spin."""
-        if rec["type"] == "slide":       # the block at P on the slide's link
-            return Body([rec["p"]], 0, block=True, guide=(rec["pivot"], rec["point"]),
-                        line=rec["direction"], spin=self.w.links[(rec["point"], rec["p"])])
-        if rec["type"] == "slider" and rec["along"] and not set(rec["along"]) <= self.fixed:
-            return Body([rec["point"]], 0, block=True, guide=tuple(rec["along"]),
-                        line=rec["direction"], spin=self.w.link_rates(*rec["along"]))
-        return Body([rec["point"]], 0, block=True, line=rec["direction"])   # on the ground
+    def _block(self, block: Block) -> Body:
+        """The block a sliding step makes: its point, its guide, its line and its spin (on
+        the ground where its guide's points are the ground's)."""
+        if block.guide and not set(block.guide) <= self.fixed:
+            return Body([block.point], 0, block=True, guide=block.guide, line=block.line,
+                        spin=self.w.link_rates(*block.spin))
+        return Body([block.point], 0, block=True, line=block.line)
 
     def _entry_body(self, k: int, entry: dict) -> Body:
         where = f"{self.field}.bodies[{k}]"

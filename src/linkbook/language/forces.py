@@ -31,29 +31,26 @@ from __future__ import annotations
 
 from .bodies import GROUND, METRES, METRES_REF, Body, BodiesAndLoads
 from .excel import ZERO, cross, guard, lin, mul, sq
-from .fields import as_table
 from .mechanisms import FORCE_ROLE, TO_METRES
 from .model import NEWTON, NEWTON_METRE, DescriptionError, Quantity
+from .steps import STEPS
 
 FORCE = FORCE_ROLE           # the model's role of a force column (sheet Forces)
 
 
-class ForceWriter(BodiesAndLoads):
+class ForceWriter:
     """Adds the Forces sheet's quantities to a compiled model (the compiler's state and the
-    motion writer's rates): the bodies, their loads, then each step type's group (steps
-    package, `forces`) from the last step back to the first."""
+    motion writer's rates): the bodies and their loads (`known`, bodies.py), then each step
+    type's group (steps package, `forces`) from the last step back to the first."""
 
     def __init__(self, compiler, motion):
         self.c, self.w = compiler, motion
         self.model = compiler.model
         self.field = compiler.field
-        data = compiler.data
-        self.entries = data.get("bodies") or []
-        self.loads = data.get("loads") or []
-        self.dynamics = as_table(f"{self.field}.dynamics", data.get("dynamics") or {})
-        self.centres: dict[str, tuple[str, str]] = {}     # "G3": (x, y) texts
         self.rank: dict[str, tuple] = {}                   # a column: its place in the sheet
-        self.actuator = self._actuator()
+        self.known = BodiesAndLoads(compiler, motion, self.add)
+        self.centres = self.known.centres                  # "G3": (x, y) texts
+        self.actuator = self.known.actuator                # (END, N) of a linear actuator
         self.actuator_force: tuple[str, str, str] | None = None   # F_in·e at N, and END
         self.effort = ""
         self.solved: set[int] = set()                      # the bodies solved so far
@@ -62,13 +59,13 @@ class ForceWriter(BodiesAndLoads):
 
     # ------------------------------------------------------------------ the whole analysis
     def run(self) -> None:
-        from .steps import STEPS
-        self.bodies = self._bodies()
+        known = self.known
+        known.find()
+        self.bodies, self.fixed, self.crank_joints = known.bodies, known.fixed, known.crank_joints
         # what grows a force's formula without bound is the loads on one link
-        self.model.where = f"{self.field}.{'loads' if self.loads else 'bodies'}"
+        self.model.where = f"{self.field}.{'loads' if known.loads else 'bodies'}"
         self.pairs = len(self.bodies) + GROUND >= 10
-        self._masses()
-        self._loads()
+        known.load()
         for rec in reversed(self.c.records):
             solve = STEPS[rec["type"]].forces
             if solve is not None:
@@ -128,7 +125,7 @@ class ForceWriter(BodiesAndLoads):
         return found[0]
 
     def holders(self, point: str) -> list[Body]:
-        return [b for b in self.bodies if point in b.joints]
+        return self.known.holders(point)
 
     def first_holder(self, point: str) -> Body:
         """The lowest-numbered body holding a point: the one that carries a pin there."""

@@ -30,6 +30,48 @@ class Guide(NamedTuple):
     line: LineOf
 
 
+class Pair(NamedTuple):
+    """A step's sliding pair as the force reference reads it: a block at `point` slides on the
+    link holding the two points `guide` (None: the ground) along `line`, turning with its
+    `spin` column where the guide's own joints cannot give it (a slide's link); a slot's block
+    also runs, by its pin, in the slot of the link holding `slotted` along `slot`. A line is
+    ("fixed", degrees), ("along", U, V, degrees: angle(U→V) plus these) or ("column", the key
+    of an angle column). `beside`: the points of the links it slides on (a `links` entry
+    holding one of them does not hold `point`)."""
+    point: str
+    line: tuple
+    guide: tuple[str, str] | None = None
+    beside: frozenset[str] = frozenset()
+    spin: str | None = None
+    slotted: tuple[str, str] | None = None
+    slot: tuple | None = None
+
+
+class Topology(NamedTuple):
+    """What a step makes of the force analysis' bodies: the rigid `links` it implies (sets of
+    points that move together); `crank`: its link turns with the input (the cranks on one
+    pivot are one body); `carried`: (point, A, B, stretches) for a point carried by the frame
+    A→B, joining the link holding both (stretches: by distances, so a frame that is no link
+    makes two); `pair`: its sliding pair; `actuator`: (P, R), the side whose length is the
+    input (a massless member of unknown force, no link); `turns`: (U, V), a direction it
+    measures that no step makes a link (a vector step's)."""
+    links: tuple[tuple[str, ...], ...] = ()
+    crank: bool = False
+    carried: tuple[str, str, str, bool] | None = None
+    pair: Pair | None = None
+    actuator: tuple[str, str] | None = None
+    turns: tuple[str, str] | None = None
+
+
+# A step type's topology, given its step and the key of a length input (None for an angle)
+TopologyOf = Callable[[Mapping, "str | None"], Topology]
+
+
+def no_topology(step: Mapping, length_input: str | None) -> Topology:
+    """A step that makes no link (a column of the user's, a measured distance)."""
+    return Topology()
+
+
 class Sliding(NamedTuple):
     """What a sliding step draws: its guides, and a block centred on point `block`, its long side
     along `line` (its corners: "<block> block 1" … "<block> block 4")."""
@@ -50,8 +92,11 @@ class StepType:
         step has none (a later step may then not use a point it places in its rates).
     length_fields: the fields whose values count towards the mechanism's size.
     sliding(step), optional: the guides and the block the step draws (a sliding joint).
+    topology(step, length_input): what the step makes of the force analysis' bodies (its
+        links, its carried point, its sliding pair: Topology), read by check/forces.
     """
     place: Callable[[Any, Mapping], None]
     rates: Callable[[Any, Mapping], None] | None = None
     length_fields: tuple[str, ...] = LENGTH_FIELDS
     sliding: Callable[[Mapping], Sliding] | None = None
+    topology: TopologyOf = no_topology

@@ -7,7 +7,7 @@ from ..columns import Column
 from ..excel import PRODUCT, SUM, Expr, key, plus, radians
 from ..mechanisms import ANGLE_KIND
 from ..model import LENGTH, DescriptionError
-from .step_type import StepType, fixed, schema_keys
+from .step_type import StepType, Topology, fixed, schema_keys
 
 
 def place(c, field: str, s: dict) -> None:
@@ -49,4 +49,10 @@ def forces(w, rec: dict) -> None:
     w.crank(rec["pivot"], rec["point"], rec.get("field", "crank"))
 
 
-STEP = StepType(schema_keys("crank"), place, rates, fixed({"length": 1, "phase": 0}), forces)
+def topology(rec: dict, length_input: str | None) -> Topology:
+    """The crank is a link from its pivot to its point, turned by the input."""
+    return Topology(links=((rec["pivot"], rec["point"]),), crank=True)
+
+
+STEP = StepType(schema_keys("crank"), place, rates, fixed({"length": 1, "phase": 0}), forces,
+                topology)

@@ -8,7 +8,7 @@ from ..columns import Column, Sym, polar, polar_columns, quantity
 from ..excel import PRODUCT, angle_of_triangle_or_na, key, minus, plus
 from ..expressions import expression
 from ..model import LENGTH, RAD, DescriptionError, Model
-from .step_type import StepType, fixed, schema_keys
+from .step_type import StepType, Topology, fixed, schema_keys
 
 
 def triangle(model: Model, *, side: str, angle: str, p: str, q: str, branch: str,
@@ -115,5 +115,14 @@ def forces(w, rec: dict) -> None:
         w.two_links(n, p, q, rec["field"])
 
 
+def topology(rec: dict, length_input: str | None) -> Topology:
+    """Two links pinned at the point, from p and from q; the side whose length is the linear
+    actuator's input (p's first) is that actuator."""
+    n = rec["point"]
+    actuator = next(((rec[end], n) for end, side in (("p", "p_length"), ("q", "q_length"))
+                     if length_input is not None and rec[side].text == length_input), None)
+    return Topology(links=((rec["p"], n), (rec["q"], n)), actuator=actuator)
+
+
 STEP = StepType(schema_keys("dyad"), place, rates, fixed({"p_length": 1, "q_length": 1}),
-                forces)
+                forces, topology)

@@ -7,7 +7,7 @@ from ..columns import Column
 from ..excel import (PRODUCT, SUM, angle_of_triangle_or_na, key, local_point, plus,
                      radians)
 from ..model import LENGTH, RAD, DescriptionError, Quantity
-from .step_type import StepType, fixed, schema_keys
+from .step_type import StepType, Topology, fixed, schema_keys
 
 
 def place(c, field: str, s: dict) -> None:
@@ -91,5 +91,12 @@ def rates(w, rec: dict) -> None:
         w.links[(a, n)] = w.rates(rec["theta"], omega, alpha)
 
 
+def topology(rec: dict, length_input: str | None) -> Topology:
+    """The point is carried by the link of its frame."""
+    a, b = rec["frame"]
+    return Topology(carried=(rec["point"], a, b))
+
+
 STEP = StepType(schema_keys("point"), place, rates,
-                fixed({"local": 1, "distances": 1, "distance": 1, "angle": 0}))
+                fixed({"local": 1, "distances": 1, "distance": 1, "angle": 0}),
+                topology=topology)

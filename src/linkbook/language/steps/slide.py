@@ -6,7 +6,7 @@ from __future__ import annotations
 from ..columns import Column, Sym, polar, polar_columns, quantity
 from ..excel import PRODUCT, acos_or_na, dot, guard, key, lin, minus, mul, plus, sq
 from ..model import LENGTH, RAD, DescriptionError, Model
-from .step_type import StepType, fixed, schema_keys
+from .step_type import Block, StepType, Topology, fixed, schema_keys
 
 
 def offset_slide(model: Model, *, p: str, angle: str, offset: str, branch: str,
@@ -113,4 +113,13 @@ def forces(w, rec: dict) -> None:
     w.outer(blk, p, lin((-1, nx), (-1, kb[0])), lin((-1, ny), (-1, kb[1])), where)
 
 
-STEP = StepType(schema_keys("slide"), place, rates, fixed({"offset": 1}), forces)
+def topology(rec: dict, length_input: str | None) -> Topology:
+    """The link from the pivot to the point, and the block at p sliding on it along the
+    slide's line, turning with that line (N→P)."""
+    n, p, pivot = rec["point"], rec["p"], rec["pivot"]
+    return Topology(links=((pivot, n),),
+                    block=Block(p, rec["direction"], guide=(pivot, n), spin=(n, p),
+                                beside=frozenset({pivot, n})))
+
+
+STEP = StepType(schema_keys("slide"), place, rates, fixed({"offset": 1}), forces, topology)

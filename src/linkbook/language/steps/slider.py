@@ -8,7 +8,7 @@ from ..excel import (PRODUCT, SUM, ZERO, Expr, asin_or_na, cross, dot, guard, ke
                      plus, radians, sq)
 from ..mechanisms import on_loop
 from ..model import ALIAS, COLUMN, LENGTH, RAD, DescriptionError, Model, Quantity
-from .step_type import StepType, fixed, schema_keys
+from .step_type import Block, StepType, Topology, fixed, schema_keys
 
 
 def slider(model: Model, *, pin_x: str, pin_y: str, line_y: str, length: str, branch: str,
@@ -152,5 +152,14 @@ def forces(w, rec: dict) -> None:
     w.outer(u, p, lin((1, x), (-1, ux)), lin((1, y), (-1, uy)), where)
 
 
+def topology(rec: dict, length_input: str | None) -> Topology:
+    """The rod from p to the point, and the block at the point on its line: fixed, or on the
+    link of `along` (which also holds `through`), turning with it."""
+    n, along = rec["point"], tuple(rec["along"] or ())
+    block = Block(n, rec["direction"], guide=along, spin=along or None,
+                  beside=frozenset({*along, rec["through"]}) if along else frozenset())
+    return Topology(links=((rec["p"], n),), block=block)
+
+
 STEP = StepType(schema_keys("slider"), place, rates, fixed({"length": 1, "direction": 0}),
-                forces)
+                forces, topology)

@@ -7,7 +7,7 @@ from ..excel import (POWER, PRODUCT, combine, cross, guard, key, key_text, lin, 
                      sq, times, turned)
 from ..mechanisms import on_loop
 from ..model import ALIAS, COLUMN, LENGTH, RATIO, DescriptionError, Quantity
-from .step_type import StepType, fixed, schema_keys
+from .step_type import Block, StepType, Topology, fixed, schema_keys
 
 
 def place(c, field: str, s: dict) -> None:
@@ -98,5 +98,12 @@ def forces(w, rec: dict) -> None:
     w.solved.add(blk.number)
 
 
+def topology(rec: dict, length_input: str | None) -> Topology:
+    """The block at the point on its fixed line, its pin pushed across the slot of the link
+    of `frame` (which also holds `slot_through`): it makes no link of its own."""
+    return Topology(block=Block(rec["point"], rec["direction"],
+                                beside=frozenset({rec["slot_through"], *rec["frame"]})))
+
+
 STEP = StepType(schema_keys("slot"), place, rates, fixed({"direction": 0, "slot_angle": 0}),
-                forces)
+                forces, topology)

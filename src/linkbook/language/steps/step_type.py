@@ -32,6 +32,41 @@ def _none(step: dict) -> dict[str, int]:
 
 
 @dataclass(frozen=True)
+class Block:
+    """A step's sliding pair as the force writer reads it: a block at `point` slides along
+    `line` ((cos, sin) texts) on the link holding the points `guide`, turning with the line
+    through the two points `spin` (the motion writer's link_rates); on the ground where there
+    is no guide or its points are the ground's. `beside`: the points of the links it slides on
+    (a `links` entry holding one of them does not hold `point`)."""
+    point: str
+    line: tuple[str, str]
+    guide: tuple[str, ...] = ()
+    spin: tuple[str, str] | None = None
+    beside: frozenset[str] = frozenset()
+
+
+@dataclass(frozen=True)
+class Topology:
+    """What a step makes of the force writer's bodies: the rigid `links` it implies (sets of
+    points that move together); `crank`: its link turns with the input (the cranks on one
+    pivot are one link); `carried`: (point, A, B) for a point carried by the frame A→B, which
+    joins the link holding both; `block`: its sliding pair; `actuator`: (END, N), its side
+    whose length is the input (no link: a member of unknown force); `turns`: (A, B), a
+    direction it measures that no step makes a link (a vector step's)."""
+    links: tuple[tuple[str, ...], ...] = ()
+    crank: bool = False
+    carried: tuple[str, str, str] | None = None
+    block: Block | None = None
+    actuator: tuple[str, str] | None = None
+    turns: tuple[str, str] | None = None
+
+
+def no_topology(record: dict, length_input: str | None) -> Topology:
+    """A step that makes no link (a column of the user's, a measured distance)."""
+    return Topology()
+
+
+@dataclass(frozen=True)
 class StepType:
     """One step type on the writer's side.
 
@@ -48,6 +83,9 @@ class StepType:
         writer `w` (forces.ForceWriter: its helpers, and two_links, crank, actuated), the
         steps being solved from the last back to the first; None for a step that places no
         link (a point carried by one, a column of the user's).
+    topology(record, length_input): what a record `place` made makes of the force writer's
+        bodies (Topology: its links, its carried point, its block), `length_input` the input's
+        cell as formula text where it is a length (a linear actuator), else None.
     dimensions(step): the power of length of each key that takes an expression (a length 1,
         an angle in degrees 0), for a change of length unit; keys left out are not checked.
     """
@@ -56,3 +94,4 @@ class StepType:
     rates: Callable[..., None] | None = None
     dimensions: Callable[[dict], dict[str, int]] = field(default=_none)
     forces: Callable[..., None] | None = None
+    topology: Callable[[dict, str | None], Topology] = no_topology

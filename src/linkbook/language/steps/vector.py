@@ -7,7 +7,7 @@ from ..columns import polar, polar_columns
 from ..excel import key, minus
 from ..fields import IDENT
 from ..model import DescriptionError
-from .step_type import StepType, schema_keys
+from .step_type import StepType, Topology, schema_keys
 
 
 def place(c, field: str, s: dict) -> None:
@@ -34,4 +34,10 @@ def rates(w, rec: dict) -> None:
     w.length_and_angle(rec["from"], rec["to"], rec["length"], rec["angle"])
 
 
-STEP = StepType(schema_keys("vector"), place, rates)
+def topology(rec: dict, length_input: str | None) -> Topology:
+    """No link: a direction measured from one point to another (a slotted link written this
+    way is no link of the steps, which a refusal says)."""
+    return Topology(turns=(rec["from"], rec["to"]))
+
+
+STEP = StepType(schema_keys("vector"), place, rates, topology=topology)

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..positions import Positions
 from ..rates import Rates
-from ..step_type import StepType
+from ..step_type import StepType, Topology
 from ..taylor import t_cos, t_sin
 
 
@@ -37,4 +37,9 @@ def rates(motion: Rates, step: Mapping) -> None:
     motion.place(step["point"], ox + r * t_cos(t), oy + r * t_sin(t))
 
 
-STEP = StepType(place=place, rates=rates)
+def topology(step: Mapping, length_input: str | None) -> Topology:
+    """The crank is a link from its pivot to its point, turned by the input."""
+    return Topology(links=((str(step["pivot"]), str(step["point"])),), crank=True)
+
+
+STEP = StepType(place=place, rates=rates, topology=topology)

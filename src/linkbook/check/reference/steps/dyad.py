@@ -18,7 +18,7 @@ from ..constraints import two_circles
 from ..geometry import HALF_PI, interior, near
 from ..positions import Positions
 from ..rates import Rates
-from ..step_type import StepType
+from ..step_type import StepType, Topology
 
 
 def place(solver: Positions, step: Mapping) -> None:
@@ -65,4 +65,15 @@ def rates(motion: Rates, step: Mapping) -> None:
     motion.put_rates(motion.key(step, "theta_p", f"theta_p_{n}"), motion.angle(p, n), True)
 
 
-STEP = StepType(place=place, rates=rates)
+def topology(step: Mapping, length_input: str | None) -> Topology:
+    """Two links pinned at the point, from p and from q; the side whose length is a linear
+    actuator's input (p's first) is that actuator."""
+    point = str(step["point"])
+    actuator = next(((str(step[end]), point) for end, side in (("p", "p_length"),
+                                                                ("q", "q_length"))
+                     if length_input is not None and step.get(side) == length_input), None)
+    return Topology(links=tuple((str(step[end]), point) for end in ("p", "q")),
+                    actuator=actuator)
+
+
+STEP = StepType(place=place, rates=rates, topology=topology)

@@ -18,7 +18,7 @@ from ..expressions import scalar
 from ..geometry import interior
 from ..positions import Positions
 from ..rates import Rates
-from ..step_type import StepType
+from ..step_type import StepType, Topology
 from ..taylor import t_cos, t_sin, t_sqrt
 
 
@@ -100,4 +100,11 @@ def rates(motion: Rates, step: Mapping) -> None:
         motion.put_rates(motion.key(step, "theta", f"theta_{n}"), theta, True)
 
 
-STEP = StepType(place=place, rates=rates)
+def topology(step: Mapping, length_input: str | None) -> Topology:
+    """The point is carried by the link of its frame (by distances, a frame that is no link
+    stretches: two links, as a dyad's)."""
+    a, b = (str(p) for p in step["frame"])
+    return Topology(carried=(str(step["point"]), a, b, "distances" in step))
+
+
+STEP = StepType(place=place, rates=rates, topology=topology)

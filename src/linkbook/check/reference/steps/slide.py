@@ -17,7 +17,7 @@ from ..geometry import HALF_PI, Point, direction, interior, near
 from ..newton import NEAR_DOUBLE, RES_TOL, TANGENT, Fun, directions, finite, solved_column, sweep
 from ..positions import Positions
 from ..rates import Rates
-from ..step_type import Guide, Sliding, StepType
+from ..step_type import Guide, Pair, Sliding, StepType, Topology
 from ..taylor import implicit, t_cos, t_sin, t_sqrt
 
 
@@ -117,12 +117,17 @@ def rates(motion: Rates, step: Mapping) -> None:
                      t_sqrt((px - nx) * (px - nx) + (py - ny) * (py - ny)), False)
 
 
+def _slide_key(step: Mapping) -> str:
+    """A slide's line: its `theta_slide` column, under the key the step's `columns` gives."""
+    spec = (step.get("columns") or {}).get("theta_slide")
+    key = str(spec.get("key") or "") if isinstance(spec, Mapping) else ""
+    return key or f"theta_slide_{step['point']}"
+
+
 def _slide_line(step: Mapping, params: Mapping[str, float]) -> Callable:
     """A slide's line: the direction `place` solved for it (θ + b·π/2, θ the link's angle),
     which stays defined where B and P meet or the offset is zero."""
-    spec = (step.get("columns") or {}).get("theta_slide")
-    key = str(spec.get("key") or "") if isinstance(spec, Mapping) else ""
-    key = key or f"theta_slide_{step['point']}"
+    key = _slide_key(step)
     return lambda solved: (np.cos(solved[key]), np.sin(solved[key]))
 
 
@@ -132,4 +137,14 @@ def sliding(step: Mapping) -> Sliding:
     return Sliding((Guide(f"{n} guide", n, step["p"], line),), step["p"], line)
 
 
-STEP = StepType(place=place, rates=rates, sliding=sliding)
+def topology(step: Mapping, length_input: str | None) -> Topology:
+    """The link from the pivot to the point, and the block at p sliding on it along the
+    slide's line, which turns with the link (its column stays defined where the link's two
+    points meet, a slide of offset zero)."""
+    pivot, point, key = str(step["pivot"]), str(step["point"]), _slide_key(step)
+    return Topology(links=((pivot, point),),
+                    pair=Pair(str(step["p"]), ("column", key), guide=(pivot, point),
+                              beside=frozenset({pivot, point}), spin=key))
+
+
+STEP = StepType(place=place, rates=rates, sliding=sliding, topology=topology)

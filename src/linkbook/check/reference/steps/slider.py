@@ -19,7 +19,7 @@ from ..geometry import HALF_PI, Point, cos_sin_deg, near, turned_direction
 from ..newton import NEAR_DOUBLE, RES_TOL, STARTS, TANGENT, Fun, finite, solved_column, sweep
 from ..positions import Positions
 from ..rates import Rates
-from ..step_type import Guide, Sliding, StepType
+from ..step_type import Guide, Pair, Sliding, StepType, Topology
 from ..taylor import Taylor, implicit, t_cos, t_sin
 
 
@@ -146,4 +146,17 @@ def sliding(step: Mapping) -> Sliding:
     return Sliding((Guide(f"{n} guide", step["through"], n, line),), n, line)
 
 
-STEP = StepType(place=place, rates=rates, sliding=sliding)
+def topology(step: Mapping, length_input: str | None) -> Topology:
+    """The rod from p to the point, and the block at the point on its line: fixed, or on
+    the link of `along` (which also holds `through`)."""
+    point = str(step["point"])
+    if "along" in step:
+        u, v = (str(p) for p in step["along"])
+        pair = Pair(point, ("along", u, v, step.get("direction", 0.0)), guide=(u, v),
+                    beside=frozenset({u, v, str(step["through"])}))
+    else:
+        pair = Pair(point, ("fixed", step.get("direction", 0.0)))
+    return Topology(links=((str(step["p"]), point),), pair=pair)
+
+
+STEP = StepType(place=place, rates=rates, sliding=sliding, topology=topology)

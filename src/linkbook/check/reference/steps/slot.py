@@ -18,7 +18,7 @@ from ..geometry import Point, cos_sin_deg, turned_direction
 from ..newton import finite, linear_solve
 from ..positions import Positions
 from ..rates import Rates
-from ..step_type import Guide, Sliding, StepType
+from ..step_type import Guide, Pair, Sliding, StepType, Topology
 from ..taylor import implicit, t_cos, t_sin
 
 
@@ -114,4 +114,14 @@ def sliding(step: Mapping) -> Sliding:
                    n, fixed)
 
 
-STEP = StepType(place=place, rates=rates, sliding=sliding)
+def topology(step: Mapping, length_input: str | None) -> Topology:
+    """The block at the point on its fixed line, its pin pushed across the slot of the link
+    of `slot_frame` (which also holds `slot_through`): it makes no link of its own."""
+    point = str(step["point"])
+    a, b = (str(p) for p in step["slot_frame"])
+    return Topology(pair=Pair(point, ("fixed", step.get("direction", 0.0)),
+                              beside=frozenset({str(step["slot_through"]), a, b}),
+                              slotted=(a, b), slot=("along", a, b, step.get("slot_angle", 0.0))))
+
+
+STEP = StepType(place=place, rates=rates, sliding=sliding, topology=topology)

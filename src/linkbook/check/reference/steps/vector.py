@@ -9,7 +9,7 @@ import numpy as np
 from ..geometry import direction
 from ..positions import Positions
 from ..rates import Rates
-from ..step_type import StepType
+from ..step_type import StepType, Topology
 from ..taylor import t_atan2, t_sqrt
 
 
@@ -36,4 +36,10 @@ def rates(motion: Rates, step: Mapping) -> None:
     motion.put_rates(motion.key(step, "phi", f"phi_{key}"), t_atan2(dy, dx), True)
 
 
-STEP = StepType(place=place, rates=rates)
+def topology(step: Mapping, length_input: str | None) -> Topology:
+    """No link: a direction measured from one point to another (a slotted link written this
+    way is no link of the steps, which a refusal says)."""
+    return Topology(turns=(str(step.get("from")), str(step.get("to"))))
+
+
+STEP = StepType(place=place, rates=rates, topology=topology)
