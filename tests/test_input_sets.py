@@ -206,3 +206,41 @@ def test_random_books_agree_at_their_other_set(family, tmp_path):
         bad = [(c.block, c.name, m) for c in other.checks for m in c.mismatches[:2]]
         assert report.status == 0 and not bad, (values, other.inputs, bad[:5])
     check()
+
+
+def test_a_synthesis_books_other_set_moves_its_task(tmp_path):
+    """A Chebyshev centre written (x0² + x1)/2 is right while x0 = 1, as in the bundled
+    function-log10 book: verify's other input set moves the task's x0 (and its other inputs,
+    as a user typing in the yellow cells would), redesigns with the reference and differs
+    there, in the x column and what follows it."""
+    path = _build(tmp_path, "function-log10")
+    wb = openpyxl.load_workbook(path)
+    record = read_record(wb)
+    cells = record.synthesis.points["x"]
+    for cell in cells:
+        text = wb["Synthesis"][cell].value
+        assert "(syn_x0+syn_x1)/2" in text, text
+        wb["Synthesis"][cell] = text.replace("(syn_x0+syn_x1)/2", "(syn_x0^2+syn_x1)/2")
+    edited = tmp_path / "edited-centre.xlsx"
+    wb.save(edited)
+    report = verifier.verify(edited)
+    assert all(c.ok for c in report.checks), "x0² = x0 at the book's own x0 = 1"
+    [other] = report.input_sets
+    assert other.skipped is None and other.inputs["syn_x0"] != 1 and not other.ok
+    assert {("Synthesis", c) for c in cells} <= other.differing()
+    assert report.status == 1
+    # the untouched book agrees there: the designed linkage is the reference's of the task
+    # moved (its crank, checked here against the reference's own design of that task)
+    [same] = verifier.verify(path).input_sets
+    assert same.ok and same.checks
+    moved = {key: same.inputs[f"syn_{key}"] for key in ("x0", "x1", "theta2_start",
+                                                        "theta2_span", "theta4_start",
+                                                        "theta4_span")}
+    assert {f"syn_{key}" for key in moved} <= set(same.changed)
+    from linkbook.check.reference import synthesis as ref
+    x, _ = ref.precision_points(np.log10, moved["x0"], moved["x1"], 3, "chebyshev")
+    theta2, theta4 = ref.precision_angles(np.log10, x, moved["x0"], moved["x1"], *np.radians(
+        [moved[k] for k in ("theta2_start", "theta2_span", "theta4_start", "theta4_span")]))
+    design = ref.function_generation(theta2, theta4, same.inputs["a1"])
+    assert same.inputs["a2"] == pytest.approx(design["a"], rel=1e-9)
+    assert same.inputs["branch"] == design["branch"][0]
