@@ -244,3 +244,32 @@ def test_a_synthesis_books_other_set_moves_its_task(tmp_path):
     design = ref.function_generation(theta2, theta4, same.inputs["a1"])
     assert same.inputs["a2"] == pytest.approx(design["a"], rel=1e-9)
     assert same.inputs["branch"] == design["branch"][0]
+
+
+def test_a_synthesis_set_whose_moved_task_has_no_design_is_not_judged(tmp_path, capsys):
+    """The rocker's span 0.01 % short of a branch defect (the reference's: at −79.75° the
+    precision points need two assemblies): the task moved by seed 1, however little, has
+    none; verify says that set is not judged and why, and the verdict is the book's own."""
+    import tomllib
+    from linkbook.check.reference import synthesis as ref
+    from linkbook.language.templates import from_data
+    source = next(p for p in templates.bundled() if p.stem == "function-log10")
+    data = tomllib.loads(source.read_text(encoding="utf-8"))
+    data["synthesis"]["theta4"] = [240, -79.66]
+    path = tmp_path / "edge.xlsx"
+    builder.build_file(from_data("edge", data), path)
+
+    def defect(span: float) -> bool:
+        x, _ = ref.precision_points(np.log10, 1, 10, 3, "chebyshev")
+        t2, t4 = ref.precision_angles(np.log10, x, 1, 10, *np.radians([30, 90, 240, span]))
+        return ref.function_generation(t2, t4, 100.0)["branch_defect"]
+    assert not defect(-79.66) and defect(-79.75)
+    report = verifier.verify(path)
+    [other] = report.input_sets
+    assert report.status == 0 and not math.isnan(report.inputs["a2"])
+    assert other.skipped == ("no task drawn near the book's has a design like the book's "
+                             "(the nearest: a branch defect)") and not other.checks
+    assert cli.main(["verify", str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[1] == f"input set 2 (seed 1) not judged: {other.skipped}"
+    assert lines[-1].startswith("all agree (at the book's own inputs; input set 2 not judged)")
