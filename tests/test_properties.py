@@ -76,10 +76,11 @@ def dimensions(t: templates.Template):
 
 def task_draw(task):
     """A function-generation task around the template's: x0 times 0.5 to 2 (f's domain kept
-    where it is the positive numbers) and the x range's width too, each range's start moved by up to ±45° and
-    its span times 0.5 to 1.5; its f, points and spacing as they are. Most design a linkage
-    for the other sheets to analyse (test_synthesis_book.py draws tasks of every outcome); some
-    end in a branch defect or a negative crank or rocker, and the book is #N/A throughout."""
+    where it is the positive numbers) and the x range's width too, each range's start moved
+    by up to ±45° and its span times 0.5 to 1.5; its f, points and spacing as they are. Most
+    design a linkage for the other sheets to analyse (test_synthesis_book.py draws tasks of
+    every outcome); some end in a branch defect or a negative crank or rocker, and the book is
+    #N/A throughout."""
     def moved(start_span):
         start, span = start_span
         return st.tuples(st.floats(-45.0, 45.0).map(lambda d: start + d),
