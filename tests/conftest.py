@@ -121,7 +121,9 @@ def pytest_terminal_summary(terminalreporter):
     for family in sorted({f for f, _ in TALLY}):
         terminalreporter.write_line(
             f"{family:24} {TALLY[(family, 'examples')]:5d} examples, "
-            f"{TALLY[(family, 'with rows that cannot close')]:5d} with rows that cannot close")
+            f"{TALLY[(family, 'with rows that cannot close')]:5d} with rows that cannot close"
+            + (f", {TALLY[(family, 'tasks with no design')]} tasks with no design"
+               if (family, "tasks with no design") in TALLY else ""))
 
 
 # ---------------------------------------------------------------- applications a test needs

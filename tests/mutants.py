@@ -161,6 +161,12 @@ MUTANTS = [
     Mutant("synthesis lengths: the crank and the rocker swapped (a = d/K2, c = d/K1)",
            "src/linkbook/book/synthesis.py", '"=IF(syn_K1=0,NA(),syn_d/syn_K1)"',
            '"=IF(syn_K2=0,NA(),syn_d/syn_K2)"', [("function-log10", [])], aimed_only=True),
+    # vanishes at the bundled task's x0 = 1: caught only where verify's other input set moves
+    # the task (input_sets.py)
+    Mutant("synthesis vanishing: the Chebyshev points' centre from x0² (x0 = 1 in the book)",
+           "src/linkbook/book/synthesis.py", 'f"=(syn_x0+syn_x1)/2-(syn_x1-syn_x0)/2"',
+           'f"=(syn_x0^2+syn_x1)/2-(syn_x1-syn_x0)/2"', [("function-log10", [])],
+           aimed_only=True),
     # Terms that vanish at the books' own inputs: caught only at verify's other input sets
     Mutant("vanishing: the crank's inertia torque −I·α left out (α = alpha_in = 0)",
            "src/linkbook/language/bodies.py",

@@ -206,3 +206,70 @@ def test_random_books_agree_at_their_other_set(family, tmp_path):
         bad = [(c.block, c.name, m) for c in other.checks for m in c.mismatches[:2]]
         assert report.status == 0 and not bad, (values, other.inputs, bad[:5])
     check()
+
+
+def test_a_synthesis_books_other_set_moves_its_task(tmp_path):
+    """A Chebyshev centre written (x0² + x1)/2 is right while x0 = 1, as in the bundled
+    function-log10 book: verify's other input set moves the task's x0 (and its other inputs,
+    as a user typing in the yellow cells would), redesigns with the reference and differs
+    there, in the x column and what follows it."""
+    path = _build(tmp_path, "function-log10")
+    wb = openpyxl.load_workbook(path)
+    record = read_record(wb)
+    cells = record.synthesis.points["x"]
+    for cell in cells:
+        text = wb["Synthesis"][cell].value
+        assert "(syn_x0+syn_x1)/2" in text, text
+        wb["Synthesis"][cell] = text.replace("(syn_x0+syn_x1)/2", "(syn_x0^2+syn_x1)/2")
+    edited = tmp_path / "edited-centre.xlsx"
+    wb.save(edited)
+    report = verifier.verify(edited)
+    assert all(c.ok for c in report.checks), "x0² = x0 at the book's own x0 = 1"
+    [other] = report.input_sets
+    assert other.skipped is None and other.inputs["syn_x0"] != 1 and not other.ok
+    assert {("Synthesis", c) for c in cells} <= other.differing()
+    assert report.status == 1
+    # the untouched book agrees there: the designed linkage is the reference's of the task
+    # moved (its crank, checked here against the reference's own design of that task)
+    [same] = verifier.verify(path).input_sets
+    assert same.ok and same.checks
+    moved = {key: same.inputs[f"syn_{key}"] for key in ("x0", "x1", "theta2_start",
+                                                        "theta2_span", "theta4_start",
+                                                        "theta4_span")}
+    assert {f"syn_{key}" for key in moved} <= set(same.changed)
+    from linkbook.check.reference import synthesis as ref
+    x, _ = ref.precision_points(np.log10, moved["x0"], moved["x1"], 3, "chebyshev")
+    theta2, theta4 = ref.precision_angles(np.log10, x, moved["x0"], moved["x1"], *np.radians(
+        [moved[k] for k in ("theta2_start", "theta2_span", "theta4_start", "theta4_span")]))
+    design = ref.function_generation(theta2, theta4, same.inputs["a1"])
+    assert same.inputs["a2"] == pytest.approx(design["a"], rel=1e-9)
+    assert same.inputs["branch"] == design["branch"][0]
+
+
+def test_a_synthesis_set_whose_moved_task_has_no_design_is_not_judged(tmp_path, capsys):
+    """The rocker's span 0.01 % short of a branch defect (the reference's: at −79.75° the
+    precision points need two assemblies): the task moved by seed 1, however little, has
+    none; verify says that set is not judged and why, and the verdict is the book's own."""
+    import tomllib
+    from linkbook.check.reference import synthesis as ref
+    from linkbook.language.templates import from_data
+    source = next(p for p in templates.bundled() if p.stem == "function-log10")
+    data = tomllib.loads(source.read_text(encoding="utf-8"))
+    data["synthesis"]["theta4"] = [240, -79.66]
+    path = tmp_path / "edge.xlsx"
+    builder.build_file(from_data("edge", data), path)
+
+    def defect(span: float) -> bool:
+        x, _ = ref.precision_points(np.log10, 1, 10, 3, "chebyshev")
+        t2, t4 = ref.precision_angles(np.log10, x, 1, 10, *np.radians([30, 90, 240, span]))
+        return ref.function_generation(t2, t4, 100.0)["branch_defect"]
+    assert not defect(-79.66) and defect(-79.75)
+    report = verifier.verify(path)
+    [other] = report.input_sets
+    assert report.status == 0 and not math.isnan(report.inputs["a2"])
+    assert other.skipped == ("no task drawn near the book's has a design like the book's "
+                             "(the nearest: a branch defect)") and not other.checks
+    assert cli.main(["verify", str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[1] == f"input set 2 (seed 1) not judged: {other.skipped}"
+    assert lines[-1].startswith("all agree (at the book's own inputs; input set 2 not judged)")

@@ -33,12 +33,21 @@ def in_load_domain(value: float) -> bool:
     return value == 0 or LOAD_RANGE[0] <= abs(value) <= LOAD_RANGE[1]
 
 
+TASK = "[synthesis]"      # the drawn task's entry among a synthesis template's draws
+
+
 def dimensions(t: templates.Template):
     """Lengths from 0.2 to 3 times the template's, offsets around it, any angle and branch;
-    masses and inertias 0 to 3 times the template's, loads and gravity −3 to 3 times."""
-    scale = max(abs(p.value) for p in t.parameters if p.kind == LENGTH_KIND)
-    draws = {}
+    masses and inertias 0 to 3 times the template's, loads and gravity −3 to 3 times. A
+    synthesis template's designed parameters are not drawn (the Synthesis sheet designs them:
+    a value drawn would be overridden): its task is, instead (task_draw)."""
+    designed = t.synthesis.designed() if t.synthesis is not None else {}
+    scale = max(abs(p.value) for p in t.parameters
+                if p.kind == LENGTH_KIND and p.symbol not in designed)
+    draws = {} if t.synthesis is None else {TASK: task_draw(t.synthesis)}
     for p in t.parameters:
+        if p.symbol in designed:
+            continue
         if p.kind == LENGTH_KIND:
             draws[p.symbol] = st.floats(0.2, 3.0).map(lambda f, v=p.value: f * v)
         elif p.kind == BRANCH_KIND:
@@ -64,12 +73,34 @@ def dimensions(t: templates.Template):
     return st.fixed_dictionaries(draws)
 
 
+def task_draw(task):
+    """A function-generation task around the template's: x0 times 0.5 to 2 (f's domain kept
+    where it is the positive numbers) and the x range's width too, each range's start moved
+    by up to ±45° and its span times 0.5 to 1.5; its f, points and spacing as they are. Most
+    design a linkage for the other sheets to analyse (test_synthesis_book.py draws tasks of
+    every outcome); some end in a branch defect or a negative crank or rocker, and the book is
+    #N/A throughout."""
+    def moved(start_span):
+        start, span = start_span
+        return st.tuples(st.floats(-45.0, 45.0).map(lambda d: start + d),
+                         st.floats(0.5, 1.5).map(lambda f: span * f))
+    return st.fixed_dictionaries({
+        "x": st.tuples(st.floats(0.5, 2.0), st.floats(0.5, 2.0)).map(
+            lambda fs: (task.x[0] * fs[0], task.x[0] * fs[0] + (task.x[1] - task.x[0]) * fs[1])),
+        "theta2": moved(task.theta2), "theta4": moved(task.theta4)})
+
+
 def with_values(t: templates.Template, values: dict) -> templates.Template:
-    params = tuple(dataclasses.replace(p, value=values[p.symbol]) for p in t.parameters)
+    params = tuple(dataclasses.replace(p, value=values.get(p.symbol, p.value))
+                   for p in t.parameters)
     grid = (values[t.mechanism.grid[0]], values[t.mechanism.grid[0]] * 0.5 + 10) \
         if t.mechanism.grid else ()
-    return dataclasses.replace(t, parameters=params, sweep=dataclasses.replace(t.sweep, step=15),
-                               grid_values=grid, stroke_step=30.0)
+    t = dataclasses.replace(t, parameters=params, sweep=dataclasses.replace(t.sweep, step=15),
+                            grid_values=grid, stroke_step=30.0)
+    if TASK in values:      # the task drawn, and the designed values designed from it anew
+        t = templates.with_design(dataclasses.replace(
+            t, synthesis=dataclasses.replace(t.synthesis, **values[TASK])))
+    return t
 
 
 def through_a_pivot(t: templates.Template) -> bool:
@@ -109,6 +140,8 @@ def test_random_dimensions_match_the_reference(family):
         TALLY[(family, "examples")] += 1
         if any(c.na_expected for c in checks):
             TALLY[(family, "with rows that cannot close")] += 1
+        if t.synthesis is not None and any(np.isnan(v) for v in t.values().values()):
+            TALLY[(family, "tasks with no design")] += 1
 
     check()
 

@@ -6,11 +6,14 @@ evaluates the book's formulas at a few other points of the inputs' domain and ju
 against the reference at the same inputs: every length, offset, angle, rate and load moved a
 little from the book's value (within ±SPREAD, an angle within ±ANGLE_SPREAD degrees), and every
 zero that may be otherwise (a rate, an offset, an angle, a mass, an inertia, a load, gravity)
-made a value of its kind's natural scale. The points come from a seed, so a verdict can be
-repeated. A set is kept only where the reference assembles the mechanism at the same sweep rows
-as at the book's own inputs, and within the domain (domain.py); else its geometric moves (the
-lengths, offsets and angles) are halved, up to SHRINKS times, and then left out: the book's own
-geometry with its rates and loads moved.
+made a value of its kind's natural scale. A synthesis book's task moves too (its x values as
+lengths do, the ranges' starts as angles, their spans by ±SPREAD), and the reference designs the
+linkage of the task moved. The points come from a seed, so a verdict can be repeated. A set is
+kept only where the reference assembles the mechanism at the same sweep rows as at the book's
+own inputs, and within the domain (domain.py, the task's rules); else its geometric moves (the
+lengths, offsets, angles and the task) are halved, up to SHRINKS times, and then left out: the
+book's own geometry with its rates and loads moved. A synthesis book's set is then not judged:
+its task moved has no design like the book's, which the set would not show.
 """
 from __future__ import annotations
 
@@ -24,10 +27,12 @@ import numpy as np
 from ..base import sheets as layout
 from ..base.record import BuildRecord
 from ..language.domain import LENGTH_UNITS, InputError, check_lengths_together, check_value
+from ..language.synthesis import task_of
 from ..language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
                                    OFFSET_KIND, RATE_KIND)
 from .checks import Check, differing, undetermined
 from .reading import mechanism_size, written_in
+from .synthesis import design_for, no_design_because, with_design
 
 DEFAULT_SEED = 1
 OTHER_SETS = 1          # input sets judged besides the book's own
@@ -41,6 +46,7 @@ GRAVITY = 9.81          # m/s²
 OMEGA = 10.0            # rad/s: a crank's speed, when the book's is 0
 OFFSET_SHARE = 0.05     # a zero offset becomes this share of the smallest length
 ANGLE = 10.0            # degrees: a zero angle parameter becomes this
+TASK = "syn_"           # a synthesis task's input in a set: its key so prefixed (its Excel name)
 
 
 @dataclass
@@ -48,7 +54,8 @@ class InputSet:
     """One other set of input values, its checks (no stored values: those belong to the
     book's own inputs) or why it was not judged."""
     number: int                         # the book's own inputs are set 1
-    inputs: dict[str, float]            # every input symbol's value in this set
+    inputs: dict[str, float]            # every input symbol's value in this set (and TASK + key:
+                                        # a synthesis task's inputs)
     changed: list[str]                  # the symbols whose value is not the book's
     checks: list[Check] = field(default_factory=list)
     skipped: str | None = None          # why the set was not judged
@@ -75,27 +82,55 @@ class InputSet:
 
 
 def other_sets(solver, record: BuildRecord, params: dict[str, float], angles: np.ndarray,
-               seed: int, count: int = OTHER_SETS) -> list[InputSet]:
+               seed: int, count: int = OTHER_SETS, task: dict[str, float] | None = None
+               ) -> list[InputSet]:
     """`count` input sets drawn from `seed` (each its own stream: set k is the same whatever
     `count` is), each kept where the reference assembles the mechanism at the same rows of
-    `angles` (the sweep's inputs) as at `params`, the book's inputs."""
+    `angles` (the sweep's inputs) as at `params`, the book's inputs (`task`: a synthesis
+    book's task inputs, check.synthesis.task_inputs)."""
     own = _assembled(solver, params, angles)
+    own_values = {**params, **{TASK + key: v for key, v in (task or {}).items()}}
+    # the geometric moves halved SHRINKS times, then none: the book's own geometry (its zero
+    # offsets and angles kept) with its rates and loads moved, which assembles alike; not for
+    # a synthesis book, whose geometry is its task
+    shrinks = [0.5 ** i for i in range(SHRINKS + 1)] + ([0.0] if record.synthesis is None
+                                                        else [])
     sets = []
     for k in range(count):
         number = k + 2
-        # the geometric moves halved SHRINKS times, then none: the book's own geometry (its
-        # zero offsets and angles kept) with its rates and loads moved, which assembles alike
-        for shrink in [0.5 ** i for i in range(SHRINKS + 1)] + [0.0]:
-            values = draw(record, solver.mechanism.input_kind, params, seed, number, shrink)
-            if values is not None and np.array_equal(_assembled(solver, values, angles), own):
+        for shrink in shrinks:
+            values = draw(record, solver.mechanism.input_kind, params, seed, number, shrink,
+                          task)
+            if values is not None and np.array_equal(
+                    _assembled(solver, {s: values[s] for s in params}, angles), own):
                 sets.append(InputSet(number, values,
-                                     [s for s in values if values[s] != params[s]
-                                      and not record.inputs[s].designed]))
+                                     [s for s in values if values[s] != own_values[s]
+                                      and not _designed(record, s)]))
                 break
         else:
-            sets.append(InputSet(number, dict(params), [], skipped=(
-                "no inputs drawn near the book's are within the domain (domain.py)")))
+            sets.append(InputSet(number, dict(params), [], skipped=_why_none(
+                record, solver.mechanism.input_kind, params, seed, number, task)))
     return sets
+
+
+def _why_none(record: BuildRecord, input_kind: str, params: dict[str, float], seed: int,
+              number: int, task: dict[str, float] | None) -> str:
+    """Why no set `number` was kept, in words: the domain, or (a synthesis book) what the
+    reference says of the task moved least."""
+    values = draw(record, input_kind, params, seed, number, 0.5 ** SHRINKS, task)
+    if record.synthesis is None or values is None:
+        return "no inputs drawn near the book's are within the domain (domain.py)"
+    ground = record.synthesis.task["ground"]
+    moved = {key: values[TASK + key] for key in task}
+    why = no_design_because(design_for(record, moved, values[ground]).result)
+    return ("no task drawn near the book's has a design like the book's (" +
+            (f"the nearest: {why}" if why else "the nearest assembles on other sweep rows")
+            + ")")
+
+
+def _designed(record: BuildRecord, symbol: str) -> bool:
+    info = record.inputs.get(symbol)
+    return info is not None and info.designed
 
 
 def _assembled(solver, params: dict[str, float], angles: np.ndarray) -> np.ndarray:
@@ -106,10 +141,12 @@ def _assembled(solver, params: dict[str, float], angles: np.ndarray) -> np.ndarr
 
 
 def draw(record: BuildRecord, input_kind: str, params: dict[str, float], seed: int,
-         number: int, shrink: float = 1.0) -> dict[str, float] | None:
+         number: int, shrink: float = 1.0, task: dict[str, float] | None = None
+         ) -> dict[str, float] | None:
     """Input set `number` of `seed`: every value moved, every zero that may be otherwise made
-    one of its natural scale; the geometric moves times `shrink`. None where the values leave
-    the domain (the caller shrinks them)."""
+    one of its natural scale; a synthesis book's `task` (its inputs by key) moved and the
+    linkage redesigned; the geometric moves times `shrink`. None where the values leave the
+    domain (the caller shrinks them)."""
     rng = random.Random(f"linkbook input set {seed} {number}")
     kinds = record.kinds()
     scales = _natural_scales(record, input_kind, params)
@@ -118,7 +155,14 @@ def draw(record: BuildRecord, input_kind: str, params: dict[str, float], seed: i
         u = rng.uniform(-1.0, 1.0)
         out[symbol] = _moved(kinds[symbol], params[symbol], scales.get(symbol), u,
                              shrink if kinds[symbol] in GEOMETRIC else 1.0)
-    _redesigned(record, params, out)
+    moved = {}
+    if record.synthesis is not None:
+        if task is None:
+            raise ValueError("a synthesis book's input set moves its task: give its inputs")
+        moved = _moved_task(task, rng, shrink)
+        if not _task_in_domain(record, moved):
+            return None
+        out = with_design(record, out, moved)   # never drawn: the reference's
     speed, accel = MOTION_SYMBOLS[input_kind]
     if params.get(accel) == 0 and speed in out:     # an acceleration of the speed's scale
         per = 1.0 if input_kind == ANGLE_KIND else mechanism_size(record, out)
@@ -131,21 +175,33 @@ def draw(record: BuildRecord, input_kind: str, params: dict[str, float], seed: i
                                written_in(record))
     except InputError:
         return None
-    return out
+    return {**out, **{TASK + key: value for key, value in moved.items()}}
 
 
-def _redesigned(record: BuildRecord, params: dict[str, float], out: dict[str, float]) -> None:
-    """A synthesis book's designed parameters follow its inputs, never drawn: function
-    generation's coefficients K1, K2, K3 do not depend on the ground length d, so the designed
-    lengths scale with it and the branch stays. The task's own inputs (x0, x1, the ranges, on
-    the Synthesis sheet) are not moved yet: a set writes the Mechanism sheet's inputs only."""
-    if record.synthesis is None:
-        return
-    ground = record.synthesis.task["ground"]
-    ratio = out[ground] / params[ground]
-    for symbol, info in record.inputs.items():
-        if info.designed:
-            out[symbol] = params[symbol] * (ratio if info.kind == LENGTH_KIND else 1.0)
+def _moved_task(task: dict[str, float], rng: random.Random, shrink: float
+                ) -> dict[str, float]:
+    """A synthesis task's inputs moved, one draw each in a fixed order: the ranges' starts as
+    angle parameters are, every other (x0, x1, the given x values, the spans) by up to
+    ±SPREAD of itself, as a length is (a zero x stays 0: f's domain may end there)."""
+    return {key: _moved(ANGLE_KIND if key.endswith("_start") else LENGTH_KIND, task[key],
+                        None, rng.uniform(-1.0, 1.0), shrink) for key in sorted(task)}
+
+
+def _task_in_domain(record: BuildRecord, moved: dict[str, float]) -> bool:
+    """Whether the task with these inputs is one the language accepts (x0 < x1, the spans
+    within ±360°, the given x ascending, f(x0) ≠ f(x1) both numbers)."""
+    spec = record.synthesis.task
+    given = [moved[f"x_{j}"] for j in range(1, spec["points"] + 1)] \
+        if spec["spacing"] == "given" else spec["spacing"]
+    table = {"f": spec["f"], "x": [moved["x0"], moved["x1"]], "points": spec["points"],
+             "theta2": [moved["theta2_start"], moved["theta2_span"]],
+             "theta4": [moved["theta4_start"], moved["theta4_span"]], "spacing": given,
+             "ground": spec["ground"], "designs": spec["designs"]}
+    try:
+        task_of({"synthesis": table}, record.kinds(), "")
+    except InputError:
+        return False
+    return True
 
 
 def _moved(kind: str, value: float, natural: float | None, u: float, shrink: float) -> float:
@@ -197,10 +253,17 @@ def _natural_scales(record: BuildRecord, input_kind: str, params: dict[str, floa
 
 def write_inputs(wb, record: BuildRecord, values: dict[str, float]) -> dict[str, object]:
     """Put `values` into the book's input cells (in memory); returns what the cells held."""
-    ws = wb[layout.MECH]
     held = {}
     for symbol, value in values.items():
-        cell = ws[record.inputs[symbol].cell]
-        held[symbol] = cell.value
-        cell.value = value
+        sheet, cell = input_cell(record, symbol)
+        held[symbol] = wb[sheet][cell].value
+        wb[sheet][cell].value = value
     return held
+
+
+def input_cell(record: BuildRecord, symbol: str) -> tuple[str, str]:
+    """(sheet, cell) of an input set's value: a parameter's on the Mechanism sheet, a synthesis
+    task's (TASK + its key) on the Synthesis sheet."""
+    if symbol in record.inputs:
+        return layout.MECH, record.inputs[symbol].cell
+    return record.synthesis.sheet, record.synthesis.inputs[symbol.removeprefix(TASK)]

@@ -59,16 +59,27 @@ def f_of(record: BuildRecord):
                                 dtype=float)
 
 
-def design_of(wb, record: BuildRecord, ground: float) -> Design:
-    """The reference's design of the task the book's Synthesis cells hold."""
+def task_inputs(wb, record: BuildRecord) -> dict[str, float]:
+    """The task's inputs as the book's Synthesis cells hold them, by the record's keys (x0 …
+    theta4_span, and x_1 … x_n where the x values are given)."""
     syn = record.synthesis
     ws = wb[syn.sheet]
-    task = {key: number_at(ws, syn.inputs[key], f"the task's {key}") for key in TASK_KEYS}
+    return {key: number_at(ws, cell, f"the task's {key}") for key, cell in syn.inputs.items()}
+
+
+def design_of(wb, record: BuildRecord, ground: float) -> Design:
+    """The reference's design of the task the book's Synthesis cells hold."""
+    return design_for(record, task_inputs(wb, record), ground)
+
+
+def design_for(record: BuildRecord, inputs: dict[str, float], ground: float) -> Design:
+    """The reference's design of the record's task with these inputs (task_inputs' keys) and
+    this ground length."""
+    spec = record.synthesis.task
+    task = {key: inputs[key] for key in TASK_KEYS}
     f = f_of(record)
-    spec = syn.task
     if spec["spacing"] == "given":
-        given = [number_at(ws, syn.inputs[f"x_{j}"], f"the given x_{j}")
-                 for j in range(1, spec["points"] + 1)]
+        given = [inputs[f"x_{j}"] for j in range(1, spec["points"] + 1)]
         x, y = ref.precision_points(f, task["x0"], task["x1"], spec["points"], given=given)
     else:
         x, y = ref.precision_points(f, task["x0"], task["x1"], spec["points"], spec["spacing"])
@@ -97,14 +108,38 @@ def designed_values(wb, record: BuildRecord, values: dict[str, float]) -> dict[s
     """`values` (the inputs read from the book) with the designed parameters' values."""
     if record.synthesis is None:
         return values
+    return with_design(record, values, task_inputs(wb, record))
+
+
+def with_design(record: BuildRecord, values: dict[str, float], inputs: dict[str, float]
+                ) -> dict[str, float]:
+    """`values` with the designed parameters' values: the reference's design of the task with
+    these `inputs` (task_inputs' keys) at the ground length `values` hold."""
     ground = values[record.synthesis.task["ground"]]
-    designed = design_of(wb, record, ground).designed
+    designed = design_for(record, inputs, ground).designed
     branch = record.synthesis.task["designs"]["branch"]
     if math.isnan(designed[branch]):
         # no linkage: its lengths NaN put every analysis cell at #N/A whichever branch the
         # references are told, and they want ±1
         designed[branch] = 1.0
     return {**values, **designed}
+
+
+def no_design_because(result: dict) -> str | None:
+    """Why the reference's design `result` is no linkage to analyse, in words; None where it
+    is one (_designed's test)."""
+    a, b, c = result["a"], result["b"], result["c"]
+    if result["singular"]:
+        return "its system is near-singular"
+    if result["branch_defect"]:
+        return "a branch defect"
+    if not all(math.isfinite(v) for v in (a, b, c)) or b <= 0:
+        return "no real coupler length"
+    if a <= 0 or c <= 0:
+        return "a negative crank or rocker"
+    if not any(math.isfinite(s) and s != 0 for s in result["branch"]):
+        return "a dead centre at every precision point"
+    return None
 
 
 def solve_bound(result: dict, points: int) -> float:

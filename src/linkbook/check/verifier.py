@@ -17,12 +17,13 @@ from pathlib import Path
 from ..base.pause import gc_paused
 from .checks import ABS_TOL, PER, TOLERANCE_RULE, Check, Mismatch, Rules
 from .context import Reference
-from .input_sets import DEFAULT_SEED, InputSet, other_sets, write_inputs
+from .input_sets import DEFAULT_SEED, InputSet, input_cell, other_sets, write_inputs
 from .judge import check_book, judge_book
 from .reading import (RECORD_ERRORS, UnusableFile, cell_order, formula_cells, input_column,
                       inputs_of, mechanism_size, read_book, record_mismatch, stored_values)
 from .report import Report, cell_ranges, cell_runs, likely_causes
 from .stored import check_replaced, check_stored, not_formulas
+from .synthesis import task_inputs
 
 # what the command, the package's face and the tests take from here
 __all__ = ["ABS_TOL", "DEFAULT_SEED", "PER", "TOLERANCE_RULE", "Check", "Mismatch", "Reference",
@@ -89,18 +90,18 @@ def _judge_other_sets(wb, record, evaluation, rules: Rules, params: dict, seed: 
     """The other input sets of `seed`, each evaluated by the engine that evaluated the book
     (only what moves with the inputs and is judged, again: engine/rerun.py) and judged with
     the book's input cells holding it; the cells restored after."""
-    from ..base import sheets as layout
     from ..engine.errors import EngineError
     from ..engine.rerun import rerun
     solver = Reference(record)
     sweep = record.sweep
     angles = input_column(wb[sweep.sheet], "A", sweep.rows, solver.mechanism.input_is_angle)
-    sets = other_sets(solver, record, params, angles, seed)
+    task = None if record.synthesis is None else task_inputs(wb, record)
+    sets = other_sets(solver, record, params, angles, seed, task=task)
     for input_set in (s for s in sets if s.skipped is None):
         changed = {k: input_set.inputs[k] for k in input_set.changed}
         held = write_inputs(wb, record, changed)
         try:
-            with rerun(evaluation, {(layout.MECH, record.inputs[k].cell): v
+            with rerun(evaluation, {input_cell(record, k): v
                                     for k, v in changed.items()}) as varied:
                 input_set.checks = judge_book(wb, record, varied, rules, own_inputs=False)
         except (UnusableFile, EngineError) as exc:
