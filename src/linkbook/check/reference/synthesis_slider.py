@@ -121,7 +121,8 @@ def _undesigned(condition: float) -> dict:
     nan3 = np.full(3, math.nan)
     return {"a": math.nan, "b": math.nan, "e": math.nan, "theta3": nan3, "branch": nan3,
             "branch_defect": False, "wrong_branch": False, "full_turn": None,
-            "singular": condition > SINGULAR_COND, "condition": condition}
+            "singular": condition > SINGULAR_COND, "condition": condition,
+            "ill_determined": False}
 
 
 def slider_crank_function_generation(theta2: Sequence[float], s: Sequence[float],
@@ -131,8 +132,9 @@ def slider_crank_function_generation(theta2: Sequence[float], s: Sequence[float]
     Returns a dict: a (signed), b, e (signed); `theta3`: the coupler's angle A→B per point;
     `branch` (+1, −1, 0 at a dead centre, per point), `branch_defect`, `wrong_branch` (a
     requested `branch` differs from some point's); `full_turn`: the crank can turn a full
-    revolution (b ≥ |a| + |e|); `singular` and `condition` (cond₂ of the linear form). Every
-    value is NaN where no slider-crank exists."""
+    revolution (b ≥ |a| + |e|); `singular` and `condition` (cond₂ of the linear form);
+    `ill_determined`: the loop closure's roots disagree beyond round-off. Every value is NaN
+    where no slider-crank exists or its digits are not determined."""
     theta2, s = np.asarray(theta2, dtype=float), np.asarray(s, dtype=float)
     if theta2.shape != (3,) or s.shape != (3,):
         raise ValueError("slider-crank function generation needs three pairs (θ2_j, s_j)")
@@ -142,7 +144,13 @@ def slider_crank_function_generation(theta2: Sequence[float], s: Sequence[float]
     condition = float(np.linalg.cond(m)) if m is not None else math.inf
     if not condition <= SINGULAR_COND:
         return _undesigned(condition)
-    root = loop_closure_solution(theta2, s / scale)
+    try:
+        root = loop_closure_solution(theta2, s / scale)
+    except ArithmeticError:
+        # roots from different first guesses differ beyond round-off: the task is so near a
+        # degenerate one (the coupler across the slider's line at every point, b → ∞) that its
+        # design has not the digits a check needs; stated as not designed, and why
+        return {**_undesigned(condition), "ill_determined": True}
     if root is None:
         return _undesigned(condition)
     a, b, e = (v * scale for v in root[:3])
@@ -151,4 +159,5 @@ def slider_crank_function_generation(theta2: Sequence[float], s: Sequence[float]
     return {"a": a, "b": b, "e": e, "theta3": np.array(root[3:]), "branch": sides,
             "branch_defect": len(used) > 1,
             "wrong_branch": branch is not None and bool(used - {branch}),
-            "full_turn": b >= abs(a) + abs(e), "singular": False, "condition": condition}
+            "full_turn": b >= abs(a) + abs(e), "singular": False, "condition": condition,
+            "ill_determined": False}
