@@ -39,7 +39,7 @@ TASK_INPUTS = (("x0", "start of x", "x0", RATIO), ("x1", "end of x", "x1", RATIO
 POINT_COLUMNS = (("j", "j"), ("x", "x_j"), ("y", "y_j = f(x_j)"), ("theta2_deg", "θ2_j [deg]"),
                  ("theta4_deg", "θ4_j [deg]"), ("theta2", "θ2_j [rad]"),
                  ("theta4", "θ4_j [rad]"), ("m1", "cos θ4_j"), ("m2", "−cos θ2_j"),
-                 ("m3", "1"), ("r", "cos(θ2_j − θ4_j)"), ("residual", "residual"),
+                 ("m3", "1 (× K3)"), ("r", "cos(θ2_j − θ4_j)"), ("residual", "residual"),
                  ("cross", "cross(B−B0, A−B0)"), ("branch", "branch"),
                  ("generated", "θ4 by the steps [rad]"),
                  ("error", "structural error [deg]"),
