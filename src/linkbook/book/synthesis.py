@@ -162,20 +162,29 @@ def _fit(ws, error_head: int) -> None:
                             if isinstance(ws.cell(row, c).value, str)])
 
 
+def _table_head(ws, head: int, title: str, columns) -> dict[str, str]:
+    """A table's bold title above row `head` and its headers in it, from TABLE_COLUMN on; the
+    column letter of each key."""
+    first = get_column_letter(TABLE_COLUMN)
+    ws[f"{first}{head - 1}"] = title
+    ws[f"{first}{head - 1}"].font = BOLD
+    ws.row_dimensions[head].height = HEAD_HEIGHT
+    letter = {}
+    for i, (key, text) in enumerate(columns, start=TABLE_COLUMN):
+        put_head(ws, head, i, text)
+        letter[key] = get_column_letter(i)
+    return letter
+
+
 def _points_table(ws, t, model, names, head, fx, fx0, fx1, d):
     """The precision-point table from row `head`: its columns' cells by key, the sums row's
     cells by key (the normal equations' entries) and the given x values' input cells."""
     task = t.synthesis
     n = task.points
-    first_letter = get_column_letter(TABLE_COLUMN)
-    ws[f"{first_letter}{head - 1}"] = "Precision points and the rows of Freudenstein's equation"
-    ws[f"{first_letter}{head - 1}"].font = BOLD
-    letter = {key: get_column_letter(i) for i, (key, _) in enumerate(POINT_COLUMNS,
-                                                                       start=TABLE_COLUMN)}
-    ws.row_dimensions[head].height = HEAD_HEIGHT
-    for i, (key, text) in enumerate(POINT_COLUMNS, start=TABLE_COLUMN):
-        put_head(ws, head, i, text)
-        ws.column_dimensions[get_column_letter(i)].width = 5 if key == "j" else 13
+    letter = _table_head(ws, head, "Precision points and the rows of Freudenstein's equation",
+                         POINT_COLUMNS)
+    for key, column in letter.items():
+        ws.column_dimensions[column].width = 5 if key == "j" else 13
     first = head + 1
     columns: dict[str, list[str]] = {key: [] for key, _ in POINT_COLUMNS}
     given: dict[str, str] = {}
@@ -229,7 +238,7 @@ def _points_table(ws, t, model, names, head, fx, fx0, fx1, d):
                     else RATIO)
     last = first + n - 1
     sums = {}
-    put_text(ws, f"{first_letter}{last + 1}", "Σ", BOLD)
+    put_text(ws, f"{get_column_letter(TABLE_COLUMN)}{last + 1}", "Σ", BOLD)
     for key in ("m11", "m12", "m13", "m22", "m23", "m33", "v1", "v2", "v3"):
         cell = f"{letter[key]}{last + 1}"
         set_formula(ws[cell], f"=SUM({letter[key]}{first}:{letter[key]}{last})")
@@ -358,16 +367,9 @@ def _error_table(ws, t, model, names, head, fx, fx0, fx1) -> dict:
     (the designed linkage, as every sheet analyses it) against the desired one; the largest
     error and where."""
     task = t.synthesis
-    first_letter = get_column_letter(TABLE_COLUMN)
-    ws[f"{first_letter}{head - 1}"] = (f"Structural error over the input range "
-                                       f"({ERROR_STEPS + 1} values of x): the designed linkage "
-                                       "against the desired y = f(x)")
-    ws[f"{first_letter}{head - 1}"].font = BOLD
-    letter = {key: get_column_letter(i) for i, (key, _) in enumerate(ERROR_COLUMNS,
-                                                                       start=TABLE_COLUMN)}
-    ws.row_dimensions[head].height = HEAD_HEIGHT
-    for i, (key, text) in enumerate(ERROR_COLUMNS, start=TABLE_COLUMN):
-        put_head(ws, head, i, text)
+    letter = _table_head(ws, head, f"Structural error over the input range ({ERROR_STEPS + 1} "
+                                   "values of x): the designed linkage against the desired "
+                                   "y = f(x)", ERROR_COLUMNS)
     out: dict = {key: [] for key, _ in ERROR_COLUMNS}
     for k in range(ERROR_STEPS + 1):
         r = head + 1 + k

@@ -115,15 +115,22 @@ def _first_guesses(theta2: np.ndarray, theta4: np.ndarray) -> list[list[float]]:
     sizes = np.array([s * sign for s in _GUESS_SIZES for sign in (1.0, -1.0)])
     a, c = (g.ravel()[:, None] for g in np.meshgrid(sizes, sizes, indexing="ij"))
     coupler = 1.0 + c * np.exp(1j * theta4) - a * np.exp(1j * theta2)   # one row per guess
+    return best_fitting(a, c, coupler)
+
+
+def best_fitting(a: np.ndarray, other: np.ndarray, coupler: np.ndarray) -> list[list[float]]:
+    """Guesses (a, b, other, θ3_j) from the coupler vectors A→B each implies (one row per
+    guess): b their mean length, θ3_j their angles; the least spread of lengths first."""
     lengths = np.abs(coupler)
     b = lengths.mean(axis=1)
     spread = np.ptp(lengths, axis=1) / np.maximum(b, 1e-300)
-    guesses = np.column_stack([a[:, 0], b, c[:, 0], np.angle(coupler)])
+    guesses = np.column_stack([a[:, 0], b, other[:, 0], np.angle(coupler)])
     return guesses[np.argsort(spread, kind="stable")].tolist()
 
 
-def _normalised(u: list[float]) -> list[float]:
-    """The same root with b ≥ 0 (b and θ3 + π describe the same coupler), angles in (−π, π]."""
+def normalised(u: list[float]) -> list[float]:
+    """The same root (a, b, c or e, θ3_j…) with b ≥ 0 (b and θ3 + π describe the same coupler),
+    angles in (−π, π]."""
     a, b, c, *theta3 = u
     if b < 0.0:
         b, theta3 = -b, [t + math.pi for t in theta3]
@@ -142,7 +149,7 @@ def loop_closure_solution(theta2: np.ndarray, theta4: np.ndarray) -> list[float]
         u = newton(fun, guess, [size] * 3 + [1.0] * n, RES_TOL * size,
                    angle_slots=tuple(range(3, 3 + n)))
         if u is not None and min(abs(u[0]), abs(u[1]), abs(u[2])) > _DEGENERATE:
-            roots.append(_normalised(u))
+            roots.append(normalised(u))
             if len(roots) == _AGREE:
                 break
     if not roots:

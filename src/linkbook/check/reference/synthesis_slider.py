@@ -27,7 +27,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .newton import RES_TOL, TANGENT, newton
-from .synthesis import SINGULAR_COND
+from .synthesis import SINGULAR_COND, best_fitting, normalised
 
 _GUESS_SIZES = tuple(10.0 ** (k / 2.0) for k in range(-2, 7))     # 0.1 .. 10³, √10 apart
 _AGREE = 3            # converged roots compared before one is accepted
@@ -71,19 +71,7 @@ def _first_guesses(theta2: np.ndarray, s: np.ndarray) -> list[list[float]]:
     sizes = np.array([0.0] + [v * sign for v in _GUESS_SIZES for sign in (1.0, -1.0)])
     a, e = (g.ravel()[:, None] for g in np.meshgrid(sizes[1:], sizes, indexing="ij"))
     coupler = s + 1j * e - a * np.exp(1j * theta2)                  # one row per guess
-    lengths = np.abs(coupler)
-    b = lengths.mean(axis=1)
-    spread = np.ptp(lengths, axis=1) / np.maximum(b, 1e-300)
-    guesses = np.column_stack([a[:, 0], b, e[:, 0], np.angle(coupler)])
-    return guesses[np.argsort(spread, kind="stable")].tolist()
-
-
-def _normalised(v: list[float]) -> list[float]:
-    """The same root with b ≥ 0 (b and θ3 + π are the same coupler), angles in (−π, π]."""
-    a, b, e, *theta3 = v
-    if b < 0.0:
-        b, theta3 = -b, [t + math.pi for t in theta3]
-    return [a, b, e] + [math.remainder(t, 2.0 * math.pi) for t in theta3]
+    return best_fitting(a, e, coupler)
 
 
 def loop_closure_solution(theta2: np.ndarray, s: np.ndarray) -> list[float] | None:
@@ -96,7 +84,7 @@ def loop_closure_solution(theta2: np.ndarray, s: np.ndarray) -> list[float] | No
         v = newton(fun, guess, [size] * 3 + [1.0] * 3, RES_TOL * size, angle_slots=(3, 4, 5))
         if v is not None and min(abs(v[0]), abs(v[1])) > _DEGENERATE \
                 and abs(v[1]) < _AT_INFINITY:
-            roots.append(_normalised(v))
+            roots.append(normalised(v))
             if len(roots) == _AGREE:
                 break
     if not roots:
