@@ -235,7 +235,9 @@ def _check_where(j, cell: str, x: np.ndarray, y: np.ndarray, peak: float, size: 
         c.na_agree += ok
     else:
         rows = np.flatnonzero(np.abs(y - peak) <= c.limit(peak))
-        ok = isinstance(got, (int, float)) and any(abs(float(got) - x[r]) <= 1e-9 for r in rows)
+        # an input as the book writes it, to the 1e-9 of any cell, relative where it is large
+        ok = isinstance(got, (int, float)) and any(
+            abs(float(got) - x[r]) <= 1e-9 * max(1.0, abs(x[r])) for r in rows)
     if not ok:
         from .checks import Mismatch
         c.mismatches.append(Mismatch(sheet, cell, f"an input where {word}", got))
