@@ -141,14 +141,22 @@ def loop_closure_solution(theta2: np.ndarray, theta4: np.ndarray) -> list[float]
     """(a, b, c, θ3_1..θ3_n) with d = 1 solving the loop closure at n = 3 precision points, by
     Newton from the first-guess grid; None if no guess converges to a linkage.
     The first _AGREE roots found must agree (the three-point system has one solution)."""
-    fun = _loop_closure(theta2, theta4)
     n = len(theta2)
+    return agreed_root(_loop_closure(theta2, theta4), _first_guesses(theta2, theta4), n,
+                       lambda u: min(abs(u[0]), abs(u[1]), abs(u[2])) > _DEGENERATE)
+
+
+def agreed_root(fun, guesses, n: int, accept) -> list[float] | None:
+    """Newton on `fun` (three lengths, then n angles) from each first guess in turn; the roots
+    `accept` takes, normalised; the first of them once _AGREE agree (one solution, found from
+    several guesses), None if none is found. Roots that disagree beyond round-off raise
+    ArithmeticError."""
     roots = []
-    for guess in _first_guesses(theta2, theta4):
+    for guess in guesses:
         size = max(1.0, *(abs(v) for v in guess[:3]))     # Newton's steps judged against it
         u = newton(fun, guess, [size] * 3 + [1.0] * n, RES_TOL * size,
                    angle_slots=tuple(range(3, 3 + n)))
-        if u is not None and min(abs(u[0]), abs(u[1]), abs(u[2])) > _DEGENERATE:
+        if u is not None and accept(u):
             roots.append(normalised(u))
             if len(roots) == _AGREE:
                 break

@@ -26,12 +26,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .newton import RES_TOL, TANGENT, newton
-from .synthesis import SINGULAR_COND, best_fitting, normalised
+from .newton import TANGENT
+from .synthesis import SINGULAR_COND, agreed_root, best_fitting
 
 _GUESS_SIZES = tuple(10.0 ** (k / 2.0) for k in range(-2, 7))     # 0.1 .. 10³, √10 apart
-_AGREE = 3            # converged roots compared before one is accepted
-_AGREE_TOL = 1e-7     # relative: the roots of one system differ by round-off only
 _DEGENERATE = 1e-9    # a crank or coupler shorter than this × L: no slider-crank
 # The loop also closes at infinity: a line infinitely far off, the coupler perpendicular to it
 # (b − |e| finite). Newton's tolerance accepts points far out on that asymptote; a root with b
@@ -77,23 +75,9 @@ def _first_guesses(theta2: np.ndarray, s: np.ndarray) -> list[list[float]]:
 def loop_closure_solution(theta2: np.ndarray, s: np.ndarray) -> list[float] | None:
     """(a, b, e, θ3_1..θ3_3) in units of L = 1 (s given in those units), by Newton from the
     first-guess grid; None if no guess converges to a slider-crank."""
-    fun = _loop_closure(theta2, s)
-    roots = []
-    for guess in _first_guesses(theta2, s):
-        size = max(1.0, *(abs(v) for v in guess[:3]))
-        v = newton(fun, guess, [size] * 3 + [1.0] * 3, RES_TOL * size, angle_slots=(3, 4, 5))
-        if v is not None and min(abs(v[0]), abs(v[1])) > _DEGENERATE \
-                and abs(v[1]) < _AT_INFINITY:
-            roots.append(normalised(v))
-            if len(roots) == _AGREE:
-                break
-    if not roots:
-        return None
-    first = np.array(roots[0][:3])
-    for other in roots[1:]:
-        if np.max(np.abs(np.array(other[:3]) - first)) > _AGREE_TOL * max(1.0, *abs(first)):
-            raise ArithmeticError(f"the loop closure's roots disagree: {roots[0]} and {other}")
-    return roots[0]
+    return agreed_root(_loop_closure(theta2, s), _first_guesses(theta2, s), 3,
+                       lambda v: min(abs(v[0]), abs(v[1])) > _DEGENERATE
+                       and abs(v[1]) < _AT_INFINITY)
 
 
 def slider_branches(a: float, e: float, theta2: np.ndarray, s: np.ndarray) -> np.ndarray:
