@@ -86,6 +86,7 @@ def test_norton_example_5_2_as_printed(example_5_2):
 
 
 def test_norton_example_5_2_passes_through_its_poses(example_5_2):
+    """The printed poses are consistent with the design: it meets them on its branch."""
     assert_meets_its_poses(example_5_2)
 
 
@@ -125,6 +126,7 @@ def test_norton_example_5_3_rotations_as_printed(example_5_3_by_pivots):
 
 
 def test_norton_example_5_3_passes_through_its_poses(example_5_3_by_pivots):
+    """The given pivots' design meets the printed poses on its branch."""
     assert_meets_its_poses(example_5_3_by_pivots)
 
 
