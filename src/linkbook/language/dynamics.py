@@ -15,6 +15,8 @@ from .bodies import METRES
 from .domain import check_value
 from .expressions import expression, is_comparison
 from .mechanisms import ANGLE_KIND, BRANCH_KIND
+from .steps import STEPS
+from .steps.step_type import slotted
 from .model import DescriptionError
 from .schema import mechanism_key_problem
 
@@ -68,9 +70,10 @@ def _points(c, field: str, names: list) -> list[str]:
 
 
 def _block_points(c) -> set[str]:
-    """The points blocks slide with (a slider's and a slot's point, a slide's p), as the steps
-    placed them."""
-    return {b.point for b in c.model.blocks}
+    """The points blocks slide with (a slider's and a slot's point, a slide's p, the pin in a
+    vector step's slotted link), as the steps' topologies say."""
+    made = slotted([(rec, STEPS[rec["type"]].topology(rec, None)) for rec in c.records])
+    return {m.block.point for _, m in made if m.block is not None}
 
 
 def _check_body(c, field: str, body: dict, known: set[str]) -> None:
