@@ -6,6 +6,8 @@ the independent Newton–Euler reference, judged by verify's own machinery, and 
 with the velocities of the independent kinematic reference (test_forces_book.py)."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -24,6 +26,7 @@ from linkbook.language import templates
 from linkbook.language.mechanisms import OFFSET_KIND
 from test_properties import in_load_domain
 
+ROOT = Path(__file__).resolve().parents[1]
 BUNDLED = ["quick-return", "shaper", "whitworth"]
 FAMILIES = [*BUNDLED, "slide-shaper"]
 EXAMPLES = examples(100, at_least=5)
@@ -124,3 +127,13 @@ def test_the_slide_shaper_is_the_vector_written_crank_shaper():
         efforts.append(np.array([values[(SHEET, f"{col}{r}")] for r in range(first, last + 1)],
                                 dtype=float))
     np.testing.assert_allclose(efforts[0], efforts[1], rtol=1e-9)
+
+
+def test_the_docs_worked_example_is_the_bundled_crank_shaper():
+    """docs/language.md's complete example with forces is templates/quick-return.toml, word for
+    word: what the tests above build and verify is what a reader copies."""
+    text = (ROOT / "docs" / "language.md").read_text(encoding="utf-8")
+    section = text[text.index("### A complete example with forces: the crank shaper"):]
+    example = section[section.index("```toml\n") + len("```toml\n"):]
+    assert example[:example.index("```")] == \
+        (ROOT / "templates" / "quick-return.toml").read_text(encoding="utf-8")
