@@ -243,11 +243,11 @@ def topology(description: Mapping) -> Topology:
         body.number = number
     _attach_entries(description.get("bodies") or [], bodies)
     top = Topology(bodies, fixed, crank, actuator, pairs)
-    _count(top, steps)
+    _count(top)
     return top
 
 
-def _count(top: Topology, steps: Steps) -> None:
+def _count(top: Topology) -> None:
     """Two unknowns per pin and per guide, one per slot and the effort: as many as the
     equations, three per moving body, or the links are no mechanism of one degree of
     freedom."""
