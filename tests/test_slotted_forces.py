@@ -6,6 +6,7 @@ the independent Newton–Euler reference, judged by verify's own machinery, and 
 with the velocities of the independent kinematic reference (test_forces_book.py)."""
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +17,7 @@ from hypothesis import strategies as st
 from conftest import examples
 from test_forces_book import (SHEET, assert_power_balance, assert_verified, coarse, load,
                               with_values)
+from linkbook.base.errors import InputError
 from linkbook.book import builder
 from linkbook.check.input_sets import input_cell, write_inputs
 from linkbook.check.judge import judge_book
@@ -137,3 +139,22 @@ def test_the_docs_worked_example_is_the_bundled_crank_shaper():
     example = section[section.index("```toml\n") + len("```toml\n"):]
     assert example[:example.index("```")] == \
         (ROOT / "templates" / "quick-return.toml").read_text(encoding="utf-8")
+
+
+def test_a_vector_step_no_step_is_carried_by_only_measures():
+    """The shaper without its ram (no slot in the lever): the vector O1→A carries nothing, so it
+    is a direction measured, no link, and a mass on the lever it would be is refused in one
+    line naming the entry (and so is one on a block at A: there is none)."""
+    data = tomllib.loads((ROOT / "templates" / "shaper.toml").read_text(encoding="utf-8"))
+    mech = data["mechanism"]
+    mech["steps"] = [s for s in mech["steps"] if s["type"] != "slot"]
+    mech["bodies"] = [b for b in mech["bodies"] if len(b["joints"]) > 1]
+    mech["loads"], mech["charts"], mech["output"] = [], [], "r3"
+    mech["links"] = [["O2", "A"]]
+    with pytest.raises(InputError) as caught:
+        templates.from_data("lever", data, origin="lever.toml")
+    assert str(caught.value).startswith("lever.toml: mechanism.bodies[1].joints: ")
+    assert "\n" not in str(caught.value)
+    mech["bodies"] = [{"joints": ["A"], "block": True, "mass": "m4"}]
+    with pytest.raises(InputError, match=r"^lever.toml: mechanism.bodies\[0\].joints: a block"):
+        templates.from_data("lever", data, origin="lever.toml")

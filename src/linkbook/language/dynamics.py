@@ -81,8 +81,9 @@ def _check_body(c, field: str, body: dict, known: set[str]) -> None:
     if body.get("block", False):
         if len(joints) != 1 or joints[0] not in _block_points(c):
             raise DescriptionError(f"{field}.joints", "a block is named by its one point, a "
-                                                      "slider's or a slot's point or a slide's "
-                                                      f"p (got {joints!r})")
+                                                      "slider's or a slot's point, a slide's p "
+                                                      "or the pin in a slotted link (got "
+                                                      f"{joints!r})")
         if "centre" in body:
             raise DescriptionError(f"{field}.centre", "a block's centre of mass is its point")
     else:
