@@ -223,11 +223,11 @@ class BodiesAndLoads:
         guide's."""
         if body.block:
             return body.spin
-        if body.frames:
-            return self.w.link_rates(*body.frames[0])
         for (a, b), rates in self.w.links.items():
             if body.holds(a, b):
                 return rates
+        if body.frames:
+            return self.w.link_rates(*body.frames[0])
         return self.w.link_rates(body.joints[0], body.joints[1])
 
     def _centre(self, where: str, body: Body, entry: dict) -> tuple[str, tuple[str, str]]:
