@@ -25,7 +25,8 @@ ROOT = Path(__file__).resolve().parents[1]
 FORCES = "tests/data/forces"      # the templates with masses and loads the force mutants aim at
 BUNDLED = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
 FAST_TESTS = ["tests/test_verdict.py", "tests/test_published.py", "tests/test_motion.py",
-              "tests/test_language.py", "tests/test_forces_book.py"]
+              "tests/test_language.py", "tests/test_forces_book.py",
+              "tests/test_slotted_forces.py"]
 NON_GRASHOF = ["--set", "a1=100", "--set", "a2=60", "--set", "a3=50", "--set", "a4=40"]
 DEAD_CENTRE = ["--set", "a1=10", "--set", "a2=20", "--set", "a3=4", "--set", "a4=6",
                "--set", "b3=3", "--set", "c3=2", "--step", "10"]
@@ -128,12 +129,22 @@ MUTANTS = [
            "src/linkbook/language/forces.py",
            'self.add(key, key, NEWTON, f"SQRT({sq(x)}+{sq(y)})", f"{what}, size", (2, pair))',
            "pass"),
-    Mutant("force slide: the block's own couple left out of the slide link's moments",
+    Mutant("force slide: a block's couple dropped from its turning guide's moments (a slide's "
+           "link, a slotted link)",
            "src/linkbook/language/steps/slide.py",
            """guard(det, lin((1, w.moment(link, pivot)),
                                                       (1, w.moment(blk, p)))))""",
            """guard(det, lin((1, w.moment(link, pivot)))))""",
-           [(f"{FORCES}/inverted-slider-crank.toml", [])]),
+           [(f"{FORCES}/inverted-slider-crank.toml", []),
+            (f"{FORCES}/quick-return.toml", ["--set", "I_blk=0.01"])]),
+    Mutant("force slotted centre: a slotted link's centre of mass on the wrong side (its frame, "
+           "pivot to pin, turned half a turn)",
+           "src/linkbook/language/bodies.py",
+           '        theta = self._frame_angle(f"{where}.centre.frame", name, a, b)\n',
+           '        theta = self._frame_angle(f"{where}.centre.frame", name, a, b)\n'
+           '        if body.frames:\n'
+           '            theta = Expr(f"{theta.at_least(SUM)}+PI()", SUM)\n',
+           [(f"{FORCES}/quick-return.toml", []), (f"{FORCES}/shaper.toml", [])]),
     Mutant("force slot: the slot's push on the plunger across the line, not across the slot",
            "src/linkbook/language/steps/slot.py",
            "mx, my = w.neg(mul(uy, lam)), mul(ux, lam)",

@@ -24,13 +24,16 @@ class SIMotion:
                 tuple(self.s[f"{k}_{name}"] * self.unit for k in ("ax", "ay")))
 
     def spin(self, a: str, b: str):
-        """ω and α of the rigid link through a and b: Δv = ω k × r, Δa = α k × r − ω² r, so
-        r × Δv = ω r² and r × Δa = α r²."""
+        """ω and α of the direction a→b (a rigid link's, or a slotted link's from its pivot a
+        to the pin b sliding in it): with r = b − a = |r| e^{iθ}, r × Δv = θ̇ r² and
+        r × Δa = θ̈ r² + 2 (r·Δv) θ̇ (the last term zero where |r| is constant)."""
         (p, v, acc), (q, w, bcc) = self.point(a), self.point(b)
         rx, ry = q[0] - p[0], q[1] - p[1]
+        dvx, dvy = w[0] - v[0], w[1] - v[1]
         r2 = rx * rx + ry * ry
-        return ((rx * (w[1] - v[1]) - ry * (w[0] - v[0])) / r2,
-                (rx * (bcc[1] - acc[1]) - ry * (bcc[0] - acc[0])) / r2)
+        omega = (rx * dvy - ry * dvx) / r2
+        return (omega, (rx * (bcc[1] - acc[1]) - ry * (bcc[0] - acc[0])
+                        - 2.0 * (rx * dvx + ry * dvy) * omega) / r2)
 
     def carried(self, a: str, b: str, u, v):
         """The point at (u, v) metres in the frame a→b (u along it), moving with that link:

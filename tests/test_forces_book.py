@@ -208,14 +208,17 @@ def dynamics(t: templates.Template):
 
 def guides(description: dict) -> dict[str, tuple[str, str]]:
     """The blocks on a moving line, by their point: the two points of the link they slide on
-    and turn with (a slide's block at p: the slide's link; a slider's along a link: that link).
+    and turn with (a slide's block at p: its line, point→p; a slider's along a link: that link;
+    the pin in a vector step's slotted link: its frame from→to).
     A block on a fixed line does not turn."""
     out = {}
     for step in description["steps"]:
-        if step["type"] == "slide":
-            out[step["p"]] = (step["pivot"], step["point"])
+        if step["type"] == "slide":     # its line N→P turns with it (N is the pivot at offset 0)
+            out[step["p"]] = (step["point"], step["p"])
         elif step["type"] == "slider" and "along" in step:
             out[step["point"]] = tuple(step["along"])
+        elif step["type"] == "vector":      # a slotted link's pin (where a block names it)
+            out[step["to"]] = (step["from"], step["to"])
     return out
 
 

@@ -318,8 +318,9 @@ def test_a_ram_pin_at_infinity_leaves_only_what_it_reaches_undetermined(tmp_path
     drawing's x extent takes it in: those are not determined (#N/A or any number, as a rate at
     a dead centre). The ram's own cells on those two rows, and its least and greatest travel
     in the summary, are named as not judged (their rounding bound is beyond their value:
-    exit 2), and every other cell is judged and agrees. The bundled shaper (|O1O2| = 60 mm)
-    never gets there: nothing left undetermined."""
+    exit 2), and every other cell is judged and agrees; every force on those rows is not
+    determined either (the shaper has masses and a cutting force). The bundled shaper
+    (|O1O2| = 60 mm) never gets there: nothing left undetermined."""
     source = next(p for p in templates.bundled() if p.stem == "shaper")
     text = source.read_text(encoding="utf-8")
     near = text.replace('between the pivots", unit = "mm", value = 60.0',
@@ -336,10 +337,17 @@ def test_a_ram_pin_at_infinity_leaves_only_what_it_reaches_undetermined(tmp_path
         assert code == {"bundled": 0, "near": 2}[name], out
     assert _dead_cells(reports["bundled"]) == {} and reports["bundled"]["not_judged"] == []
     guide_ends = 4 * 2        # B guide 1, 2 and B slot 1, 2, x and y each
+    # every force on those two rows (the effort, the pins, the guides, the shaking force): what
+    # the slot's push on the ram pin reaches, its determinant zero there; not the centres'
+    # places and accelerations
+    forces = {c["column"] for c in reports["near"]["checks"] if c["block"] == "Forces"
+              and c["column"][0] in "FNTs"}
     assert _dead_cells(reports["near"]) == {
         ("joints", "drawing rows"): guide_ends, ("frame", "drawing: extents"): 2,
         ("frame", "drawing: links x"): guide_ends // 2,
-        ("frame", "drawing: links y"): guide_ends // 2}
+        ("frame", "drawing: links y"): guide_ends // 2,
+        **{("Forces", column): 2 for column in forces}}
+    assert {"T12", "F35", "N35", "shaking_moment"} <= forces
     assert reports["near"]["mismatches"] == 0 and not reports["near"]["unjudged"]
     assert reports["near"]["not_judged"]
     wb = openpyxl.load_workbook(tmp_path / "near.xlsx")

@@ -17,7 +17,7 @@ from .fields import as_table
 from .mechanisms import TO_METRES
 from .model import ACCEL, LENGTH, DescriptionError
 from .steps import STEPS
-from .steps.step_type import Block
+from .steps.step_type import Block, slotted
 
 GROUND = 1
 # what can make a value another error than #N/A: a division (but by a whole number), a power
@@ -32,9 +32,12 @@ class Body:
     """One moving link: the points it holds, and what is known to act on it so far. A block
     (a step's sliding pair, docs/language.md "Sliding pairs") holds one point and slides on
     its guide: the link holding `guide`'s points (none: the ground), along `line` (cos, sin),
-    turning with it at `spin` (ω, α; None on a fixed line)."""
+    turning with it at `spin` (ω, α; None on a fixed line). `frames`: directions (A, B) that
+    turn with a link beside its joints' (a slotted link's, its pivot to the pin in its slot):
+    it holds A and B as a frame, to carry points and a centre, not as pins."""
     joints: list[str]
     rank: int
+    frames: list[tuple[str, str]] = field(default_factory=list)
     block: bool = False
     number: int = 0
     forces: list[tuple[str, str, str]] = field(default_factory=list)   # (Fx, Fy, at point)
@@ -44,7 +47,13 @@ class Body:
     spin: tuple[str, str] | None = None
 
     def holds(self, *points: str) -> bool:
-        return all(p in self.joints for p in points)
+        """Are these its joints, or the two points of one of its frames?"""
+        return (all(p in self.joints for p in points) or
+                any(set(points) == set(f) for f in self.frames))
+
+    def names(self, points: set[str]) -> bool:
+        """Do these points, two or more, name it (its joints and its frames' points)?"""
+        return len(points) > 1 and points <= {*self.joints, *(p for f in self.frames for p in f)}
 
 
 class BodiesAndLoads:
@@ -62,8 +71,8 @@ class BodiesAndLoads:
         self.dynamics = as_table(f"{self.field}.dynamics", data.get("dynamics") or {})
         self.centres: dict[str, tuple[str, str]] = {}     # "G3": (x, y) texts
         length_input = f"{{{compiler.input_key}}}" if compiler.swept else None
-        self.made = [(rec, STEPS[rec["type"]].topology(rec, length_input))
-                     for rec in compiler.records]
+        self.made = slotted([(rec, STEPS[rec["type"]].topology(rec, length_input))
+                             for rec in compiler.records])
         # (END, N) of the dyad side that is the linear actuator's length
         self.actuator = next((m.actuator for _, m in self.made if m.actuator is not None), None)
         self.bodies: list[Body] = []
@@ -109,30 +118,32 @@ class BodiesAndLoads:
                 drawn.append(joints)
         return drawn
 
-    def _links(self) -> list[list[str]]:
+    def _links(self) -> list[Body]:
         """The rigid sets the description implies, in the textbook's order: its `links`, then
         the steps' own (the cranks on one pivot are one link), but the actuator's side."""
-        drawn = self._drawn()
+        drawn = [Body(joints, 0) for joints in self._drawn()]
         implied, crank = [], None
         for rec, made in self.made:
             if made.crank:
                 (pivot, point), = made.links
                 if crank is None:
                     crank = [pivot, point]
-                    implied.append(crank)
+                    implied.append(Body(crank, 0))
                 elif pivot != crank[0]:
                     raise DescriptionError(rec["field"], "force analysis: a second crank on "
                                                          "another pivot (not supported)")
                 else:
                     crank.append(point)
                 continue
-            implied += [list(link) for link in made.links
-                        if set(link) != set(self.actuator or ())]
-        self.crank_joints = crank
+            implied += [Body(list(link), 0, frames=[made.frame] if made.frame else [])
+                        for link in made.links if set(link) != set(self.actuator or ())]
+        self.crank_joints = list(crank) if crank else None
         return drawn + implied
 
     def _bodies(self) -> list[Body]:
-        groups = [Body(list(j), rank) for rank, j in enumerate(self._links())]
+        groups = self._links()
+        for rank, g in enumerate(groups):
+            g.rank = rank
         groups = _merged(groups)
         fixed = set(self.c.ground)
         for rec, made in self.made:
@@ -147,8 +158,8 @@ class BodiesAndLoads:
             else:
                 raise DescriptionError(rec["field"], f"force analysis: the point {point} is "
                                                      f"carried by {a}→{b}, which is no rigid "
-                                                     f"link{self._vector_hint(a, b)}")
-        groups = [g for g in _merged(groups) if not set(g.joints) <= fixed]
+                                                     "link")
+        groups = [g for g in _merged(groups) if g.frames or not set(g.joints) <= fixed]
         self.fixed = fixed
         crank = next((g for g in groups if self.crank_joints and
                       set(self.crank_joints) <= set(g.joints)), None)
@@ -157,13 +168,6 @@ class BodiesAndLoads:
         for number, b in enumerate(bodies, start=GROUND + 1):
             b.number = number
         return bodies
-
-    def _vector_hint(self, a: str, b: str) -> str:
-        """Where a vector step measures the frame a→b (a slotted link written as the direction
-        from its pivot to a pin), how to make it a link."""
-        if any(m.turns is not None and set(m.turns) == {a, b} for _, m in self.made):
-            return " (a slotted link turned by a vector step: write it as a slide step)"
-        return ""
 
     def _block(self, block: Block) -> Body:
         """The block a sliding step makes: its point, its guide, its line and its spin (on
@@ -178,8 +182,7 @@ class BodiesAndLoads:
         joints = [str(p) for p in entry.get("joints") or []]
         block = bool(entry.get("block", False))
         found = [b for b in self.bodies if b.block == block and
-                 (set(joints) == set(b.joints) if block else
-                  len(set(joints)) > 1 and set(joints) <= set(b.joints))]
+                 (set(joints) == set(b.joints) if block else b.names(set(joints)))]
         if len(found) != 1:
             raise DescriptionError(f"{where}.joints", f"{joints} is no moving link of the "
                                                       "steps and links (a block, a slider's, "
@@ -223,6 +226,8 @@ class BodiesAndLoads:
         for (a, b), rates in self.w.links.items():
             if body.holds(a, b):
                 return rates
+        if body.frames:
+            return self.w.link_rates(*body.frames[0])
         return self.w.link_rates(body.joints[0], body.joints[1])
 
     def _centre(self, where: str, body: Body, entry: dict) -> tuple[str, tuple[str, str]]:
@@ -333,7 +338,8 @@ class BodiesAndLoads:
         lowest-numbered link holding it."""
         if "body" in load:
             wanted = {str(p) for p in load["body"]}
-            found = [b for b in self.bodies if wanted <= set(b.joints)]
+            found = [b for b in self.bodies if not b.block and b.names(wanted) or
+                     wanted <= set(b.joints)]
             found = [b for b in found if set(b.joints) == wanted] if len(found) > 1 else found
             if len(found) != 1 or (at is not None and at not in found[0].joints):
                 raise DescriptionError(f"{where}.body", f"no single moving link holds "
@@ -354,6 +360,7 @@ def _merged(groups: list[Body]) -> list[Body]:
                          None)
             if other is not None:
                 a.joints += [p for p in other.joints if p not in a.joints]
+                a.frames += [f for f in other.frames if f not in a.frames]
                 out.remove(other)
                 merged = True
                 break

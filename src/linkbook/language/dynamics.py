@@ -15,6 +15,8 @@ from .bodies import METRES
 from .domain import check_value
 from .expressions import expression, is_comparison
 from .mechanisms import ANGLE_KIND, BRANCH_KIND
+from .steps import STEPS
+from .steps.step_type import slotted
 from .model import DescriptionError
 from .schema import mechanism_key_problem
 
@@ -68,9 +70,10 @@ def _points(c, field: str, names: list) -> list[str]:
 
 
 def _block_points(c) -> set[str]:
-    """The points blocks slide with (a slider's and a slot's point, a slide's p), as the steps
-    placed them."""
-    return {b.point for b in c.model.blocks}
+    """The points blocks slide with (a slider's and a slot's point, a slide's p, the pin in a
+    vector step's slotted link), as the steps' topologies say."""
+    made = slotted([(rec, STEPS[rec["type"]].topology(rec, None)) for rec in c.records])
+    return {m.block.point for _, m in made if m.block is not None}
 
 
 def _check_body(c, field: str, body: dict, known: set[str]) -> None:
@@ -78,8 +81,9 @@ def _check_body(c, field: str, body: dict, known: set[str]) -> None:
     if body.get("block", False):
         if len(joints) != 1 or joints[0] not in _block_points(c):
             raise DescriptionError(f"{field}.joints", "a block is named by its one point, a "
-                                                      "slider's or a slot's point or a slide's "
-                                                      f"p (got {joints!r})")
+                                                      "slider's or a slot's point, a slide's p "
+                                                      "or the pin in a slotted link (got "
+                                                      f"{joints!r})")
         if "centre" in body:
             raise DescriptionError(f"{field}.centre", "a block's centre of mass is its point")
     else:

@@ -4,8 +4,8 @@ Every moving link with mass feels d'Alembert's inertia force −m·a_G at its ce
 the inertia torque −I_G·α, beside its weight m·g and the loads the description puts on it
 ([mechanism.dynamics], [[mechanism.bodies]], [[mechanism.loads]]: docs/language.md). The steps
 that placed the points forward are solved backward, last first: each loop step's group (a dyad's
-two links, a slider's rod and block, a slide's block and link, a slot's block) is in equilibrium
-under the known loads and the reactions of the groups solved before it, and its own joint
+two links, a slider's rod and block, a slide's or a slotted link's block and link, a slot's
+block) is in equilibrium under the known loads and the reactions of the groups solved before it, and its own joint
 reactions follow in closed form, written out by Cramer's rule over a determinant that is zero
 exactly where the group cannot carry a load (a dyad stretched straight, a rod square to its
 line): there the forces are #N/A. Each step type's group is solved in its module (steps

@@ -44,17 +44,21 @@ Every step that slides makes a block, a body of one point (its centre), on a gui
 - a ``slide``: at its ``p``, on the slide's link (its pivot and point), pinned to the links
   holding p (the crank);
 - a ``slot``: at its point, on its fixed line (the ground), and in the slot of the link of
-  ``slot_frame``: a pin pushed across the slot only (one unknown, no couple).
+  ``slot_frame``: a pin pushed across the slot only (one unknown, no couple);
+- a ``vector`` from a pivot U to a pin V, where another step places a point on the frame U→V
+  or slides on it and no other step's link holds both (a slotted link: the crank shaper's
+  rocker): at V, on the slotted link turning about U along U→V, pinned to the links holding V.
+A link's frame turns with it beside its joints (a slotted link's U→V; a slide's line, its
+point→p, which at offset 0 is the one a point is placed on): a carried point, a centre, a
+``bodies`` entry and a torque may name the link by it; its second point is no joint (no pin).
 A guide pushes its block across its line and holds it with a couple; the block turns with its
 guide (not at all on a fixed line). A sliding point is no joint of its guide: a ``links`` entry
 holding a point of the guide (``along`` and ``through``; the slide's pivot and point; the slot's
-``slot_through`` and ``slot_frame``) leaves it out, and one left with fewer than two points only
-draws. Numbering, as the textbook's: the ground 1, the crank 2, then the other bodies in the
+``slot_through`` and ``slot_frame``; a slotted link's pivot) leaves it out, and one left with
+fewer than two points only draws. Numbering, as the textbook's: the ground 1, the crank 2, then the other bodies in the
 order of the ``links`` entries, then those that only the steps name, then the blocks in the
 order of their steps. Links that are no mechanism of one degree of freedom (unknowns, 2 per pin
-and guide, 1 per slot and the effort, other than 3 per body) are refused; so is a slotted link
-written with a ``vector`` step (the direction from its pivot to a pin sliding in it): it is no
-link of the steps, a ``slide`` step is.
+and guide, 1 per slot and the effort, other than 3 per body) are refused.
 
 What ``forces`` returns (arrays over the rows; i < j body numbers, written together as "23", or
 with "_" between them, "2_13", in a mechanism of ten bodies or more):
@@ -157,8 +161,7 @@ def forces(description: Mapping, params: Mapping[str, float], angles_deg,
     the kinematic reference's (an expression reads each angle in the turn a book shows).
 
     Raises ValueError for a description it cannot analyse (a body entry naming no link, links
-    that do not make a mechanism of one degree of freedom, a slotted link written with a
-    `vector` step, ...)."""
+    that do not make a mechanism of one degree of freedom, ...)."""
     if length_unit not in LENGTH_UNITS:
         raise ValueError(f"length_unit must be one of {sorted(LENGTH_UNITS)}")
     rates = _RATES[(description.get("input") or {}).get("kind", "angle")]

@@ -57,7 +57,7 @@ class Loads:
 
     def centre(self, body: Body, spec: Mapping, what: str) -> str:
         frame = spec.get("frame")
-        if not isinstance(frame, (list, tuple)) or not set(map(str, frame)) <= set(body.joints):
+        if not isinstance(frame, (list, tuple)) or not body.names(set(map(str, frame))):
             raise ValueError(f"{what}.frame must be two joints of the body {body.joints}")
         name = f"{_OWN}G{body.number}"
         self.steps.append({"type": "point", "point": name,
@@ -158,16 +158,25 @@ class Rows:
 
     def angular_acceleration(self, body: Body | None) -> np.ndarray:
         """α of a body, from the motion of its first two joints: for r = P1 − P0,
-        Δa = α k×r − ω² r, so α = r×Δa / |r|². A block turns with its guide (a block on a
-        fixed line, the ground, does not turn); a slide's link as its line's column, whose
-        rates stay defined where its two joints meet (a slide of offset zero)."""
+        Δa = α k×r − ω² r, so α = r×Δa / |r|². A slotted link of one joint, from its frame:
+        the pin P1 slides along r = |r| e^{iθ}, so r×Δa = α |r|² + 2 (r·Δv) ω, ω = r×Δv / |r|².
+        A block turns with its guide (a block on a fixed line, the ground, does not turn); a
+        slide's link as its line's column, whose rates stay defined where its two joints meet
+        (a slide of offset zero)."""
         if body is None:
             return np.zeros(self.n)
         if body.block:
             return self.angular_acceleration(body.guide)
         if body.spin is not None:
             return self.array("alpha_" + body.spin)
-        (x0, y0), (x1, y1) = self.position(body.joints[0]), self.position(body.joints[1])
-        (a0, b0), (a1, b1) = self.rate("a", body.joints[0]), self.rate("a", body.joints[1])
+        p0, p1 = body.joints[:2] if len(body.joints) > 1 else body.frames[0]
+        (x0, y0), (x1, y1) = self.position(p0), self.position(p1)
+        (a0, b0), (a1, b1) = self.rate("a", p0), self.rate("a", p1)
         rx, ry = x1 - x0, y1 - y0
-        return cross(rx, ry, a1 - a0, b1 - b0) / (rx * rx + ry * ry)
+        r2 = rx * rx + ry * ry
+        if len(body.joints) > 1:
+            return cross(rx, ry, a1 - a0, b1 - b0) / r2
+        (u0, w0), (u1, w1) = self.rate("v", p0), self.rate("v", p1)
+        omega = cross(rx, ry, u1 - u0, w1 - w0) / r2
+        return (cross(rx, ry, a1 - a0, b1 - b0)
+                - 2.0 * omega * (rx * (u1 - u0) + ry * (w1 - w0))) / r2

@@ -10,6 +10,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from ..reference.step_type import Topology as StepTopology
+from ..reference.step_type import slotted
 from ..reference.steps import STEP_TYPES
 
 GROUND = 1
@@ -27,6 +28,17 @@ class Body:
     centre: str | None = None       # its centre of mass among the solved points
     spin: str | None = None         # an angle column that turns with it (a slide's link's line)
     guide: Body | None = None      # a block's guide (None: the ground, a fixed line)
+    # directions turning with it beside its joints' (a slotted link's pivot to its pin):
+    # their points name it, as a frame, not as pins
+    frames: list[tuple[str, str]] = field(default_factory=list)
+
+    def holds(self, a: str, b: str) -> bool:
+        """Does it hold a and b: as joints, or as the two points of one of its frames?"""
+        return {a, b} <= set(self.joints) or any({a, b} == set(f) for f in self.frames)
+
+    def names(self, points: set[str]) -> bool:
+        """Do these points, two or more, name it (its joints and its frames' points)?"""
+        return len(points) > 1 and points <= {*self.joints, *(p for f in self.frames for p in f)}
 
 
 @dataclass
@@ -78,6 +90,7 @@ def _merge(groups: list[Body]) -> list[Body]:
             return out
         a, b = pair
         a.joints += [p for p in b.joints if p not in a.joints]
+        a.frames += [f for f in b.frames if f not in a.frames]
         out.remove(b)
 
 
@@ -89,7 +102,7 @@ def _steps(description: Mapping) -> list[tuple[int, Mapping, StepTopology]]:
     for k, step in enumerate(description.get("steps") or []):
         kind = STEP_TYPES.get(step.get("type"))
         out.append((k, step, kind.topology(step, length_input) if kind else StepTopology()))
-    return out
+    return slotted(out)
 
 
 def _drawn_links(description: Mapping, steps: Steps) -> list[list[str]]:
@@ -102,18 +115,6 @@ def _drawn_links(description: Mapping, steps: Steps) -> list[list[str]]:
         out.append([p for p in joints
                     if not any(p == q and set(joints) & guide for q, guide in sliding)])
     return out
-
-
-def _turned_by_vector(steps: Steps, groups: Sequence[Sequence[str]]) -> str:
-    """The hint for a link that only a `vector` step turns (a slotted link written as the
-    direction from its pivot to a pin), where its two points are one of these groups' or
-    a frame that is no link: empty where there is none."""
-    for k, step, made in steps:
-        if made.turns is not None and any(set(made.turns) <= set(map(str, g)) for g in groups):
-            return (f"; {_where(k, step)} turns the link {step.get('from')}→{step.get('to')} "
-                    "as a direction to a pin that slides on it (a slotted link), which no step "
-                    "makes a link: write the slotted link as a slide step to give it forces")
-    return ""
 
 
 def _actuator(description: Mapping, steps: Steps) -> tuple[str, str] | None:
@@ -144,7 +145,8 @@ def _step_groups(steps: Steps, actuator, first_rank: int) -> tuple[list[Body], B
                 crank.joints.append(point)
             continue
         links = [link for link in made.links if set(link) != set(actuator or ())]
-        groups += [Body(list(link), first_rank + len(groups) + n)
+        groups += [Body(list(link), first_rank + len(groups) + n,
+                        frames=[made.frame] if made.frame else [])
                    for n, link in enumerate(links)]
     return groups, crank
 
@@ -156,7 +158,7 @@ def _carry_points(steps: Steps, groups: list[Body], fixed: set[str]) -> list[Bod
         if made.carried is None:
             continue
         point, a, b, stretches = made.carried
-        host = next((g for g in groups if a in g.joints and b in g.joints), None)
+        host = next((g for g in groups if g.holds(a, b)), None)
         if a in fixed and b in fixed:
             fixed.add(point)
         elif host is not None:
@@ -165,8 +167,7 @@ def _carry_points(steps: Steps, groups: list[Body], fixed: set[str]) -> list[Bod
             rank = max(g.rank for g in groups) + 1
             groups = _merge(groups + [Body([a, point], rank), Body([b, point], rank + 1)])
         else:
-            raise ValueError(f"{_where(k, step)}: its frame {a}→{b} is no rigid link"
-                             + _turned_by_vector(steps, [(a, b)]))
+            raise ValueError(f"{_where(k, step)}: its frame {a}→{b} is no rigid link")
     return _merge(groups)
 
 
@@ -174,7 +175,7 @@ def _link(bodies: Sequence[Body], fixed: set[str], a: str, b: str, what: str) ->
     """The moving body holding the points a and b (None: both are the ground's)."""
     if a in fixed and b in fixed:
         return None
-    found = next((g for g in bodies if a in g.joints and b in g.joints), None)
+    found = next((g for g in bodies if g.holds(a, b)), None)
     if found is None:
         raise ValueError(f"{what}: its line's link {a}→{b} is no rigid link of the steps")
     return found
@@ -207,7 +208,7 @@ def _attach_entries(entries: Sequence[Mapping], bodies: list[Body]) -> None:
         joints = {str(p) for p in entry.get("joints") or []}
         block = bool(entry.get("block", False))
         found = [b for b in bodies if b.block == block and (
-                 joints == set(b.joints) if block else len(joints) > 1 and joints <= set(b.joints))]
+                 joints == set(b.joints) if block else b.names(joints))]
         if len(found) != 1:
             raise ValueError(f"mechanism.bodies[{k}]: {sorted(joints)} is no moving link of the "
                              "steps and links (a block: [the point of a slider or a slot, or a "
@@ -229,11 +230,10 @@ def topology(description: Mapping) -> Topology:
              if len(joints) >= 2 and set(joints) != set(actuator or ())]
     implied, crank = _step_groups(steps, actuator, len(drawn))
     groups = _carry_points(steps, _merge(drawn + implied), fixed)
-    groups = [g for g in groups if not set(g.joints) <= fixed]
+    groups = [g for g in groups if g.frames or not set(g.joints) <= fixed]
     for g in groups:
         if len(set(g.joints) & fixed) >= 2:
-            raise ValueError(f"the link {g.joints} is held by two ground points: it cannot move"
-                             + _turned_by_vector(steps, [g.joints]))
+            raise ValueError(f"the link {g.joints} is held by two ground points: it cannot move")
     if crank is not None:          # the group the crank was merged into
         crank = next(g for g in groups if set(crank.joints) <= set(g.joints))
     bodies = ([crank] if crank else []) + [g for g in groups if g is not crank]
@@ -243,11 +243,11 @@ def topology(description: Mapping) -> Topology:
         body.number = number
     _attach_entries(description.get("bodies") or [], bodies)
     top = Topology(bodies, fixed, crank, actuator, pairs)
-    _count(top, steps)
+    _count(top)
     return top
 
 
-def _count(top: Topology, steps: Steps) -> None:
+def _count(top: Topology) -> None:
     """Two unknowns per pin and per guide, one per slot and the effort: as many as the
     equations, three per moving body, or the links are no mechanism of one degree of
     freedom."""
@@ -259,7 +259,7 @@ def _count(top: Topology, steps: Steps) -> None:
             f"{unknowns} unknowns (2 × {joints} pins, 2 × {guides} guides, {slots} slots, the "
             f"effort) for {equations} equations (3 × {len(top.bodies)} moving bodies: "
             f"{[b.joints for b in top.bodies]}): the links are no mechanism of one degree of "
-            "freedom" + _turned_by_vector(steps, [b.joints for b in top.bodies]))
+            f"freedom")
 
 
 def pins(top: Topology) -> list[tuple[int, Body, str]]:
@@ -290,7 +290,7 @@ def host(top: Topology, point: str) -> Body:
 def body_of(top: Topology, joints: Sequence[str], what: str) -> Body:
     """The body holding all these joints (the one holding exactly them where several do)."""
     wanted = {str(p) for p in joints}
-    found = [b for b in top.bodies if wanted <= set(b.joints)]
+    found = [b for b in top.bodies if wanted <= set(b.joints) or not b.block and b.names(wanted)]
     found = [b for b in found if set(b.joints) == wanted] if len(found) > 1 else found
     if len(found) != 1:
         raise ValueError(f"{what}: no single moving link holds {sorted(wanted)}")

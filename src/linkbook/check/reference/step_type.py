@@ -53,14 +53,35 @@ class Topology(NamedTuple):
     pivot are one body); `carried`: (point, A, B, stretches) for a point carried by the frame
     A→B, joining the link holding both (stretches: by distances, so a frame that is no link
     makes two); `pair`: its sliding pair; `actuator`: (P, R), the side whose length is the
-    input (a massless member of unknown force, no link); `turns`: (U, V), a direction it
-    measures that no step makes a link (a vector step's)."""
+    input (a massless member of unknown force, no link); `frame`: (U, V), a direction that
+    turns with its link beside its points' (a slide's: its point to p; a slotted link's: its
+    pivot to the pin in its slot); `turns`: (U, V), the direction a vector step measures, its
+    links and pair a slotted link's (pivot U) and the block at V's only where another step
+    is carried by U→V or slides on it and no other step's link holds both (`slotted`)."""
     links: tuple[tuple[str, ...], ...] = ()
     crank: bool = False
     carried: tuple[str, str, str, bool] | None = None
     pair: Pair | None = None
     actuator: tuple[str, str] | None = None
+    frame: tuple[str, str] | None = None
     turns: tuple[str, str] | None = None
+
+
+def slotted(steps: list) -> list:
+    """(k, step, Topology) of each step, a vector step's kept as a slotted link where it is
+    one (see Topology.turns), else reduced to the direction it measures."""
+    uses: set[frozenset] = set()
+    for _, _, made in steps:
+        if made.turns is not None:
+            continue
+        if made.carried is not None:
+            uses.add(frozenset(made.carried[1:3]))
+        if made.pair is not None:
+            uses |= {frozenset(made.pair.guide or ()), frozenset(made.pair.slotted or ())}
+    held = [set(link) for _, _, made in steps if made.turns is None for link in made.links]
+    return [(k, step, made) if made.turns is None or (
+                frozenset(made.turns) in uses and not any(set(made.turns) <= h for h in held))
+            else (k, step, Topology(turns=made.turns)) for k, step, made in steps]
 
 
 # A step type's topology, given its step and the key of a length input (None for an angle)

@@ -93,16 +93,21 @@ def rates(w, rec: dict) -> None:
 
 
 def forces(w, rec: dict) -> None:
-    """The block b at P slides on the link L (Q–N) turning about Q, along the line e, through
+    """The block at P on the slide's link (pivot Q, point N), through the force writer `w`."""
+    turning_guide(w, w.body(rec["pivot"], rec["point"]), w.body(rec["p"], block=True),
+                  rec["pivot"], rec["point"], rec["field"])
+
+
+def turning_guide(w, link, blk, pivot: str, name: str, where: str) -> None:
+    """The block b at P slides on the link L turning about Q (`pivot`), along the line e, through
     the force writer `w`: the guide pushes it with N·n (n = e turned +90°) and the couple
     M = −M_b(P). L turns about Q under −N·n at P and −M: N·((P−Q)·e) = M_L(Q) + M_b(P), zero
     when P is at the foot of Q on the line. The block's pin at P takes −N·n − ΣF_b; L's pivot
-    N·n − ΣF_L."""
-    p, pivot, n, where = rec["p"], rec["pivot"], rec["point"], rec["field"]
-    link, blk = w.body(pivot, n), w.body(p, block=True)
+    N·n − ΣF_L. `name` names the determinant's alias (a slide's point, a vector's key)."""
+    p = blk.joints[0]
     ex, ey = blk.line
     a = w.arm(p, pivot)
-    det = w.w.alias(f"_Dforce_{n}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
+    det = w.w.alias(f"_Dforce_{name}", lin((1, mul(ex, a[0])), (1, mul(ey, a[1]))))
     normal = w.guide_normal(link, blk, guard(det, lin((1, w.moment(link, pivot)),
                                                       (1, w.moment(blk, p)))))
     nx, ny = w.neg(mul(ey, normal)), mul(ex, normal)
@@ -115,9 +120,10 @@ def forces(w, rec: dict) -> None:
 
 def topology(rec: dict, length_input: str | None) -> Topology:
     """The link from the pivot to the point, and the block at p sliding on it along the
-    slide's line, turning with that line (N→P)."""
+    slide's line, turning with that line (N→P): the link's direction beside its points'
+    (at offset 0, where N is the pivot, the one that places a point on the link)."""
     n, p, pivot = rec["point"], rec["p"], rec["pivot"]
-    return Topology(links=((pivot, n),),
+    return Topology(links=((pivot, n),), frame=(n, p),
                     block=Block(p, rec["direction"], guide=(pivot, n), spin=(n, p),
                                 beside=frozenset({pivot, n})))
 

@@ -101,7 +101,7 @@ def forces(w, rec: dict) -> None:
 def topology(rec: dict, length_input: str | None) -> Topology:
     """The block at the point on its fixed line, its pin pushed across the slot of the link
     of `frame` (which also holds `slot_through`): it makes no link of its own."""
-    return Topology(block=Block(rec["point"], rec["direction"],
+    return Topology(block=Block(rec["point"], rec["direction"], slotted=rec["frame"],
                                 beside=frozenset({rec["slot_through"], *rec["frame"]})))
 
 

@@ -37,12 +37,14 @@ class Block:
     `line` ((cos, sin) texts) on the link holding the points `guide`, turning with the line
     through the two points `spin` (the motion writer's link_rates); on the ground where there
     is no guide or its points are the ground's. `beside`: the points of the links it slides on
-    (a `links` entry holding one of them does not hold `point`)."""
+    (a `links` entry holding one of them does not hold `point`). `slotted`: the two points of
+    the link in whose slot its pin also runs (a slot's), if any."""
     point: str
     line: tuple[str, str]
     guide: tuple[str, ...] = ()
     spin: tuple[str, str] | None = None
     beside: frozenset[str] = frozenset()
+    slotted: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -51,14 +53,34 @@ class Topology:
     points that move together); `crank`: its link turns with the input (the cranks on one
     pivot are one link); `carried`: (point, A, B) for a point carried by the frame A→B, which
     joins the link holding both; `block`: its sliding pair; `actuator`: (END, N), its side
-    whose length is the input (no link: a member of unknown force); `turns`: (A, B), a
-    direction it measures that no step makes a link (a vector step's)."""
+    whose length is the input (no link: a member of unknown force); `frame`: (A, B), a
+    direction that turns with its link beside its points' (a slide's, its point to p; a
+    slotted link's, its pivot to the pin sliding in it); `turns`: (A, B), the direction a
+    vector step measures, whose link and block are the slotted link's and its pin's only where
+    another step is carried by or slides on A→B and no step's link holds both (`slotted`)."""
     links: tuple[tuple[str, ...], ...] = ()
     crank: bool = False
     carried: tuple[str, str, str] | None = None
     block: Block | None = None
     actuator: tuple[str, str] | None = None
+    frame: tuple[str, str] | None = None
     turns: tuple[str, str] | None = None
+
+
+def slotted(made: list[tuple[dict, Topology]]) -> list[tuple[dict, Topology]]:
+    """Each step's topology, a vector step's as a slotted link (its pivot A, the block at B
+    sliding in it along A→B) where another step places a point on A→B or slides or runs on
+    it and no other step's link holds both; elsewhere a direction measured, no link."""
+    used: set[frozenset[str]] = set()
+    linked = [set(link) for _, m in made if m.turns is None for link in m.links]
+    for _, m in made:
+        if m.turns is None and m.carried is not None:
+            used.add(frozenset(m.carried[1:]))
+        if m.turns is None and m.block is not None:
+            used |= {frozenset(m.block.guide), frozenset(m.block.slotted)}
+    return [(rec, m if m.turns is None or (frozenset(m.turns) in used and
+                                           not any(set(m.turns) <= k for k in linked))
+             else Topology(turns=m.turns)) for rec, m in made]
 
 
 def no_topology(record: dict, length_input: str | None) -> Topology:

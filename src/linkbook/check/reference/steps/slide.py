@@ -140,9 +140,10 @@ def sliding(step: Mapping) -> Sliding:
 def topology(step: Mapping, length_input: str | None) -> Topology:
     """The link from the pivot to the point, and the block at p sliding on it along the
     slide's line, which turns with the link (its column stays defined where the link's two
-    points meet, a slide of offset zero)."""
+    points meet, a slide of offset zero); the line's direction, point→p, is the link's frame
+    (at offset zero the one that places a point on it)."""
     pivot, point, key = str(step["pivot"]), str(step["point"]), _slide_key(step)
-    return Topology(links=((pivot, point),),
+    return Topology(links=((pivot, point),), frame=(point, str(step["p"])),
                     pair=Pair(str(step["p"]), ("column", key), guide=(pivot, point),
                               beside=frozenset({pivot, point}), spin=key))
 

@@ -9,7 +9,7 @@ import numpy as np
 from ..geometry import direction
 from ..positions import Positions
 from ..rates import Rates
-from ..step_type import StepType, Topology
+from ..step_type import Pair, StepType, Topology
 from ..taylor import t_atan2, t_sqrt
 
 
@@ -37,9 +37,11 @@ def rates(motion: Rates, step: Mapping) -> None:
 
 
 def topology(step: Mapping, length_input: str | None) -> Topology:
-    """No link: a direction measured from one point to another (a slotted link written this
-    way is no link of the steps, which a refusal says)."""
-    return Topology(turns=(str(step.get("from")), str(step.get("to"))))
+    """The direction measured from U to V; where it is a slotted link (step_type.slotted), the
+    link turning about U, and the block at V sliding in it along U→V (its guide)."""
+    u, v = str(step.get("from")), str(step.get("to"))
+    return Topology(links=((u,),), frame=(u, v), turns=(u, v),
+                    pair=Pair(v, ("along", u, v, 0.0), guide=(u, v), beside=frozenset({u})))
 
 
 STEP = StepType(place=place, rates=rates, topology=topology)
