@@ -24,14 +24,14 @@ from .style import (BOLD, NOTE, TITLE, block_head, column_width, fit_heads, numb
 from .summary import grashof_formula
 from .synthesis import TABLE_COLUMN, _Block
 
-FORM = ("The standard dyad form (Norton §5.7), j = 2, 3: W·(e^{iβ_j} − 1) + "
-        "Z·(e^{iα_j} − 1) = δ_j; real: W_x(cos β_j − 1) − W_y sin β_j + Z_x(cos α_j − 1) − "
-        "Z_y sin α_j = δ_jx; imaginary: W_x sin β_j + W_y(cos β_j − 1) + Z_x sin α_j + "
-        "Z_y(cos α_j − 1) = δ_jy. The rocker's dyad: U and S with γ_j.")
-CONVENTION = ("At pose 1: W = A − A0 (crank), Z = P − A, U = B − B0 (rocker), S = P − B; "
-              "δ_j = P_j − P_1; α_j, β_j, γ_j are rotations from pose 1, angles from +x "
-              "counter-clockwise. cos ρ − 1 is written −2·sin²(ρ/2): the same number, "
-              "without cancellation.")
+FORM = ("The standard dyad form (Norton §5.7): W·(e^{iβ_j} − 1) + Z·(e^{iα_j} − 1) = δ_j, "
+        "j = 2, 3, for the crank's dyad; U and S with γ_j for the rocker's. In real and "
+        "imaginary parts:",
+        "W_x(cos β_j − 1) − W_y sin β_j + Z_x(cos α_j − 1) − Z_y sin α_j = δ_jx;  "
+        "W_x sin β_j + W_y(cos β_j − 1) + Z_x sin α_j + Z_y(cos α_j − 1) = δ_jy.")
+CONVENTION = ("At pose 1: W = A − A0, Z = P − A, U = B − B0, S = P − B; δ_j = P_j − P_1; "
+              "α_j, β_j, γ_j are rotations from pose 1. cos ρ − 1 is written −2·sin²(ρ/2): "
+              "the same number, without cancellation.")
 TITLES = {"motion": "Synthesis: motion generation, three poses of the coupler",
           "path": "Synthesis: path generation with prescribed timing, three points"}
 # the pose table's columns: key, header
@@ -54,9 +54,10 @@ def dyads_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) -> dic
     pose tables' columns."""
     task: DyadTask = t.synthesis
     put_text(ws, "A1", TITLES[task.kind], TITLE)
-    put_text(ws, "A2", FORM, NOTE)
-    put_text(ws, "A3", CONVENTION, NOTE)
-    put_text(ws, "A4", "Yellow cells are the task's inputs and free choices: change them and "
+    put_text(ws, "A2", FORM[0], NOTE)
+    put_text(ws, "A3", FORM[1], NOTE)
+    put_text(ws, "A4", CONVENTION, NOTE)
+    put_text(ws, "A5", "Yellow cells are the task's inputs and free choices: change them and "
                        "the design, and every sheet that analyses it, follow. #N/A: the design "
                        "does not exist.", NOTE)
     block_head(ws, "A", "Task", (("Quantity", 44), ("Symbol", 10), ("Value", 14), ("Unit", 8),
@@ -66,10 +67,12 @@ def dyads_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) -> dic
     head = 7
     poses = _pose_table(ws, head)
     b.row += 1
+    # the second table's headers level with the crank's dyad's title: a tall row there is no
+    # gap in the block
+    at_head = b.row + 1
     for dyad, turn in (("crank", ("b_re", "b_im")), ("rocker", ("g_re", "g_im"))):
         _dyad(b, dyad, poses, turn)
     _four_bar(b)
-    at_head = head + 3 + 4
     at_pose = _at_pose_table(ws, t, model, names, at_head)
     _checks(b, at_pose)
     _designed(b, task)
@@ -329,7 +332,7 @@ def _misses(ws, b: _Block, at: dict[str, list[str]], head: int) -> None:
     """The largest miss of the poses, beside the table: the distance of the coupler point
     from P_j and the coupler angle's miss, by the position steps."""
     col = TABLE_COLUMN + len(AT_POSE_COLUMNS) + 1
-    label, value = get_column_letter(col), get_column_letter(col + 3)
+    label, value = get_column_letter(col), get_column_letter(col + 1)
     angle = f"{at['miss_angle'][0]}:{at['miss_angle'][-1]}"
     distances = ",".join(f"SQRT({p}^2+{q}^2)" for p, q in zip(at["miss_x"], at["miss_y"]))
     for i, (key, text, formula, unit) in enumerate((
@@ -338,6 +341,8 @@ def _misses(ws, b: _Block, at: dict[str, list[str]], head: int) -> None:
              f"=MAX(MAX({angle}),-MIN({angle}))", DEG))):
         r = head + 1 + i
         put_text(ws, f"{label}{r}", text, BOLD)
+        ws.column_dimensions[label].width = max(ws.column_dimensions[label].width or 12,
+                                                column_width(text, bold=True))
         set_formula(ws[f"{value}{r}"], formula)
         ws[f"{value}{r}"].number_format = number_format(unit, b.t.length_unit)
         b.cells[key] = f"{value}{r}"
