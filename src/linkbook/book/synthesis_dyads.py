@@ -193,7 +193,8 @@ def _dyad(b: _Block, dyad: str, poses: dict[str, list[str]], turn: tuple[str, st
     t2 = b.add(f"{k}_t2", "t₂ = |D|²/t₁", "t₂", f"=IF({t1}>0,{d2}/{t1},0)", RATIO)
     b.add(f"{k}_condition", "condition number cond₂ = √(t₁/t₂)", "cond₂",
           f"=IF({t2}>0,SQRT({t1}/{t2}),NA())", RATIO)
-    singular = f"{t1}>{SINGULAR_COND ** 2:G}*{t2}"
+    # t₂ = 0 (the matrix of rank 1 or 0) is cond₂ = ∞
+    singular = f"OR({t2}<=0,{t1}>{SINGULAR_COND ** 2:G}*{t2})"
     b.add(f"{k}_system", f"the {dyad}'s system", "",
           f'=IF({singular},"{WORDS["singular"]}","{WORDS["solvable"]}")', "")
     for v in (first, second):
