@@ -300,3 +300,25 @@ def test_a_mechanism_that_does_not_read_the_design_is_refused():
     data["mechanism"]["steps"][2]["frame"] = ["B", "A"]
     with pytest.raises(InputError, match=r"bad.toml: synthesis.designs: .*point step"):
         from_data("bad", data, origin="bad.toml")
+
+
+def test_info_prints_the_design_its_branch_class_and_largest_miss():
+    """`linkbook info` of the bundled path book: the designed lengths the reference's, the
+    branch, Grashof's class and the largest miss of the points (round-off: it passes
+    through them)."""
+    from linkbook.apps.info import built_book, lines, summary
+    data = summary(built_book(str(TEMPLATES["path"])))
+    syn = data["synthesis"]
+    task = _data("path")["synthesis"]
+    (x, y), rotations = zip(*task["points"]), np.radians([task["beta"], task["alpha"],
+                                                          task["gamma"]])
+    expected = path_generation(x, y, *rotations)
+    for role, key in (("crank a2", "a"), ("coupler a3", "b"), ("rocker a4", "c"),
+                      ("ground a1", "d")):
+        assert syn["designed"][role] == pytest.approx(expected[key], rel=1e-9)
+    assert syn["grashof"] == expected["grashof"] == "Grashof: crank-rocker"
+    assert syn["branch"] == SYNTHESIS_WORDS["no defect"] and syn["designed"]["branch branch"] == 1
+    assert syn["largest_miss"] < 1e-9 * expected["d"]
+    text = "\n".join(lines(data))
+    assert "Synthesis: path generation, three points with timing" in text
+    assert "largest miss of the poses by the position steps" in text
