@@ -268,6 +268,16 @@ def test_libreoffice_recalculates_the_book_to_the_references_numbers(tmp_path, n
                                                 for c in report.checks if not c.ok]
 
 
+@pytest.mark.gnumeric
+def test_gnumeric_recalculates_the_path_book_to_the_references_numbers(tmp_path, needs):
+    needs("gnumeric")
+    path = tmp_path / "path.xlsx"
+    builder.build_file(load(str(TEMPLATES["path"])), path)
+    report = verify(path, engine="gnumeric")
+    assert report.status == 0, report.error or [(c.block, c.name, c.mismatches[:2])
+                                                for c in report.checks if not c.ok]
+
+
 BAD = [
     ("motion", "poses", {"poses": [[0, 0, 0], [1, 1, 400], [2, 0, 10]]}, "synthesis.poses"),
     ("motion", "beta", {"beta": [10, 500]}, "synthesis.beta"),
@@ -322,3 +332,16 @@ def test_info_prints_the_design_its_branch_class_and_largest_miss():
     text = "\n".join(lines(data))
     assert "Synthesis: path generation, three points with timing" in text
     assert "largest miss of the poses by the position steps" in text
+
+
+def test_a_book_in_metres_designs_the_same_linkage_in_metres():
+    """--unit m converts the poses with the lengths: the designed crank is the reference's
+    design of the task in mm, over 1000."""
+    from linkbook.language.templates import with_unit
+    t = with_unit(load(str(TEMPLATES["motion"])), "m")
+    task = _data("motion")["synthesis"]
+    x, y, alpha = (np.array([p[k] for p in task["poses"]]) for k in range(3))
+    expected = motion_generation(x, y, np.radians(alpha), crank_rotation=np.radians(
+        task["beta"]), rocker_rotation=np.radians(task["gamma"]))
+    assert t.values()["a2"] == pytest.approx(expected["a"] / 1000, rel=1e-9)
+    assert t.values()["xB0"] == pytest.approx(expected["B0"][0] / 1000, rel=1e-9)
