@@ -257,6 +257,36 @@ def test_editing_a_pose_in_the_book_redesigns_and_verifies(tmp_path):
     assert abs(after["a"] - load(str(TEMPLATES["motion"])).values()["a2"]) > 0.1
 
 
+OUTCOMES = [
+    ("motion", "singular: the crank turns with the coupler", {"beta": [-16.3, -4.3]},
+     "singular"),
+    ("motion", "two equal poses: a link of zero length",
+     {"poses": [[73.0, 90.7, 61.9], [73.0, 90.7, 61.9], [-14.6, 54.6, 57.6]]}, "degenerate"),
+    ("motion", "branch defect", {"beta": [20, 40], "gamma": [-30, 100]}, "branch_defect"),
+    ("path", "non-Grashof, one branch", {"alpha": [10, 20], "gamma": [60, -30]}, None),
+]
+
+
+@pytest.mark.parametrize("kind, what, task, outcome", OUTCOMES, ids=[o[1] for o in OUTCOMES])
+def test_every_outcome_verifies(tmp_path, kind, what, task, outcome):
+    """verify on books whose tasks end each way: every cell the reference's, or #N/A where
+    there is no design (the analysis sheets and the drawing too)."""
+    data = _data(kind, **task)
+    path = tmp_path / "task.xlsx"
+    built = builder.build_file(from_data("task", data), path)
+    report = verify(path)
+    assert report.status == 0, [(c.block, c.name, c.mismatches[:2]) for c in report.checks
+                                if not c.ok]
+    inputs = {key: built.workbook[SYNTHESIS][c].value
+              for key, c in built.record.synthesis.inputs.items()}
+    expected = _reference(kind, inputs)
+    if outcome is None:
+        assert not expected["grashof"].startswith("Grashof") and not expected["branch_defect"]
+    else:
+        assert expected[outcome]
+    assert math.isnan(report.inputs["a2"]) == (outcome is not None)
+
+
 @pytest.mark.libreoffice
 @pytest.mark.parametrize("kind", TEMPLATES)
 def test_libreoffice_recalculates_the_book_to_the_references_numbers(tmp_path, needs, kind):

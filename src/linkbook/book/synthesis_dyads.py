@@ -247,7 +247,7 @@ def _four_bar(b: _Block) -> None:
     b.add("v", "coupler point v = ((Z − S) × Z)/b, left of A→B", "v",
           f"=IF(syn_exists,((syn_Zx-syn_Sx)*syn_Zy-(syn_Zy-syn_Sy)*syn_Zx)/{along},NA())",
           LENGTH, name="syn_v")
-    b.add("offset", "coupler offset α_1 − ∠(Z − S), in (−180°, 180°]", "α_1 − θ3_1",
+    b.add("offset", "coupler offset ε = α_1 − ∠(Z − S), in (−180°, 180°]", "ε",
           "=IF(syn_exists,180-MOD(180-(syn_alpha1-DEGREES(ATAN2(syn_Zx-syn_Sx,"
           "syn_Zy-syn_Sy))),360),NA())", DEG, name="syn_offset")
 
