@@ -27,7 +27,6 @@ EPS = float(np.finfo(float).eps)
 # dyads' cond₂), never below the 1e-9 of any other cell; as check/synthesis.py's for three
 # precision points, where the margin covers the constant of Cramer's rule on a 2×2
 SOLVE_MARGIN = 1000.0
-ROLE_VALUES = {"crank": "a", "coupler": "b", "rocker": "c", "ground": "d"}
 
 
 @dataclass
@@ -343,7 +342,7 @@ def _check_at_poses(judge: _Judge) -> None:
         judge.run(f"at pose {key}", columns[f"at_{key}"], value, unit, lever)
     offset = math.degrees(res["coupler_offset"])
     if all(math.isfinite(v) for v in d.designed.values()):
-        placed = j.solver.solve(j.params, np.asarray(columns_values(judge, "at_theta2")))
+        placed = j.solver.solve(j.params, np.asarray(_crank_angles(judge)))
         keys = j.record.synthesis.task["keys"]
         x, y = (np.asarray(placed[keys[k]], dtype=float) for k in ("x", "y"))
         angle = np.degrees(np.asarray(placed[keys["theta3"]], dtype=float)) + offset
@@ -360,11 +359,11 @@ def _check_at_poses(judge: _Judge) -> None:
     judge.cell("largest_angle_miss", float(np.max(np.abs(miss_angle))), "deg", judge.lever)
 
 
-def columns_values(judge: _Judge, key: str) -> list[float]:
+def _crank_angles(judge: _Judge) -> list[float]:
     """The crank angles (degrees) the book places the designed linkage at: its own θ2_j
     cells where they hold numbers (judged above against the reference), else the
     reference's."""
-    got = judge.j.got(judge.sheet, list(judge.columns[key]))
+    got = judge.j.got(judge.sheet, list(judge.columns["at_theta2"]))
     want = np.degrees(np.asarray(judge.design.result["theta2"], dtype=float))
     return [float(g) if isinstance(g, (int, float)) and not isinstance(g, bool) else float(w)
             for g, w in zip(got, want)]

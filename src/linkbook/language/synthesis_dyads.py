@@ -79,9 +79,8 @@ def task_of(table: dict, kinds: dict[str, str], where: str) -> DyadTask:
         points = table["points"]
         x, y = (tuple(float(p[k]) for p in points) for k in range(2))
         alpha = (0.0, *_pair(table, "alpha", where))
-    task = DyadTask(kind, x, y, alpha, _pair(table, "beta", where), _pair(table, "gamma", where),
-                    _designs(table, kinds, where))
-    return task
+    return DyadTask(kind, x, y, alpha, _pair(table, "beta", where),
+                    _pair(table, "gamma", where), _designs(table, kinds, where))
 
 
 def _pair(table: dict, key: str, where: str) -> tuple[float, float]:
