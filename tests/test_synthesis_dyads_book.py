@@ -49,11 +49,13 @@ def _is_na(value) -> bool:
 
 
 class Book:
-    """A bundled synthesis book built once; each task is typed into its input cells and its
-    Synthesis sheet evaluated again by the vector engine, as a user's edit would be."""
+    """A bundled synthesis book built once (`pivots`: with both fixed pivots given instead of
+    the rotations); each task is typed into its input cells and its Synthesis sheet evaluated
+    again by the vector engine, as a user's edit would be."""
 
-    def __init__(self, kind: str):
-        self.built, _ = builder.make(load(str(TEMPLATES[kind])))
+    def __init__(self, kind: str, pivots: bool = False):
+        self.built, _ = builder.make(load(str(TEMPLATES[kind])) if not pivots else
+                                     from_data("pivots", _with_pivots(_data(kind))))
         self.syn = self.built.record.synthesis
         self.wanted = {(SYNTHESIS, c) for c in self.syn.cells.values()} | {
             (SYNTHESIS, c) for cells in self.syn.points.values() for c in cells}
@@ -68,9 +70,16 @@ class Book:
         return cell, column
 
 
+def _with_pivots(data: dict) -> dict:
+    """A motion task with both fixed pivots given (Norton §5.9) instead of the rotations."""
+    task = {k: v for k, v in data["synthesis"].items() if k not in ("beta", "gamma")}
+    return {**data, "synthesis": {**task, "pivots": {"crank": [0.0, 0.0],
+                                                     "rocker": [150.0, -30.0]}}}
+
+
 @pytest.fixture(scope="module")
 def books() -> dict[str, Book]:
-    return {kind: Book(kind) for kind in TEMPLATES}
+    return {**{kind: Book(kind) for kind in TEMPLATES}, "pivots": Book("motion", pivots=True)}
 
 
 def _degrees(angle) -> np.ndarray:
@@ -107,14 +116,19 @@ def tasks(draw):
             "mode": mode, **rotations}
 
 
-def _inputs(kind: str, task: dict) -> dict[str, float]:
-    """The task as the book's input cells hold it (degrees within ±180)."""
+def _inputs(kind: str, task: dict, pivots: bool = False) -> dict[str, float]:
+    """The task as the book's input cells hold it (degrees within ±180); `pivots`: the fixed
+    pivots of the four-bar that made the poses (moved by task["moved"]) for the rotations."""
     out = {}
     for j in (1, 2, 3):
         out[f"x{j}"], out[f"y{j}"] = task["x"][j - 1], task["y"][j - 1]
-    for key in ("beta", "gamma"):
+    for key in ("beta", "gamma") if not pivots else ():
         for j in (2, 3):
             out[f"{key}{j}"] = float(_degrees(task[key][j - 2]))
+    if pivots:
+        params, (dx, dy) = task["params"], task["moved"]
+        out.update(crank_x=params["ax"] + dx, crank_y=params["ay"] + dy,
+                   rocker_x=params["bx"] - dy, rocker_y=params["by"] + dx)
     alpha = task["alpha"] - (task["alpha"][0] if kind == "path" else 0.0)
     for j in (1, 2, 3) if kind == "motion" else (2, 3):     # a path's α_1 is 0
         out[f"alpha{j}"] = float(_degrees(alpha[j - 1]))
@@ -124,11 +138,16 @@ def _inputs(kind: str, task: dict) -> dict[str, float]:
 def _reference(kind: str, inputs: dict[str, float]) -> dict:
     x = [inputs[f"x{j}"] for j in (1, 2, 3)]
     y = [inputs[f"y{j}"] for j in (1, 2, 3)]
-    beta, gamma = (np.radians([inputs[f"{k}2"], inputs[f"{k}3"]]) for k in ("beta", "gamma"))
+    beta, gamma = (np.radians([inputs.get(f"{k}2", 0.0), inputs.get(f"{k}3", 0.0)])
+                   for k in ("beta", "gamma"))
     if kind == "path":
         return path_generation(x, y, beta, np.radians([inputs["alpha2"], inputs["alpha3"]]),
                                gamma)
     alpha = np.radians([inputs[f"alpha{j}"] for j in (1, 2, 3)])
+    if "crank_x" in inputs:
+        return motion_generation(x, y, alpha, crank_pivot=(inputs["crank_x"],
+                                                           inputs["crank_y"]),
+                                 rocker_pivot=(inputs["rocker_x"], inputs["rocker_y"]))
     return motion_generation(x, y, alpha, crank_rotation=beta, rocker_rotation=gamma)
 
 
@@ -145,8 +164,8 @@ def _bounds(expected: dict, inputs: dict[str, float]) -> tuple[float, float, flo
     return bound, size, max(1.0, size / shortest)
 
 
-def _check_book(kind: str, book: Book, task: dict) -> None:
-    inputs = _inputs(kind, task)
+def _check_book(kind: str, book: Book, task: dict, pivots: bool = False) -> None:
+    inputs = _inputs(kind, task, pivots)
     cell, column = book.evaluate(inputs)
     expected = _reference(kind, inputs)
     words = SYNTHESIS_WORDS
@@ -185,7 +204,7 @@ def _check_book(kind: str, book: Book, task: dict) -> None:
     assert cell("designed_branch") == sides.pop()
     assert cell("largest_miss") <= 1e-9 * size * lever
     assert cell("largest_angle_miss") <= math.degrees(1e-9 * lever)
-    if task["mode"] == "recover":
+    if task["mode"] == "recover" and task.get("moved", (0, 0)) == (0, 0):
         # the four-bar that made the poses, on its branch
         params = task["params"]
         assert cell("designed_branch") == params["branch"]
@@ -214,6 +233,16 @@ def test_random_path_tasks_give_the_references_design_or_na(books, task):
     from the four-bar that made them, the coupler's and rocker's rotations the free choices;
     as for motion generation, with α_1 = 0."""
     _check_book("path", books["path"], task)
+
+
+@settings(max_examples=examples(30), deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+@given(tasks(), st.sampled_from([(0.0, 0.0), (0.0, 0.0), (0.3, -0.2), (-1.0, 2.0)]))
+def test_random_motion_tasks_by_fixed_pivots(books, task, moved):
+    """A motion book whose dyads take their fixed pivots (Norton §5.9): the pivots of the
+    four-bar that made the poses give it back; moved pivots give the reference's design (the
+    circle condition, solved by lstsq there and by Cramer's rule on the sheet)."""
+    _check_book("motion", books["pivots"], {**task, "moved": moved}, pivots=True)
 
 
 @pytest.mark.parametrize("kind", TEMPLATES)
@@ -320,6 +349,11 @@ BAD = [
                   if k != "u"}}, "synthesis.designs"),
     ("path", "alpha missing", {"alpha": None}, "synthesis"),
     ("path", "gamma", {"gamma": [0, -361]}, "synthesis.gamma"),
+    ("motion", "both the rotations and the pivot", {"pivots": {"crank": [0, 0]}},
+     "synthesis.beta"),
+    ("motion", "neither", {"gamma": None}, "synthesis.gamma"),
+    ("path", "the crank's pivot drops the timing", {"pivots": {"crank": [0, 0]}},
+     "synthesis.pivots"),
 ]
 
 

@@ -47,6 +47,7 @@ AT_POSE_COLUMNS = (("j", "j"), ("theta2", "θ2_j = ∠W + β_j [deg]"),
                    ("angle", "coupler angle by the steps [deg]"), ("miss_x", "x − x_j"),
                    ("miss_y", "y − y_j"), ("miss_angle", "angle − α_j [deg]"))
 LENGTH_KEYS = ("dx", "dy", "cross", "x", "y", "miss_x", "miss_y")
+PIVOTS = {"crank": "A0", "rocker": "B0"}
 
 
 def dyads_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) -> dict:
@@ -71,7 +72,10 @@ def dyads_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) -> dic
     # gap in the block
     at_head = b.row + 1
     for dyad, turn in (("crank", ("b_re", "b_im")), ("rocker", ("g_re", "g_im"))):
-        _dyad(b, dyad, poses, turn)
+        if task.pivot(dyad) is None:
+            _dyad(b, dyad, poses, turn)
+        else:
+            _dyad_about_pivot(b, dyad, poses)
     _four_bar(b)
     at_pose = _at_pose_table(ws, t, model, names, at_head)
     _checks(b, at_pose)
@@ -107,7 +111,12 @@ def _task(b: _Block, task: DyadTask) -> dict[str, str]:
     if path:
         rotations.append(("alpha", "coupler", task.alpha[1:], "free choice"))
     rotations.append(("gamma", "rocker", task.gamma, "free choice"))
-    for key, link, values, what in rotations:
+    for dyad, pivot in task.pivots:
+        for axis, value in zip("xy", pivot):
+            inputs[f"{dyad}_{axis}"] = b.add(
+                f"{dyad}_{axis}", f"given: the {dyad}'s fixed pivot {PIVOTS[dyad]}, {axis}",
+                f"{axis}_{PIVOTS[dyad]}", value, LENGTH, name=f"syn_{dyad}_{axis}", given=True)
+    for key, link, values, what in (r for r in rotations if r[2] is not None):
         for j, value in zip((2, 3), values):
             inputs[f"{key}{j}"] = b.add(f"{key}{j}", f"{what}: the {link}'s rotation from "
                                         f"{'point' if path else 'pose'} 1 to {j}",
@@ -205,6 +214,67 @@ def _dyad(b: _Block, dyad: str, poses: dict[str, list[str]], turn: tuple[str, st
         b.add(f"{v}_y", f"{v}_y = Im(N_{v}/D)", f"{v}_y",
               f"=IF({singular},NA(),({im}*{d[0]}-{re}*{d[1]})/{d2})", LENGTH,
               name=f"syn_{v}y")
+
+
+def _dyad_about_pivot(b: _Block, dyad: str, poses: dict[str, list[str]]) -> None:
+    """One dyad about its given fixed pivot G (Norton §5.9): M_j's distance from G the same at
+    every pose, linear in m = M − P_1 (e_1 = P_1 − G, e^{−iα_j} = 1 + (cos α_j − 1) −
+    i·sin α_j): 2·[e^{−iα_j}·δ_j + (e^{−iα_j} − 1)·e_1]·m = −δ_j·(2e_1 + δ_j), j = 2, 3, by
+    Cramer's rule; its condition as the reference states it; then W = e_1 + m, Z = −m (U, S)
+    and the dyad's rotations β_j (γ_j), now results."""
+    first, second = ("W", "Z") if dyad == "crank" else ("U", "S")
+    k, key, g = dyad[0], ("beta" if dyad == "crank" else "gamma"), PIVOTS[dyad]
+    b.title(f"The {dyad}'s dyad about its given pivot {g}: |M_j − {g}| = |M_1 − {g}|, "
+            "linear in m = M − P_1, by Cramer's rule")
+    ex = b.add(f"{k}_e1_x", f"e_1 = P_1 − {g}, x", "e_1x", f"=syn_x1-syn_{dyad}_x", LENGTH)
+    ey = b.add(f"{k}_e1_y", "e_1, y", "e_1y", f"=syn_y1-syn_{dyad}_y", LENGTH)
+    rows, rhs, row_terms, rhs_terms = [], [], [], []
+    for j in (2, 3):
+        cr, ci = poses["c_re"][j - 1], poses["c_im"][j - 1]
+        dx, dy = poses["dx"][j - 1], poses["dy"][j - 1]
+        rows.append((
+            b.add(f"{k}_row{j}_x", f"row {j}: 2·Re(e^{{−iα_{j}}}·δ_{j} + (e^{{−iα_{j}}} − 1)·e_1)",
+                  f"R_{j}x", f"=2*((1+{cr})*{dx}+{ci}*{dy}+{cr}*{ex}+{ci}*{ey})", LENGTH),
+            b.add(f"{k}_row{j}_y", f"row {j}: 2·Im(…)", f"R_{j}y",
+                  f"=2*((1+{cr})*{dy}-{ci}*{dx}+{cr}*{ey}-{ci}*{ex})", LENGTH)))
+        rhs.append(b.add(f"{k}_rhs{j}", f"right-hand side {j}: −δ_{j}·(2e_1 + δ_{j})", f"r_{j}",
+                         f"=-({dx}*(2*{ex}+{dx})+{dy}*(2*{ey}+{dy}))", "length²"))
+        delta = f"SQRT({dx}^2+{dy}^2)"
+        row_terms.append(f"2*({delta}+SQRT({cr}^2+{ci}^2)*SQRT({ex}^2+{ey}^2))")
+        rhs_terms.append(f"{delta}*(2*SQRT({ex}^2+{ey}^2)+{delta})")
+    (r2x, r2y), (r3x, r3y) = rows
+    det = b.add(f"{k}_det", "determinant R_2x·R_3y − R_2y·R_3x", "D", f"={r2x}*{r3y}-{r2y}*{r3x}",
+                "length²")
+    mx = b.add(f"{k}_mx", "m_x by Cramer's rule", "m_x",
+               f"=IF({det}=0,NA(),({rhs[0]}*{r3y}-{r2y}*{rhs[1]})/{det})", LENGTH)
+    my = b.add(f"{k}_my", "m_y by Cramer's rule", "m_y",
+               f"=IF({det}=0,NA(),({r2x}*{rhs[1]}-{rhs[0]}*{r3x})/{det})", LENGTH)
+    f = b.add(f"{k}_F", "F = Σ entries² of the rows", "F",
+              f"={r2x}^2+{r2y}^2+{r3x}^2+{r3y}^2", "length²")
+    t1 = b.add(f"{k}_t1", "t₁ = (F + √(F² − 4D²))/2", "t₁",
+               f"=({f}+SQRT(MAX(0,{f}^2-4*{det}^2)))/2", "length²")
+    t2 = b.add(f"{k}_t2", "t₂ = D²/t₁ (the smallest singular value²)", "t₂",
+               f"=IF({t1}>0,{det}^2/{t1},0)", "length²")
+    b.add(f"{k}_condition", "condition: (largest row term + largest right-hand term/|m|)/√t₂",
+          "cond", f"=IF({t2}>0,(MAX({','.join(row_terms)})+MAX({','.join(rhs_terms)})"
+                  f"/MAX(SQRT({mx}^2+{my}^2),1E-300))/SQRT({t2}),NA())", RATIO)
+    singular = f"IF({t2}<=0,TRUE,{b.cells[f'{k}_condition']}>{SINGULAR_COND:G})"
+    b.add(f"{k}_system", f"the {dyad}'s system", "",
+          f'=IF({singular},"{WORDS["singular"]}","{WORDS["solvable"]}")', "")
+    for v, (x, y) in ((first, (f"{ex}+{mx}", f"{ey}+{my}")), (second, (f"-{mx}", f"-{my}"))):
+        b.add(f"{v}_x", f"{v}_x (#N/A where near-singular)", f"{v}_x",
+              f"=IF({singular},NA(),{x})", LENGTH, name=f"syn_{v}x")
+        b.add(f"{v}_y", f"{v}_y", f"{v}_y", f"=IF({singular},NA(),{y})", LENGTH,
+              name=f"syn_{v}y")
+    symbol = "β" if dyad == "crank" else "γ"
+    for j in (2, 3):
+        cr, ci = poses["c_re"][j - 1], poses["c_im"][j - 1]
+        vx = (f"syn_{first}x+{poses['dx'][j - 1]}-({cr}*syn_{second}x-{ci}*syn_{second}y)")
+        vy = (f"syn_{first}y+{poses['dy'][j - 1]}-({cr}*syn_{second}y+{ci}*syn_{second}x)")
+        b.add(f"{key}{j}", f"the {dyad}'s rotation from pose 1 to {j} (a result)",
+              f"{symbol}_{j}", f"=180-MOD(180-(DEGREES(ATAN2({vx},{vy}))"
+                               f"-DEGREES(ATAN2(syn_{first}x,syn_{first}y))),360)", DEG,
+              name=f"syn_{key}{j}")
 
 
 def _four_bar(b: _Block) -> None:

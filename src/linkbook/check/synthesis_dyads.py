@@ -55,18 +55,27 @@ def design_for(record: BuildRecord, inputs: dict[str, float]) -> DyadDesign:
     x = [inputs[f"x{j}"] for j in (1, 2, 3)]
     y = [inputs[f"y{j}"] for j in (1, 2, 3)]
     alpha = np.radians([inputs.get("alpha1", 0.0), inputs["alpha2"], inputs["alpha3"]])
-    rotations = {dyad: np.radians([0.0, inputs[f"{key}2"], inputs[f"{key}3"]])
-                 for dyad, key in (("crank", "beta"), ("rocker", "gamma"))}
-    result = ref.motion_generation(x, y, alpha, crank_rotation=rotations["crank"][1:],
-                                   rocker_rotation=rotations["rocker"][1:])
     points = np.array(x) + 1j * np.array(y)
     turn = alpha - alpha[0]
-    dyads = {}
-    for dyad, rotation in rotations.items():
+    given, dyads, rotations = {}, {}, {}
+    for dyad, key in (("crank", "beta"), ("rocker", "gamma")):
+        if f"{dyad}_x" in inputs:           # its fixed pivot given (Norton §5.9)
+            fixed = complex(inputs[f"{dyad}_x"], inputs[f"{dyad}_y"])
+            moving, condition = ref.dyad_from_fixed_pivot(points, turn, fixed)
+            given[f"{dyad}_pivot"] = (fixed.real, fixed.imag)
+            dyads[dyad] = (condition, fixed, moving)
+            # its rotations are results: the moving pivot carried by the coupler, about G
+            carried = points + np.exp(1j * turn) * (moving - points[0])
+            rotations[dyad] = np.angle((carried - fixed) / (moving - fixed))
+            continue
+        rotation = np.radians([0.0, inputs[f"{key}2"], inputs[f"{key}3"]])
+        given[f"{dyad}_rotation"] = rotation[1:]
         condition = ref.standard_form_condition(turn, rotation)
         pivots = ref.dyad_from_rotations(points, turn, rotation) \
             if condition <= ref.SINGULAR_COND else None
         dyads[dyad] = (condition, *(pivots or (_complex_nan(), _complex_nan())))
+        rotations[dyad] = rotation
+    result = ref.motion_generation(x, y, alpha, **given)
     return DyadDesign(points, alpha, rotations, result, dyads,
                       _designed(result, spec["designs"]))
 
@@ -123,9 +132,12 @@ def task_table(spec: dict, inputs: dict[str, float]) -> dict:
     """The [synthesis] table of the record's task with these inputs (the language checks it:
     input_sets keeps a moved task only where it is one the language accepts)."""
     pairs = [[inputs[f"x{j}"], inputs[f"y{j}"]] for j in (1, 2, 3)]
-    table = {"kind": spec["kind"], "designs": spec["designs"],
-             "beta": [inputs["beta2"], inputs["beta3"]],
-             "gamma": [inputs["gamma2"], inputs["gamma3"]]}
+    table = {"kind": spec["kind"], "designs": spec["designs"]}
+    for dyad, key in (("crank", "beta"), ("rocker", "gamma")):
+        if f"{dyad}_x" in inputs:
+            table.setdefault("pivots", {})[dyad] = [inputs[f"{dyad}_x"], inputs[f"{dyad}_y"]]
+        else:
+            table[key] = [inputs[f"{key}2"], inputs[f"{key}3"]]
     if spec["kind"] == "motion":
         return {**table, "poses": [p + [inputs[f"alpha{j}"]] for j, p in enumerate(pairs, 1)]}
     return {**table, "points": pairs, "alpha": [inputs["alpha2"], inputs["alpha3"]]}
@@ -224,7 +236,8 @@ def check_synthesis(j, inputs: dict[str, float]) -> None:
     judge = _Judge(j, design)
     _check_poses(judge)
     for dyad in ("crank", "rocker"):
-        _check_dyad(judge, dyad)
+        about_pivot = f"{dyad}_x" in inputs
+        (_check_dyad_about_pivot if about_pivot else _check_dyad)(judge, dyad)
     _check_four_bar(judge)
     _check_at_poses(judge)
     _check_words(judge)
@@ -280,6 +293,45 @@ def _check_dyad(judge: _Judge, dyad: str) -> None:
     for v, vector in ((first, m - g), (second, d.points[0] - m)):
         judge.cell(f"{v}_x", vector.real, "length")
         judge.cell(f"{v}_y", vector.imag, "length")
+
+
+def _check_dyad_about_pivot(judge: _Judge, dyad: str) -> None:
+    """The circle condition's rows, right-hand sides and determinant, its solution m and
+    the singular values behind its condition by numpy; the condition, W and Z (U and S) and
+    the dyad's rotations, now results, the reference's."""
+    d = judge.design
+    k, key = dyad[0], ("beta" if dyad == "crank" else "gamma")
+    first, second = ("W", "Z") if dyad == "crank" else ("U", "S")
+    condition, g, m = d.dyads[dyad]
+    turn = d.alpha - d.alpha[0]
+    rows, rhs = ref.circle_condition(d.points, turn, g)
+    first_arm = d.points[0] - g
+    judge.cell(f"{k}_e1_x", first_arm.real, "length")
+    judge.cell(f"{k}_e1_y", first_arm.imag, "length")
+    for j in (2, 3):
+        judge.cell(f"{k}_row{j}_x", rows[j - 2, 0], "length")
+        judge.cell(f"{k}_row{j}_y", rows[j - 2, 1], "length")
+        judge.cell(f"{k}_rhs{j}", rhs[j - 2], "length²")
+    det = float(np.linalg.det(rows))
+    sigma = np.linalg.svd(rows, compute_uv=False)
+    solution = np.linalg.solve(rows, rhs) if det != 0 else np.full(2, math.nan)
+    judge.cell(f"{k}_det", det, "length²")
+    judge.cell(f"{k}_mx", solution[0], "length", lever=min(condition, ref.SINGULAR_COND))
+    judge.cell(f"{k}_my", solution[1], "length", lever=min(condition, ref.SINGULAR_COND))
+    for name, value in (("F", float(np.sum(sigma ** 2))), ("t1", sigma[0] ** 2),
+                        ("t2", sigma[1] ** 2)):
+        judge.cell(f"{k}_{name}", value, "length²")
+    if condition <= ref.SINGULAR_COND:
+        judge.cell(f"{k}_condition", condition, "-", lever=condition)
+    else:
+        _beyond(judge, f"{k}_condition", ref.SINGULAR_COND)
+    judge.text(f"{k}_system", WORDS["singular" if condition > ref.SINGULAR_COND
+                                   else "solvable"])
+    for v, vector in ((first, m - g), (second, d.points[0] - m)):
+        judge.cell(f"{v}_x", vector.real, "length")
+        judge.cell(f"{v}_y", vector.imag, "length")
+    for j in (2, 3):
+        judge.cell(f"{key}{j}", math.degrees(d.rotations[dyad][j - 1]), "deg", judge.lever)
 
 
 def _beyond(judge: _Judge, key: str, limit: float) -> None:

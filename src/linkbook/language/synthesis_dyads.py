@@ -46,10 +46,16 @@ class DyadTask:
     x: tuple[float, float, float]              # the coupler point P_j
     y: tuple[float, float, float]
     alpha: tuple[float, float, float]          # motion: the poses' angles; path: (0, α2, α3)
-    beta: tuple[float, float]                  # the crank's rotations β2, β3
-    gamma: tuple[float, float]                 # the rocker's rotations γ2, γ3
+    beta: tuple[float, float] | None           # the crank's rotations β2, β3 (None: its pivot)
+    gamma: tuple[float, float] | None          # the rocker's rotations γ2, γ3 (None: its pivot)
     designs: tuple[tuple[str, str], ...]       # (role, parameter symbol)
     keys: tuple[tuple[str, str], ...] = ()     # the model's keys: theta3, theta4, x, y of P
+    # the fixed pivots given instead of a dyad's rotations (Norton §5.9): (dyad, (x, y))
+    pivots: tuple[tuple[str, tuple[float, float]], ...] = ()
+
+    def pivot(self, dyad: str) -> tuple[float, float] | None:
+        """The dyad's given fixed pivot ("crank" or "rocker"), or None: its rotations given."""
+        return dict(self.pivots).get(dyad)
 
     def designed(self) -> dict[str, str]:
         """{parameter symbol: role} of the parameters the task designs."""
@@ -64,7 +70,9 @@ class DyadTask:
     def in_unit(self, factor: float) -> DyadTask:
         """The task with its positions in another length unit (times `factor`)."""
         return replace(self, x=tuple(v * factor for v in self.x),
-                       y=tuple(v * factor for v in self.y))
+                       y=tuple(v * factor for v in self.y),
+                       pivots=tuple((dyad, (gx * factor, gy * factor))
+                                    for dyad, (gx, gy) in self.pivots))
 
 
 def task_of(table: dict, kinds: dict[str, str], where: str) -> DyadTask:
@@ -79,8 +87,16 @@ def task_of(table: dict, kinds: dict[str, str], where: str) -> DyadTask:
         points = table["points"]
         x, y = (tuple(float(p[k]) for p in points) for k in range(2))
         alpha = (0.0, *_pair(table, "alpha", where))
-    return DyadTask(kind, x, y, alpha, _pair(table, "beta", where),
-                    _pair(table, "gamma", where), _designs(table, kinds, where))
+    pivots = tuple((dyad, tuple(float(v) for v in xy))
+                   for dyad, xy in table.get("pivots", {}).items())
+    rotations = {}
+    for dyad, key in (("crank", "beta"), ("rocker", "gamma")):
+        if (key in table) == (dyad in dict(pivots)):
+            raise InputError(f"{where}.{key}", f"give the {dyad}'s rotations ({key}) or its "
+                                               f"fixed pivot (pivots.{dyad}), one of the two")
+        rotations[key] = _pair(table, key, where) if key in table else None
+    return DyadTask(kind, x, y, alpha, rotations["beta"], rotations["gamma"],
+                    _designs(table, kinds, where), pivots=pivots)
 
 
 def _pair(table: dict, key: str, where: str) -> tuple[float, float]:
@@ -169,6 +185,30 @@ def _standard_form(turn: np.ndarray, rotation: np.ndarray, delta: np.ndarray
     return complex(w), complex(z)
 
 
+def _about_pivot(turn: np.ndarray, delta: np.ndarray, first: complex
+                 ) -> tuple[complex, complex] | None:
+    """(W, Z) of the dyad about a given fixed pivot G (`first` = P_1 − G): m = M − P_1 from
+    |M_j − G| = |M_1 − G|, 2·Re(conj(e^{−iα_j}·δ_j + (e^{−iα_j} − 1)·e_1)·m) =
+    −δ_j·(2e_1 + δ_j), j = 2, 3; None if near-singular."""
+    q = np.exp(-1j * turn)
+    rows = 2.0 * (q * delta + (q - 1.0) * first)
+    m = np.column_stack([rows.real, rows.imag])
+    if not np.linalg.cond(m) <= SINGULAR_COND:
+        return None
+    rhs = -(delta.real * (2 * first.real + delta.real) + delta.imag * (2 * first.imag
+                                                                       + delta.imag))
+    mx, my = np.linalg.solve(m, rhs)
+    return first + complex(mx, my), -complex(mx, my)
+
+
+def _dyad(task: DyadTask, dyad: str, turn, delta, p1: complex):
+    pivot = task.pivot(dyad)
+    if pivot is not None:
+        return _about_pivot(turn, delta, p1 - complex(*pivot))
+    rotation = task.beta if dyad == "crank" else task.gamma
+    return _standard_form(turn, np.radians(rotation), delta)
+
+
 def design(task: DyadTask) -> dict[str, float]:
     """{role: value} of the designed parameters, NaN where the design does not exist or cannot
     be used (a near-singular dyad, a link too short, a branch defect)."""
@@ -176,8 +216,7 @@ def design(task: DyadTask) -> dict[str, float]:
     p = np.array(task.x) + 1j * np.array(task.y)
     alpha = np.radians(task.alpha)
     turn, delta = alpha[1:] - alpha[0], p[1:] - p[0]
-    crank = _standard_form(turn, np.radians(task.beta), delta)
-    rocker = _standard_form(turn, np.radians(task.gamma), delta)
+    crank, rocker = (_dyad(task, dyad, turn, delta, p[0]) for dyad in ("crank", "rocker"))
     if crank is None or rocker is None:
         return nothing
     (w, z), (u, s) = crank, rocker
@@ -185,8 +224,9 @@ def design(task: DyadTask) -> dict[str, float]:
     a, b, c, d = abs(w), abs(z - s), abs(u), abs(b0 - a0)
     if min(a, b, c, d) <= DEGENERATE * max(a, b, c, d, float(np.max(np.abs(delta)))):
         return nothing
-    theta2 = np.angle(w) + np.radians([0.0, *task.beta])
-    theta4 = np.angle(u) + np.radians([0.0, *task.gamma])
+    carried = np.exp(1j * (alpha - alpha[0]))       # the coupler's rotations from pose 1
+    theta2 = np.angle(w + (p - p[0]) + (carried - 1.0) * -z)
+    theta4 = np.angle(u + (p - p[0]) + (carried - 1.0) * -s)
     reach, rocker_arm = a0 - b0 + a * np.exp(1j * theta2), c * np.exp(1j * theta4)
     cross = (np.conj(rocker_arm) * reach).imag
     sides = set(np.sign(cross[np.abs(cross) > DEAD_CENTRE * c * np.abs(reach)]).tolist())
