@@ -14,7 +14,7 @@ from __future__ import annotations
 from openpyxl.utils import get_column_letter
 
 from ..base.sheets import SYNTHESIS, SYNTHESIS_WORDS as WORDS
-from ..language.excel import acos_or_na
+from ..language.excel import acos_or_na, in_domain_or_na
 from ..language.model import DEG, LENGTH, RATIO, Model
 from ..language.synthesis_dyads import DEAD_CENTRE, DEGENERATE, SINGULAR_COND, DyadTask
 from ..language.templates import Template
@@ -198,10 +198,10 @@ def _dyad(b: _Block, dyad: str, poses: dict[str, list[str]], turn: tuple[str, st
     entries = "+".join(f"{re}^2+{im}^2" for re, im in (*B, *C))
     f = b.add(f"{k}_F", "F = Σ|entries|² of [B_j, C_j]", "F", f"={entries}", RATIO)
     t1 = b.add(f"{k}_t1", "t₁ = (F + √(F² − 4|D|²))/2", "t₁",
-               f"=({f}+SQRT(MAX(0,{f}^2-4*{d2})))/2", RATIO)
+               f"=({f}+{in_domain_or_na('SQRT', f'MAX(0,{f}^2-4*{d2})')})/2", RATIO)
     t2 = b.add(f"{k}_t2", "t₂ = |D|²/t₁", "t₂", f"=IF({t1}>0,{d2}/{t1},0)", RATIO)
     b.add(f"{k}_condition", "condition number cond₂ = √(t₁/t₂)", "cond₂",
-          f"=IF({t2}>0,SQRT({t1}/{t2}),NA())", RATIO)
+          f"=IF({t2}>0,{in_domain_or_na('SQRT', f'{t1}/{t2}')},NA())", RATIO)
     # t₂ = 0 (the matrix of rank 1 or 0) is cond₂ = ∞
     singular = f"OR({t2}<=0,{t1}>{SINGULAR_COND ** 2:G}*{t2})"
     b.add(f"{k}_system", f"the {dyad}'s system", "",
@@ -252,12 +252,13 @@ def _dyad_about_pivot(b: _Block, dyad: str, poses: dict[str, list[str]]) -> None
     f = b.add(f"{k}_F", "F = Σ entries² of the rows", "F",
               f"={r2x}^2+{r2y}^2+{r3x}^2+{r3y}^2", "length²")
     t1 = b.add(f"{k}_t1", "t₁ = (F + √(F² − 4D²))/2", "t₁",
-               f"=({f}+SQRT(MAX(0,{f}^2-4*{det}^2)))/2", "length²")
+               f"=({f}+{in_domain_or_na('SQRT', f'MAX(0,{f}^2-4*{det}^2)')})/2", "length²")
     t2 = b.add(f"{k}_t2", "t₂ = D²/t₁ (the smallest singular value²)", "t₂",
                f"=IF({t1}>0,{det}^2/{t1},0)", "length²")
     b.add(f"{k}_condition", "condition: (largest row term + largest right-hand term/|m|)/√t₂",
           "cond", f"=IF({t2}>0,(MAX({','.join(row_terms)})+MAX({','.join(rhs_terms)})"
-                  f"/MAX(SQRT({mx}^2+{my}^2),1E-300))/SQRT({t2}),NA())", RATIO)
+                  f"/MAX(SQRT({mx}^2+{my}^2),1E-300))/{in_domain_or_na('SQRT', t2)},NA())",
+          RATIO)
     singular = f"IF({t2}<=0,TRUE,{b.cells[f'{k}_condition']}>{SINGULAR_COND:G})"
     b.add(f"{k}_system", f"the {dyad}'s system", "",
           f'=IF({singular},"{WORDS["singular"]}","{WORDS["solvable"]}")', "")
@@ -341,14 +342,14 @@ def _at_pose_table(ws, t: Template, model: Model, names: dict[str, str], head: i
         g = f"RADIANS({c['theta4']})"
         reach = (f"(syn_xA0-syn_xB0+syn_a*COS({a}))", f"(syn_yA0-syn_yB0+syn_a*SIN({a}))")
         cross = f"syn_c*COS({g})*{reach[1]}-syn_c*SIN({g})*{reach[0]}"
-        s2 = f"({reach[0]}^2+{reach[1]}^2)"
+        s2 = f"{reach[0]}^2+{reach[1]}^2"      # a sum of squares: its root needs no test
         formulas = {
             "theta2": f"=IF(syn_exists,DEGREES(ATAN2(syn_Wx,syn_Wy))+{rotation[0]},NA())",
             "theta4": f"=IF(syn_exists,DEGREES(ATAN2(syn_Ux,syn_Uy))+{rotation[1]},NA())",
             "cross": f"={cross}",
             "branch": f"=IF(ABS({c['cross']})<={DEAD_CENTRE:G}*syn_c*SQRT({s2}),0,"
                       f"SIGN({c['cross']}))",
-            "mu": f"=DEGREES({acos_or_na(f'(syn_b^2+syn_c^2-{s2})/(2*syn_b*syn_c)')})",
+            "mu": f"=DEGREES({acos_or_na(f'(syn_b^2+syn_c^2-({s2}))/(2*syn_b*syn_c)')})",
             "x": steps.formula(task.key("x")), "y": steps.formula(task.key("y")),
             "angle": f"=180-MOD(180-DEGREES({steps.formula(task.key('theta3'))[1:]})"
                      f"-syn_offset,360)",
