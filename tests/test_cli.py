@@ -28,7 +28,8 @@ def test_list_shows_every_bundled_template():
     assert names == sorted(["fourbar", "slider-crank", "pump", "inverted-slider-crank",
                             "quick-return", "shaper", "garage-door", "tk-fourbar",
                             "jansen", "watt-sixbar", "whitworth", "toggle-press", "hoeken",
-                            "boom-cylinder", "function-log10"])
+                            "boom-cylinder", "function-log10", "motion-3pose",
+                            "path-timing"])
     assert "[crank, dyad, point]" in next(line for line in out.stdout.splitlines()
                                           if line.startswith("fourbar "))
 

@@ -42,8 +42,9 @@ def dimensions(t: templates.Template):
     synthesis template's designed parameters are not drawn (the Synthesis sheet designs them:
     a value drawn would be overridden): its task is, instead (task_draw)."""
     designed = t.synthesis.designed() if t.synthesis is not None else {}
-    scale = max(abs(p.value) for p in t.parameters
-                if p.kind == LENGTH_KIND and p.symbol not in designed)
+    # a motion or path generator designs every length: its offsets are designed too
+    scale = max((abs(p.value) for p in t.parameters
+                 if p.kind == LENGTH_KIND and p.symbol not in designed), default=1.0)
     draws = {} if t.synthesis is None else {TASK: task_draw(t.synthesis)}
     for p in t.parameters:
         if p.symbol in designed:
@@ -74,6 +75,29 @@ def dimensions(t: templates.Template):
 
 
 def task_draw(task):
+    """A synthesis task around the template's: function generation's (function_task_draw),
+    or three poses moved (dyad_task_draw)."""
+    return function_task_draw(task) if task.kind == "function" else dyad_task_draw(task)
+
+
+def dyad_task_draw(task):
+    """A motion or path task around the template's: each coordinate moved by up to ±10 % of
+    the task's size, each angle and rotation by up to ±10° (a path's α_1 stays 0). Most
+    design a linkage (test_synthesis_dyads_book.py draws tasks of every outcome); some end in
+    a branch defect, and the book is #N/A throughout."""
+    size = max(abs(v) for v in (*task.x, *task.y))
+
+    def near(values, spread):
+        return st.tuples(*(st.floats(-spread, spread).map(lambda d, v=v: v + d)
+                           for v in values))
+    alpha = near(task.alpha, 10.0) if task.kind == "motion" else \
+        near(task.alpha[1:], 10.0).map(lambda rest: (0.0, *rest))
+    return st.fixed_dictionaries({
+        "x": near(task.x, 0.1 * size), "y": near(task.y, 0.1 * size), "alpha": alpha,
+        "beta": near(task.beta, 10.0), "gamma": near(task.gamma, 10.0)})
+
+
+def function_task_draw(task):
     """A function-generation task around the template's: x0 times 0.5 to 2 (f's domain kept
     where it is the positive numbers) and the x range's width too, each range's start moved
     by up to ±45° and its span times 0.5 to 1.5; its f, points and spacing as they are. Most

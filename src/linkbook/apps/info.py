@@ -109,6 +109,11 @@ def _inputs(book: Book) -> list[dict]:
              "unit": _text(book, layout.MECH, f"D{row}")} for row in rows]
 
 
+# a motion or path generator's designed parameters, in the order `info` lists them
+DYAD_ROLES = ("crank", "coupler", "rocker", "ground", "xA0", "yA0", "xB0", "yB0", "u", "v",
+              "offset", "branch")
+
+
 def _synthesis(book: Book) -> dict | None:
     """A synthesis book's design as its Synthesis sheet states it: the designed lengths and
     branch, the checks in words, Grashof's class and the largest structural error."""
@@ -118,6 +123,15 @@ def _synthesis(book: Book) -> dict | None:
 
     def cell(key: str):
         return _plain(book.values.get((syn.sheet, syn.cells[key])))
+    if syn.task["kind"] != "function":          # motion or path generation: three poses
+        designs = syn.task["designs"]
+        return {"kind": syn.task["kind"], "unit": book.record.length_unit,
+                "designed": {f"{role} {designs[role]}": cell(f"designed_{role}")
+                             for role in DYAD_ROLES if role in designs},
+                "system": f"crank's {cell('c_system')}, rocker's {cell('r_system')}",
+                "lengths": cell("short"), "branch": cell("defect"),
+                "grashof": cell("grashof"), "largest_miss": cell("largest_miss"),
+                "largest_angle_miss": cell("largest_angle_miss")}
     return {"f": syn.task["f"], "points": syn.task["points"], "spacing": syn.task["spacing"],
             "designed": {f"{role} {syn.task['designs'][role]}": cell(f"designed_{role}")
                          for role in ("crank", "coupler", "rocker", "branch")},
@@ -331,11 +345,19 @@ def lines(data: dict) -> list[str]:
 def _synthesis_lines(syn: dict) -> list[str]:
     def shown(x) -> str:
         return _g(x) if number(x) is not None else str(x)
-    out = _fit(f"Synthesis: y = {syn['f']}, {syn['points']} {syn['spacing']} precision points")
+    kind = syn.get("kind", "function")
+    out = _fit(f"Synthesis: y = {syn['f']}, {syn['points']} {syn['spacing']} precision points"
+               if kind == "function" else f"Synthesis: {kind} generation, three "
+               f"{'poses' if kind == 'motion' else 'points with timing'}")
     out += _fit("  designed: " + ", ".join(f"{k} = {shown(v)}"
                                            for k, v in syn["designed"].items()))
     for key in ("system", "lengths", "branch", "grashof"):
         out += _fit(f"  {key}: {syn[key]}")
+    if kind != "function":
+        out += _fit(f"  largest miss of the poses by the position steps: "
+                    f"{shown(syn['largest_miss'])} {syn['unit']}, "
+                    f"{shown(syn['largest_angle_miss'])} deg")
+        return out
     out += _fit(f"  largest structural error: {shown(syn['largest_error'])} deg at x = "
                 f"{shown(syn['largest_error_x'])}")
     return out

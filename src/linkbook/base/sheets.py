@@ -24,6 +24,9 @@ SYNTHESIS_WORDS = {
     "defect": "branch defect: the points need both assemblies, no one linkage passes "
               "through all",
     "no defect": "no branch defect",
+    # motion and path generation: a link that comes out of (almost) zero length
+    "too short": "a link shorter than 10⁻⁹ of the task's size: nothing is designed",
+    "long enough": "every link longer than 10⁻⁹ of the task's size",
 }
 DRAWING_COLUMNS = ("N", "O")   # x and y of the joints table and of the links the drawing plots
 JOINT_COLUMN = "M"             # the joints table's joint names: the drawing's labels read them

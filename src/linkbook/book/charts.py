@@ -167,7 +167,7 @@ def add_charts(built: Built, t: Template, model: Model) -> None:
         _force_charts(wb, t, model, meta, row)
     if "grid" in meta:
         _family_chart(wb, t, model, meta)
-    if "synthesis" in meta:
+    if "synthesis" in meta and meta["synthesis"]["task"]["kind"] == "function":
         _structural_error_chart(wb, meta["synthesis"])
 
 

@@ -96,7 +96,8 @@ def _designed_link(ws, row: int, p, length_unit: str) -> dict:
     c = ws[f"C{row}"]
     set_formula(c, f"={p.name}")
     c.fill = DERIVED_FILL
-    c.number_format = "0" if p.kind == BRANCH_KIND else number_format(LENGTH, length_unit)
+    c.number_format = "0" if p.kind == BRANCH_KIND else number_format(
+        DEG if p.kind == ANGLE_KIND else LENGTH, length_unit)
     put_text(ws, f"D{row}", p.unit)
     put_text(ws, f"E{row}", f"designed: {p.name}", NOTE)
     return {"cell": f"C{row}", "name": p.name, "kind": p.kind, "designed": True}

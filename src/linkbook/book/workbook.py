@@ -33,6 +33,7 @@ from .stroke import grid_is_fine, stroke_row, stroke_sheet
 from .style import set_formula, top_align_tall_rows
 from .summary import summary_block
 from .synthesis import synthesis_sheet
+from .synthesis_dyads import dyads_sheet
 from .sweep import default_window, degree_formula, radian_window, sweep_numbers_only, sweep_table
 
 
@@ -69,7 +70,9 @@ def build(t: Template) -> Built:
 
     names, meta["inputs"], meta["constants"], next_row = inputs_block(wb, ws_mech, t, model)
     if ws_synthesis is not None:
-        meta["synthesis"] = synthesis_sheet(wb, ws_synthesis, t, model, names)
+        # function generation, or motion and path generation (the standard dyad form)
+        sheet = synthesis_sheet if t.synthesis.kind == "function" else dyads_sheet
+        meta["synthesis"] = sheet(wb, ws_synthesis, t, model, names)
     meta["position"] = position_block(wb, ws_mech, t, model, names)
     meta["sweep"] = sweep_table(ws_sweep, t, model, names)
     if ws_motion is not None:

@@ -73,10 +73,13 @@ def joined_pairs(description: dict, ref: dict, size: float) -> set[frozenset]:
     """Pairs of points the reference knows are joined, found without the description's list of
     links: a step's new point and each point the step names (a crank's pivot, a dyad's two
     ends, a slider's line, an actuator's ends; a vector's two ends), any two points of one
-    slider's guide or of one block (generic.slider_parts), and any two points whose distance
-    never changes over the sweep (a rigid link, the ground)."""
+    slider's guide or of one block (generic.slider_parts), any two ground points (link 1, even
+    where a synthesis designed no place for them: NaN) and any two points whose distance
+    never changes over the sweep (a rigid link)."""
     pairs = {frozenset((a, b)) for part in generic.slider_parts(description)
              for a in part for b in part if a != b}
+    ground = [name for name in description.get("ground", {}) if isinstance(name, str)]
+    pairs.update(frozenset((a, b)) for a in ground for b in ground if a != b)
     for step in description.get("steps", []):
         if not isinstance(step, dict):
             continue

@@ -32,7 +32,7 @@ from ..language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_
                                    OFFSET_KIND, RATE_KIND)
 from .checks import Check, differing, undetermined
 from .reading import mechanism_size, written_in
-from .synthesis import design_for, no_design_because, with_design
+from .synthesis import task_table, why_no_design, with_design
 
 DEFAULT_SEED = 1
 OTHER_SETS = 1          # input sets judged besides the book's own
@@ -47,6 +47,7 @@ OMEGA = 10.0            # rad/s: a crank's speed, when the book's is 0
 OFFSET_SHARE = 0.05     # a zero offset becomes this share of the smallest length
 ANGLE = 10.0            # degrees: a zero angle parameter becomes this
 TASK = "syn_"           # a synthesis task's input in a set: its key so prefixed (its Excel name)
+TASK_ANGLES = ("alpha", "beta", "gamma")    # a motion or path task's angles, by their keys
 
 
 @dataclass
@@ -120,9 +121,8 @@ def _why_none(record: BuildRecord, input_kind: str, params: dict[str, float], se
     values = draw(record, input_kind, params, seed, number, 0.5 ** SHRINKS, task)
     if record.synthesis is None or values is None:
         return "no inputs drawn near the book's are within the domain (domain.py)"
-    ground = record.synthesis.task["ground"]
     moved = {key: values[TASK + key] for key in task}
-    why = no_design_because(design_for(record, moved, values[ground]).result)
+    why = why_no_design(record, moved, values)
     return ("no task drawn near the book's has a design like the book's (" +
             (f"the nearest: {why}" if why else "the nearest assembles on other sweep rows")
             + ")")
@@ -180,25 +180,21 @@ def draw(record: BuildRecord, input_kind: str, params: dict[str, float], seed: i
 
 def _moved_task(task: dict[str, float], rng: random.Random, shrink: float
                 ) -> dict[str, float]:
-    """A synthesis task's inputs moved, one draw each in a fixed order: the ranges' starts as
-    angle parameters are, every other (x0, x1, the given x values, the spans) by up to
-    ±SPREAD of itself, as a length is (a zero x stays 0: f's domain may end there)."""
-    return {key: _moved(ANGLE_KIND if key.endswith("_start") else LENGTH_KIND, task[key],
-                        None, rng.uniform(-1.0, 1.0), shrink) for key in sorted(task)}
+    """A synthesis task's inputs moved, one draw each in a fixed order: the ranges' starts and
+    the poses' angles and rotations (alpha…, beta…, gamma…) as angle parameters are, every
+    other (x0, x1, the given x values, the spans, the poses' coordinates) by up to ±SPREAD of
+    itself, as a length is (a zero x stays 0: f's domain may end there)."""
+    return {key: _moved(ANGLE_KIND if key.endswith("_start") or key.startswith(TASK_ANGLES)
+                        else LENGTH_KIND, task[key], None, rng.uniform(-1.0, 1.0), shrink)
+            for key in sorted(task)}
 
 
 def _task_in_domain(record: BuildRecord, moved: dict[str, float]) -> bool:
-    """Whether the task with these inputs is one the language accepts (x0 < x1, the spans
-    within ±360°, the given x ascending, f(x0) ≠ f(x1) both numbers)."""
-    spec = record.synthesis.task
-    given = [moved[f"x_{j}"] for j in range(1, spec["points"] + 1)] \
-        if spec["spacing"] == "given" else spec["spacing"]
-    table = {"f": spec["f"], "x": [moved["x0"], moved["x1"]], "points": spec["points"],
-             "theta2": [moved["theta2_start"], moved["theta2_span"]],
-             "theta4": [moved["theta4_start"], moved["theta4_span"]], "spacing": given,
-             "ground": spec["ground"], "designs": spec["designs"]}
+    """Whether the task with these inputs is one the language accepts (function generation:
+    x0 < x1, the spans within ±360°, the given x ascending, f(x0) ≠ f(x1) both numbers;
+    motion and path generation: the angles within ±360°)."""
     try:
-        task_of({"synthesis": table}, record.kinds(), "")
+        task_of({"synthesis": task_table(record, moved)}, record.kinds(), "")
     except InputError:
         return False
     return True

@@ -4,7 +4,8 @@ read from the book's own cells, the linkage designed by the independent referenc
 handed to the kinematic and force references, which judge the analysis sheets as for any book.
 
 Nothing here reads the writer or the language: f is evaluated by the reference's own reader of
-expressions, and the words the sheet states are base.sheets.SYNTHESIS_WORDS.
+expressions, and the words the sheet states are base.sheets.SYNTHESIS_WORDS. Motion and path
+generation are synthesis_dyads.py's: the public functions here dispatch on the task's kind.
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from .checks import ABS_TOL, Check, Mismatch, compare_exact
 from .cells import number_at
 from .reference import evaluate
 from .reference import synthesis as ref
+from . import synthesis_dyads as dyads
 
 EPS = float(np.finfo(float).eps)
 # The bound of the cells the solve gives (the system's determinants, K1-K3, the lengths, the
@@ -111,10 +113,17 @@ def designed_values(wb, record: BuildRecord, values: dict[str, float]) -> dict[s
     return with_design(record, values, task_inputs(wb, record))
 
 
+def _dyads(record: BuildRecord) -> bool:
+    """Is the record's task motion or path generation (synthesis_dyads.py's)?"""
+    return record.synthesis.task["kind"] != "function"
+
+
 def with_design(record: BuildRecord, values: dict[str, float], inputs: dict[str, float]
                 ) -> dict[str, float]:
     """`values` with the designed parameters' values: the reference's design of the task with
     these `inputs` (task_inputs' keys) at the ground length `values` hold."""
+    if _dyads(record):
+        return dyads.with_design(record, values, inputs)
     ground = values[record.synthesis.task["ground"]]
     designed = design_for(record, inputs, ground).designed
     branch = record.synthesis.task["designs"]["branch"]
@@ -123,6 +132,30 @@ def with_design(record: BuildRecord, values: dict[str, float], inputs: dict[str,
         # references are told, and they want ±1
         designed[branch] = 1.0
     return {**values, **designed}
+
+
+def why_no_design(record: BuildRecord, inputs: dict[str, float], values: dict[str, float]
+                  ) -> str | None:
+    """Why the task with these `inputs` (and the ground length `values` hold) designs no
+    linkage to analyse, in words; None where it designs one."""
+    if _dyads(record):
+        return dyads.no_design_because(dyads.design_for(record, inputs).result)
+    ground = values[record.synthesis.task["ground"]]
+    return no_design_because(design_for(record, inputs, ground).result)
+
+
+def task_table(record: BuildRecord, inputs: dict[str, float]) -> dict:
+    """The [synthesis] table of the record's task with these inputs, as a template states it
+    (the language checks a moved task with it)."""
+    spec = record.synthesis.task
+    if _dyads(record):
+        return dyads.task_table(spec, inputs)
+    given = [inputs[f"x_{j}"] for j in range(1, spec["points"] + 1)] \
+        if spec["spacing"] == "given" else spec["spacing"]
+    return {"kind": "function", "f": spec["f"], "x": [inputs["x0"], inputs["x1"]],
+            "points": spec["points"], "theta2": [inputs["theta2_start"], inputs["theta2_span"]],
+            "theta4": [inputs["theta4_start"], inputs["theta4_span"]], "spacing": given,
+            "ground": spec["ground"], "designs": spec["designs"]}
 
 
 def no_design_because(result: dict) -> str | None:
@@ -163,6 +196,8 @@ def as_designed(wb, record: BuildRecord, values: dict, params: dict) -> dict[str
     cells are judged against it, check_synthesis), so that the kinematic and force references
     analyse the linkage the book designed; the reference's where they do not (a wrong design
     is reported there, and its analysis judged against the right one)."""
+    if _dyads(record):
+        return dyads.as_designed(record, task_inputs(wb, record), values, params)
     syn = record.synthesis
     design = design_of(wb, record, params[syn.task["ground"]])
     bound = solve_bound(design.result, syn.task["points"]) * coupler_growth(design.result)
@@ -179,6 +214,9 @@ def as_designed(wb, record: BuildRecord, values: dict, params: dict) -> dict[str
 def check_synthesis(j) -> None:
     """Every cell of the Synthesis sheet, and the Mechanism sheet's links to the designed
     cells, against the reference's design (j: context.Judging)."""
+    if _dyads(j.record):
+        dyads.check_synthesis(j, task_inputs(j.wb, j.record))
+        return
     syn = j.record.synthesis
     ground = j.params[syn.task["ground"]]
     design = design_of(j.wb, j.record, ground)

@@ -1,11 +1,13 @@
 """A template's synthesis task (docs/synthesis.md): what the linkage must do, from which the
 Synthesis sheet designs some of its parameters.
 
-Only function generation by a four-bar so far (`kind = "function"`): the rocker's angle θ4
-follows y = f(x) while the crank's angle θ2 follows x over [x0, x1]. The task is checked here,
-each problem one line naming the field; `design` is the writer's own solution in Python (the
-values a template's checks and `linkbook info` read before the book exists). The book's
-formulas are book/synthesis.py's; the independent reference is check/reference/synthesis.py.
+Function generation by a four-bar (`kind = "function"`): the rocker's angle θ4 follows
+y = f(x) while the crank's angle θ2 follows x over [x0, x1]. Motion and path generation
+(`kind = "motion"`, `"path"`) are synthesis_dyads.py's; the functions here dispatch on the
+kind. The task is checked here, each problem one line naming the field; `design` is the
+writer's own solution in Python (the values a template's checks and `linkbook info` read
+before the book exists). The book's formulas are book/synthesis.py's; the independent
+reference is check/reference/synthesis.py.
 """
 from __future__ import annotations
 
@@ -18,8 +20,10 @@ from .domain import InputError
 from .expressions import expression, value_of
 from .mechanisms import BRANCH_KIND, LENGTH_KIND
 from .model import DescriptionError
+from . import synthesis_dyads as dyads
+from .synthesis_dyads import DyadTask
 
-KINDS = ("function",)
+KINDS = ("function", *dyads.KINDS)
 SPACINGS = ("chebyshev", "equal")
 ROLES = ("crank", "coupler", "rocker", "branch")     # what a function generator designs
 DEFAULT_POINTS = 3
@@ -45,6 +49,7 @@ class FunctionTask:
     ground: str                       # the ground length's parameter: an input
     designs: tuple[tuple[str, str], ...]   # (role, parameter symbol) for each of ROLES
     output: str = ""                  # the model's key of the rocker's angle θ4 (fitted_to)
+    kind: str = "function"
 
     def designed(self) -> dict[str, str]:
         """{parameter symbol: role} of the parameters the task designs."""
@@ -53,19 +58,26 @@ class FunctionTask:
     def symbol(self, role: str) -> str:
         return dict(self.designs)[role]
 
+    def in_unit(self, factor: float) -> FunctionTask:
+        """The task in another length unit: nothing in it is a length (the ground is a
+        parameter)."""
+        return self
+
     def f_of(self, x: float) -> float:
         """f(x) by the writer's reading of the expression; NaN where it is an error."""
         value = value_of(self.f, {"x": float(x)})
         return math.nan if value is None else value
 
 
-def task_of(data: dict, kinds: dict[str, str], origin: str) -> FunctionTask | None:
+def task_of(data: dict, kinds: dict[str, str], origin: str) -> FunctionTask | DyadTask | None:
     """The template's [synthesis] table, checked against the parameters' kinds (`kinds`), or
     None when it has none. The schema has checked the keys and their types."""
     table = data.get("synthesis")
     if table is None:
         return None
     where = f"{origin}: synthesis"
+    if table["kind"] in dyads.KINDS:
+        return dyads.task_of(table, kinds, where)
     try:
         f_excel = expression(f"{where}.f", table["f"], {"x"}).text
     except DescriptionError as exc:
@@ -118,11 +130,14 @@ def _designed(table: dict, role: str, kinds: dict[str, str], where: str) -> str:
     return symbol
 
 
-def fitted_to(task: FunctionTask, description: dict, origin: str) -> FunctionTask:
+def fitted_to(task: FunctionTask | DyadTask, description: dict, origin: str
+              ) -> FunctionTask | DyadTask:
     """The task with the key of its output angle: the mechanism must be the four-bar the task
     designs, as docs/synthesis.md places it (A0 at the origin, B0 at (ground, 0), the crank
     the input turning about A0, a dyad on the crank's pin and B0 with the coupler, the rocker
     and the branch), else one line naming what does not fit."""
+    if isinstance(task, DyadTask):
+        return dyads.fitted_to(task, description, origin)
     where = f"{origin}: synthesis"
     steps = description.get("steps", [])
     ground = description.get("ground", {})
@@ -160,9 +175,13 @@ def precision_x(task: FunctionTask) -> np.ndarray:
     return (x0 + x1) / 2 - (x1 - x0) / 2 * np.cos((2 * j - 1) * math.pi / (2 * n))
 
 
-def design(task: FunctionTask, d: float) -> dict[str, float]:
+def design(task: FunctionTask | DyadTask, values: dict[str, float]) -> dict[str, float]:
     """{role: value} of the designed parameters, NaN where the design does not exist or cannot
-    be used (a negative crank or rocker, a branch defect, a near-singular system)."""
+    be used (a negative crank or rocker, a branch defect, a near-singular system); `values`:
+    the parameters' (a function generator's ground length is one)."""
+    if isinstance(task, DyadTask):
+        return dyads.design(task)
+    d = values[task.ground]
     # no linkage: its lengths NaN leave every analysis cell #N/A whichever branch it is
     # given, and the references want a branch of ±1
     nothing = {"crank": math.nan, "coupler": math.nan, "rocker": math.nan, "branch": 1.0}

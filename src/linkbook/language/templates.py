@@ -17,7 +17,7 @@ from .bundled import TEMPLATE_DIR, bundled, bundled_template_data
 from .compiler import DescriptionError, compile_mechanism, parameter_kinds
 from .expressions import always_an_error, value_of
 from .fields import check_nesting
-from .synthesis import FunctionTask, design, fitted_to, task_of
+from .synthesis import DyadTask, FunctionTask, design, fitted_to, task_of
 from .mechanisms import (ANGLE_KIND, LENGTH_KIND, LOAD_UNITS, MOTION_SYMBOLS, OFFSET_KIND,
                          RATE_KIND, Mechanism, typed_unit)
 
@@ -73,7 +73,7 @@ class Template:
     position: float                      # the current-position input angle, degrees
     grid_values: tuple[float, ...] = ()  # values of mechanism.grid's parameter across the grid
     stroke_step: float = 1.0             # fine sweep under the grid, degrees
-    synthesis: FunctionTask | None = None   # the task that designs some parameters
+    synthesis: FunctionTask | DyadTask | None = None   # the task that designs some parameters
 
     def values(self) -> dict[str, float]:
         return {p.symbol: p.value for p in self.parameters}
@@ -297,7 +297,7 @@ def with_design(t: Template) -> Template:
     ground length (NaN where there is no usable design)."""
     if t.synthesis is None:
         return t
-    values = design(t.synthesis, t.values()[t.synthesis.ground])
+    values = design(t.synthesis, t.values())
     roles = t.synthesis.designed()
     return replace(t, parameters=tuple(
         replace(p, value=values[roles[p.symbol]]) if p.symbol in roles else p
@@ -359,8 +359,9 @@ def with_unit(t: "Template", unit: str, flag: str = FLAGS["unit"]) -> "Template"
     if t.mechanism.grid and t.mechanism.parameters[t.mechanism.grid[0]] in (LENGTH_KIND,
                                                                                OFFSET_KIND):
         grid_values = tuple(v * factor for v in grid_values)
+    task = t.synthesis.in_unit(factor) if t.synthesis is not None else None
     out = with_design(replace(t, parameters=tuple(params), sweep=sweep, position=position,
-                              grid_values=grid_values, length_unit=unit))
+                              grid_values=grid_values, length_unit=unit, synthesis=task))
     check_sweep(out)
     return out
 
