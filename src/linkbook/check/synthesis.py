@@ -186,9 +186,10 @@ def as_designed(wb, record: BuildRecord, values: dict, params: dict) -> dict[str
 
 
 # ---------------------------------------------------------------- the checks
-def check_synthesis(j) -> None:
-    """Every cell of the Synthesis sheet, and the Mechanism sheet's links to the designed
-    cells, against the reference's design (j: context.Judging)."""
+def check_synthesis(j) -> Design:
+    """Every cell of the Synthesis sheet but its drawing (synthesis_drawing.py, which judge.py
+    runs with the design this returns), and the Mechanism sheet's links to the designed cells,
+    against the reference's design (j: context.Judging)."""
     syn = j.record.synthesis
     ground = j.params[syn.task["ground"]]
     design = design_of(j.wb, j.record, ground)
@@ -204,6 +205,7 @@ def check_synthesis(j) -> None:
     _check_words(j, design)
     _check_designed(j, design, solved)
     _check_error_table(j, design)
+    return design
 
 
 def _run(j, name: str, sheet: str, cells: list[str], expected, unit: str, rules=None,
