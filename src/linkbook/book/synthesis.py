@@ -139,8 +139,9 @@ def synthesis_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     cells = {**b.cells, **{f"sum_{key}": cell for key, cell in sums.items()}}
     error = _error_table(ws, t, model, names, head, fx, fx0, fx1)
     cells.update(error.pop("cells"))
-    drawing = _drawing(ws, t, model, names, error.pop("rows")[1] + 3, columns["theta2_deg"])
-    _fit(ws, head)
+    drawing_head = error.pop("rows")[1] + 3
+    drawing = _drawing(ws, t, model, names, drawing_head, columns["theta2_deg"])
+    _fit(ws, head, drawing_head)
     ws.freeze_panes = "A7"
     return {"sheet": SYNTHESIS, "inputs": inputs, "cells": cells,
             "points": {k: tuple(v) for k, v in columns.items()
@@ -164,14 +165,15 @@ def _drawing(ws, t: Template, model: Model, names: dict[str, str], head: int,
     return positions_drawing(ws, t, positions, head, TABLE_COLUMN + 6)
 
 
-def _fit(ws, error_head: int) -> None:
-    """Column A as wide as its longest label (the block's quantities), and the two tables'
-    headers whole: no label clipped on screen or on paper."""
+def _fit(ws, *heads: int) -> None:
+    """Column A as wide as its longest label (the block's quantities), and the headers of the
+    tables (the precision points', and those in rows `heads`) whole: no label clipped on
+    screen or on paper."""
     labels = [c.value for (c,) in ws.iter_rows(min_row=8, min_col=1, max_col=1)
               if isinstance(c.value, str) and not c.font.b]
     ws.column_dimensions["A"].width = max([ws.column_dimensions["A"].width or 12] +
                                           [column_width(text) for text in labels])
-    for row in (7, error_head):
+    for row in (7, *heads):
         fit_heads(ws, row, [get_column_letter(c) for c in range(TABLE_COLUMN, ws.max_column + 1)
                             if isinstance(ws.cell(row, c).value, str)])
 
