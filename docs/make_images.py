@@ -4,7 +4,8 @@
 
 Each picture is cut from a printed page: a book's drawing (found by its blue grid), the whole
 Mechanism page of the four-bar, the four-bar's first Charts page with a drawing, the page of
-the pump's family chart, the slider-crank's page with its driving torque.
+the pump's family chart, the slider-crank's page with its driving torque, function-log10's
+drawing of its designed linkage at the precision positions.
 """
 from __future__ import annotations
 
@@ -26,12 +27,19 @@ DRAWINGS = ("boom-cylinder", "garage-door", "hoeken", "jansen", "toggle-press", 
 DPI = 110
 
 
-def pages(name: str, tmp: Path, sheets=("Mechanism",)) -> list[Path]:
+def pages(name: str, tmp: Path, sheets=("Mechanism",), dpi: int = DPI) -> list[Path]:
     """The printed pages of the named sheets of a freshly built bundled book."""
     built, _ = builder.make(templates.load(name))
     path = tmp / f"{name}.xlsx"
     built.workbook.save(path)
-    return preview.preview(path, tmp / name, dpi=DPI, sheets=list(sheets))
+    return preview.preview(path, tmp / name, dpi=dpi, sheets=list(sheets))
+
+
+def synthesis_positions(tmp: Path) -> None:
+    """function-log10's designed linkage at its precision positions, cut from its Synthesis
+    page (the whole sheet on one page: printed finer, so that the cut reads)."""
+    page = Image.open(pages("function-log10", tmp, ("Synthesis",), dpi=3 * DPI)[0])
+    page.crop(drawing_box(page)).save(IMAGES / "function-log10-positions.png")
 
 
 def drawing_box(page: Image.Image) -> tuple[int, int, int, int] | None:
@@ -88,6 +96,7 @@ def main() -> int:
             page = Image.open(pages(name, tmp)[0])
             page.crop(drawing_box(page)).save(IMAGES / f"{name}-mechanism.png")
             print(f"wrote {IMAGES / name}-mechanism.png")
+        synthesis_positions(tmp)
     return 0
 
 

@@ -24,6 +24,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 FORCES = "tests/data/forces"      # the templates with masses and loads the force mutants aim at
 BUNDLED = sorted(p.stem for p in (ROOT / "templates").glob("*.toml"))
+SYNTHESIS_TESTS = ["tests/test_synthesis_book.py", "tests/test_synthesis_drawing.py"]
+DYADS_TESTS = ["tests/test_synthesis_dyads_book.py"]
 FAST_TESTS = ["tests/test_verdict.py", "tests/test_published.py", "tests/test_motion.py",
               "tests/test_language.py", "tests/test_forces_book.py",
               "tests/test_slotted_forces.py"]
@@ -50,6 +52,8 @@ class Mutant:
     # verify only the books aimed at it: a mutant whose term vanishes at their inputs (and not
     # at every bundled book's), which verify must catch at its other input sets
     aimed_only: bool = False
+    # test files aimed at it, run after FAST_TESTS (which hold none of the synthesis tests)
+    tests: list = field(default_factory=list)
 
 
 MUTANTS = [
@@ -162,22 +166,29 @@ MUTANTS = [
     # The Synthesis sheet (function generation): aimed at the bundled synthesis book
     Mutant("synthesis sign: K2's column cos θ2 for −cos θ2", "src/linkbook/book/synthesis.py",
            """"m2": f"=-COS({c['theta2']})\"""", """"m2": f"=COS({c['theta2']})\"""",
-           [("function-log10", [])], aimed_only=True),
+           [("function-log10", [])], aimed_only=True, tests=SYNTHESIS_TESTS),
     Mutant("synthesis chebyshev: the cosine's argument (2j + 1)π/(2n) for (2j − 1)π/(2n)",
            "src/linkbook/book/synthesis.py", "*COS((2*{c['j']}-1)*PI()/(2*{n}))",
-           "*COS((2*{c['j']}+1)*PI()/(2*{n}))", [("function-log10", [])], aimed_only=True),
+           "*COS((2*{c['j']}+1)*PI()/(2*{n}))", [("function-log10", [])], aimed_only=True,
+           tests=SYNTHESIS_TESTS),
     Mutant("synthesis branch: the branch at each precision point inverted",
            "src/linkbook/book/synthesis.py", "0,SIGN({c['cross']}))", "0,-SIGN({c['cross']}))",
-           [("function-log10", [])], aimed_only=True),
+           [("function-log10", [])], aimed_only=True, tests=SYNTHESIS_TESTS),
     Mutant("synthesis lengths: the crank and the rocker swapped (a = d/K2, c = d/K1)",
            "src/linkbook/book/synthesis.py", '"=IF(syn_K1=0,NA(),syn_d/syn_K1)"',
-           '"=IF(syn_K2=0,NA(),syn_d/syn_K2)"', [("function-log10", [])], aimed_only=True),
+           '"=IF(syn_K2=0,NA(),syn_d/syn_K2)"', [("function-log10", [])], aimed_only=True,
+           tests=SYNTHESIS_TESTS),
     # vanishes at the bundled task's x0 = 1: caught only where verify's other input set moves
     # the task (input_sets.py)
     Mutant("synthesis vanishing: the Chebyshev points' centre from x0² (x0 = 1 in the book)",
            "src/linkbook/book/synthesis.py", 'f"=(syn_x0+syn_x1)/2-(syn_x1-syn_x0)/2"',
            'f"=(syn_x0^2+syn_x1)/2-(syn_x1-syn_x0)/2"', [("function-log10", [])],
-           aimed_only=True),
+           aimed_only=True, tests=SYNTHESIS_TESTS),
+    Mutant("synthesis drawing: each position's joints at the next precision angle",
+           "src/linkbook/book/synthesis_drawing.py",
+           "resolve = Resolver(model, names, {t.mechanism.input_column: angle})",
+           "resolve = Resolver(model, names, {t.mechanism.input_column: angles[i % len(angles)]})",
+           [("function-log10", [])], aimed_only=True, tests=SYNTHESIS_TESTS),
     # The Synthesis sheet (motion and path generation): aimed at the bundled synthesis books
     Mutant("synthesis dyads swapped: the free choices β2 and γ2 swapped in the pose table",
            "src/linkbook/book/synthesis_dyads.py",
@@ -185,17 +196,17 @@ MUTANTS = [
                     "gamma": f"=syn_gamma{j}" if j > 1 else "=0",''',
            '''"beta": f"=syn_{'gamma' if j == 2 else 'beta'}{j}" if j > 1 else "=0",
                     "gamma": f"=syn_{'beta' if j == 2 else 'gamma'}{j}" if j > 1 else "=0",''',
-           [("motion-3pose", []), ("path-timing", [])], aimed_only=True),
+           [("motion-3pose", []), ("path-timing", [])], aimed_only=True, tests=DYADS_TESTS),
     Mutant("synthesis dyads sign: B_j's imaginary part −sin β_j for sin β_j",
            "src/linkbook/book/synthesis_dyads.py",
            '''            formulas[f"{part}_im"] = f"=SIN(RADIANS({c[angle]}))"''',
            '''            formulas[f"{part}_im"] = f"=SIN(RADIANS({c[angle]}))" if part != "b" \\
                 else f"=-SIN(RADIANS({c[angle]}))"''',
-           [("motion-3pose", []), ("path-timing", [])], aimed_only=True),
+           [("motion-3pose", []), ("path-timing", [])], aimed_only=True, tests=DYADS_TESTS),
     Mutant("synthesis dyads branch: the branch at each pose inverted",
            "src/linkbook/book/synthesis_dyads.py", "SIGN({c['cross']}))\",",
            "-SIGN({c['cross']}))\",", [("motion-3pose", []), ("path-timing", [])],
-           aimed_only=True),
+           aimed_only=True, tests=DYADS_TESTS),
     # Terms that vanish at the books' own inputs: caught only at verify's other input sets
     Mutant("vanishing: the crank's inertia torque −I·α left out (α = alpha_in = 0)",
            "src/linkbook/language/bodies.py",
@@ -273,7 +284,7 @@ def main() -> int:
             by_verify = caught_by_verify(repo, m, work)
             by_tests = "" if opts.no_tests else (
                 "failed" if run(repo, [sys.executable, "-m", "pytest", "-x", "-q",
-                                       "-p", "no:cacheprovider", *FAST_TESTS],
+                                       "-p", "no:cacheprovider", *m.tests, *FAST_TESTS],
                                 timeout=1800) != 0 else "")
         rows.append((m.name, by_verify, by_tests, time.perf_counter() - start))
         print(f"{m.name}: verify {'caught (' + by_verify + ')' if by_verify else 'MISSED'}"

@@ -7,16 +7,17 @@ checked against pylinkage and the loop closure in test_synthesis_reference.py) a
 kinematic reference, never from the writer."""
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
-from conftest import examples
+from conftest import checks_of, examples, formula_cells
 
 from linkbook.base.errors import InputError
 from linkbook.base.sheets import SYNTHESIS, SYNTHESIS_WORDS
@@ -129,6 +130,72 @@ def test_random_tasks_give_the_references_design_or_na(task):
         got = cell(f"designed_{role}")
         assert (abs(got - expected[key]) <= bound * growth * max(expected[key], 100)) \
             if usable else _is_na(got)
+
+
+BOOK_EXAMPLES = examples(100)
+# The outcomes the random tasks through the book must reach at the default profile (the fast
+# profile's handful need not): a design on each branch, a non-Grashof design, a branch defect.
+OUTCOMES_REACHED = ("open", "crossed", "non-Grashof", "branch defect")
+NEAR_DEFECT = {"f": "LOG10(x)", "x": [1, 10], "theta2": [30, 90], "theta4": [240, -79.668],
+               "points": 3, "spacing": "chebyshev"}
+
+
+def _outcome(expected: dict) -> str:
+    """What the reference's design of a task is, in the words OUTCOMES_REACHED uses."""
+    if expected["singular"]:
+        return "near-singular"
+    if expected["branch_defect"]:
+        return "branch defect"
+    if not (expected["a"] > 0 and expected["c"] > 0):
+        return "negative crank or rocker"
+    if not expected["grashof"].startswith("Grashof"):
+        return "non-Grashof"
+    return "open" if expected["branch"][0] == 1 else "crossed"
+
+
+def test_random_tasks_through_the_book_verify():
+    """Random tasks (f, both ranges, 3 to 6 points, either spacing) through the whole book:
+    every formula cell the vector engine computes is judged by verify's checks against the
+    references (the synthesis reference's design, the kinematic reference placing it), none
+    differs, and every cell is judged. #N/A exactly where there is no design is part of that.
+    NEAR_DEFECT: the rocker's span 0.01 % short of a branch defect, where the first precision
+    point is 0.0008° from a dead centre and the position steps' θ4 there loses digits like
+    1/sin μ (the allowance near a limit position: its structural error is not judged, not
+    passed)."""
+    reached: dict[str, int] = {}
+
+    @settings(max_examples=BOOK_EXAMPLES, deadline=None, derandomize=True,
+              suppress_health_check=[HealthCheck.too_slow])
+    @given(TASKS, st.sampled_from([[1, 3], [0.5, 4], [2, 2.5]]))
+    @example(NEAR_DEFECT, NEAR_DEFECT["x"])
+    def check(task, x):
+        task = {**task, "x": x}
+        expected = _reference(task)
+        # Left out, as test_properties leaves out a crank pin through a pivot: a dead centre
+        # exactly at a precision point (θ2_j = θ4_j = ±180°: A, B and B0 on the ground line)
+        # puts a limit position exactly on a sweep row, where whether the loop closes is
+        # round-off's, and the Sweep's judgement does not yet take #N/A there.
+        assume(expected["singular"] or 0 not in list(expected["branch"]))
+        try:
+            t = from_data("random", _data(**task))
+        except InputError as refused:       # lengths over 1000 times the ground: refused
+            assume("too small beside" not in str(refused))
+            raise
+        t = dataclasses.replace(t, sweep=dataclasses.replace(t.sweep, step=15))
+        built, values = builder.make(t)
+        checks = checks_of(built, values)
+        bad = [(c.name, m) for c in checks for m in c.mismatches[:2]]
+        assert not bad, (task, bad[:5])
+        assert sum(c.cells for c in checks) == len(formula_cells(built.workbook))
+        if task == NEAR_DEFECT:         # given up there only: the error 0.0008° from μ = 0
+            assert {cell for c in checks for cell in c.not_judged} == \
+                {(SYNTHESIS, built.record.synthesis.points["error"][0])}
+        outcome = _outcome(expected)
+        reached[outcome] = reached.get(outcome, 0) + 1
+
+    check()
+    if BOOK_EXAMPLES >= 100:
+        assert set(OUTCOMES_REACHED) <= set(reached), reached
 
 
 def test_editing_a_task_input_in_the_book_redesigns_and_verifies(tmp_path):

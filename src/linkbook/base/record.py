@@ -328,13 +328,16 @@ class Frames(Part):
 class Synthesis(Part):
     """The Synthesis sheet (book/synthesis.py): the task as built (`task`: kind, f, spacing,
     points, ground, designs, output), its input cells by key, every result's cell by key, the
-    precision points' columns and the structural error's columns."""
+    precision points' columns, the structural error's columns and the drawing's cells."""
     sheet: str = _entry(_str)
     task: dict = _entry(_object)
     inputs: dict[str, str] = _entry(_cells)
     cells: dict[str, str] = _entry(_cells)
     points: dict[str, tuple[str, ...]] = _entry(_map(_list(_str)))
     error: dict[str, tuple[str, ...]] = _entry(_map(_list(_str)))
+    # the designed linkage at each precision position (book/synthesis_drawing.py): the frame's
+    # cells, the scale bar, and per position its legend, θ2, joints, their cells and mapped cells
+    drawing: dict | None = _entry(_optional(_object), None)
 
 
 @_frozen

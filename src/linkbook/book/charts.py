@@ -19,7 +19,8 @@ from openpyxl.chart.shapes import GraphicalProperties
 from openpyxl.utils import column_index_from_string, get_column_letter, quote_sheetname
 
 from . import frames
-from ..base.palette import PART_COLOURS, PATH_COLOUR, drawing_colours, link_label
+from ..base.palette import (LINK_COLOURS, PART_COLOURS, PATH_COLOUR, drawing_colours,
+                            link_label)
 from ..language.model import ANG_ACCEL, ANG_SPEED, LENGTH, NEWTON, NEWTON_METRE, Model
 from .style import header, unit_text
 from ..language.templates import Template
@@ -169,6 +170,9 @@ def add_charts(built: Built, t: Template, model: Model) -> None:
         _family_chart(wb, t, model, meta)
     if "synthesis" in meta and meta["synthesis"]["task"]["kind"] == "function":
         _structural_error_chart(wb, meta["synthesis"])
+        if meta["synthesis"].get("drawing"):
+            positions_chart(wb[meta["synthesis"]["sheet"]], meta["synthesis"]["drawing"],
+                            f"x [{t.length_unit}]")
 
 
 def _column_of(cells) -> tuple[str, tuple[int, int]]:
@@ -194,6 +198,32 @@ def _structural_error_chart(wb, syn: dict) -> None:
     chart.width, chart.height = SWEEP_CHART_CM, 10
     letter, (first, _) = _column_of(syn["error"]["error"])
     ws.add_chart(chart, f"{get_column_letter(column_index_from_string(letter) + 2)}{first + 2}")
+
+
+def positions_chart(ws, drawing: dict, title: str) -> None:
+    """A linkage at several positions (book/synthesis_drawing.py's record), to scale in its
+    live frame: one series per position through its joints, each in its own colour, named by
+    its legend cell (θ2 = …), and the scale bar; beside the frame's cells."""
+    chart = _chart("The designed linkage at each precision position", title,
+                   title.replace("x", "y", 1))
+    for i, p in enumerate(drawing["positions"]):
+        (x, first), (_, last) = (_split(p["mapped"][0][0]), _split(p["mapped"][-1][0]))
+        y = _split(p["mapped"][0][1])[0]
+        s = _series(ws, x, y, (first, last), p["title"], markers=True,
+                    colour=LINK_COLOURS[i % len(LINK_COLOURS)])
+        column, row = _split(p["title"])
+        s.tx = SeriesLabel(strRef=StrRef(f"{quote_sheetname(ws.title)}!${column}${row}"))
+        chart.series.append(s)
+    chart.series.append(_scale_bar(ws, {"bar": drawing["bar"], "cells": drawing["frame"]}))
+    _frame_axes(chart, DRAWING_CM * 0.8)
+    label = drawing["bar"]["columns"][1]
+    anchor = get_column_letter(column_index_from_string(label) + 2)
+    ws.add_chart(chart, f"{anchor}{drawing['bar']['rows'][0] - len(drawing['frame']) - 2}")
+
+
+def _split(cell: str) -> tuple[str, int]:
+    letters = cell.rstrip("0123456789")
+    return letters, int(cell[len(letters):])
 
 
 def _drawing(wb, t, model: Model, meta: dict) -> None:

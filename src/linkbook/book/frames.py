@@ -182,17 +182,7 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
             ranges[-1].append(column_range(SHEET, get_column_letter(c), FIRST_ROW, last))
             c += 1
     wrap_across(ws, 3, get_column_letter(first_copy), get_column_letter(c - 1), note)
-    formulas = {
-        "xmin": _extreme("MIN", ranges[0]), "xmax": _extreme("MAX", ranges[0]),
-        "ymin": _extreme("MIN", ranges[1]), "ymax": _extreme("MAX", ranges[1]),
-        "cx": f"=({ref['xmin']}+{ref['xmax']})/2", "cy": f"=({ref['ymin']}+{ref['ymax']})/2",
-        "need": f"=MAX({ref['xmax']}-{ref['xmin']},{ref['ymax']}-{ref['ymin']},1E-12)"
-                f"*{MARGIN}/{2 * HALF}",
-        "decade": f"=10^INT(LOG10({ref['need']}))",
-        "square": "={d}*IF({n}<={d},1,IF({n}<=2*{d},2,IF({n}<=5*{d},5,10)))".format(
-            d=ref["decade"], n=ref["need"]),
-        "label": square_label(ref["square"], t.length_unit),
-    }
+    formulas = frame_formulas(ref, ranges, t.length_unit)
     for i, (key, text, is_length) in enumerate(FRAME_CELLS):
         r = FIRST_ROW + i
         put_text(ws, f"{label}{r}", text)
@@ -220,6 +210,23 @@ def _block(ws, t: Template, col: int, title: str, extent: dict, sources: list[li
     return {"cells": cells, "extent": extent, "series": series,
             "bar": {"columns": [label, value], "rows": [bar_head + 1, bar_head + 2]},
             "next_column": c}
+
+
+def frame_formulas(ref: dict, ranges: list[list[str]], unit: str) -> dict[str, str]:
+    """The formula of each of a frame's cells (FRAME_CELLS' keys; `ref`: their references):
+    the extents over `ranges` (x's, then y's), the centre, the size a square must hold, its
+    power of ten, the square and the scale bar's legend."""
+    return {
+        "xmin": _extreme("MIN", ranges[0]), "xmax": _extreme("MAX", ranges[0]),
+        "ymin": _extreme("MIN", ranges[1]), "ymax": _extreme("MAX", ranges[1]),
+        "cx": f"=({ref['xmin']}+{ref['xmax']})/2", "cy": f"=({ref['ymin']}+{ref['ymax']})/2",
+        "need": f"=MAX({ref['xmax']}-{ref['xmin']},{ref['ymax']}-{ref['ymin']},1E-12)"
+                f"*{MARGIN}/{2 * HALF}",
+        "decade": f"=10^INT(LOG10({ref['need']}))",
+        "square": "={d}*IF({n}<={d},1,IF({n}<=2*{d},2,IF({n}<=5*{d},5,10)))".format(
+            d=ref["decade"], n=ref["need"]),
+        "label": square_label(ref["square"], unit),
+    }
 
 
 def _extreme(fn: str, ranges: list[str]) -> str:

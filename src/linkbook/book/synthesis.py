@@ -22,6 +22,7 @@ from .style import (BOLD, BOX, DERIVED_FILL, INPUT_FILL, NOTE, TITLE, block_head
                     define_name, fit_heads, number_format, put_head, put_text, set_formula,
                     unit_text)
 from .summary import grashof_formula
+from .synthesis_drawing import joints_at, positions_drawing
 
 ERROR_STEPS = 40          # intervals of the structural-error table over the input range
 TABLE_COLUMN = 7          # the tables start in column G, right of the task and its solution
@@ -138,26 +139,41 @@ def synthesis_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) ->
     cells = {**b.cells, **{f"sum_{key}": cell for key, cell in sums.items()}}
     error = _error_table(ws, t, model, names, head, fx, fx0, fx1)
     cells.update(error.pop("cells"))
-    error.pop("rows")
-    _fit(ws, head)
+    drawing_head = error.pop("rows")[1] + 3
+    drawing = _drawing(ws, t, model, names, drawing_head, columns["theta2_deg"])
+    _fit(ws, head, drawing_head)
     ws.freeze_panes = "A7"
     return {"sheet": SYNTHESIS, "inputs": inputs, "cells": cells,
             "points": {k: tuple(v) for k, v in columns.items()
                        if k not in ("j", "m3") and not (k == "x" and given)},
             "error": {k: tuple(v) for k, v in error.items() if k != "k"},
+            "drawing": drawing,
             "task": {"kind": "function", "f": task.f, "spacing": task.spacing, "points": n,
                      "ground": task.ground, "designs": dict(task.designs),
                      "output": task.output}}
 
 
-def _fit(ws, error_head: int) -> None:
-    """Column A as wide as its longest label (the block's quantities), and the two tables'
-    headers whole: no label clipped on screen or on paper."""
+def _drawing(ws, t: Template, model: Model, names: dict[str, str], head: int,
+             angles: list[str]) -> dict:
+    """The designed linkage at each precision point's θ2_j by the position steps, and the
+    live frame of its drawing (synthesis_drawing.py), under the structural error's table."""
+    first = get_column_letter(TABLE_COLUMN)
+    ws[f"{first}{head - 1}"] = ("The designed linkage at each precision position (the position "
+                                "steps at θ2_j), drawn to scale")
+    ws[f"{first}{head - 1}"].font = BOLD
+    positions = joints_at(ws, t, model, names, head, TABLE_COLUMN, angles)
+    return positions_drawing(ws, t, positions, head, TABLE_COLUMN + 6)
+
+
+def _fit(ws, *heads: int) -> None:
+    """Column A as wide as its longest label (the block's quantities), and the headers of the
+    tables (the precision points', and those in rows `heads`) whole: no label clipped on
+    screen or on paper."""
     labels = [c.value for (c,) in ws.iter_rows(min_row=8, min_col=1, max_col=1)
               if isinstance(c.value, str) and not c.font.b]
     ws.column_dimensions["A"].width = max([ws.column_dimensions["A"].width or 12] +
                                           [column_width(text) for text in labels])
-    for row in (7, error_head):
+    for row in (7, *heads):
         fit_heads(ws, row, [get_column_letter(c) for c in range(TABLE_COLUMN, ws.max_column + 1)
                             if isinstance(ws.cell(row, c).value, str)])
 

@@ -65,7 +65,11 @@ def judge_book(wb, record: BuildRecord, values: dict, rules: Rules,
         j.checks += grid.check_grid(j)
     if record.synthesis is not None:
         from .synthesis import check_synthesis
-        check_synthesis(j)
+        from .synthesis_drawing import check_positions_drawing
+        design = check_synthesis(j)
+        if record.synthesis.drawing is not None:
+            check_positions_drawing(j, record.synthesis.drawing, record.synthesis.sheet,
+                                    np.degrees(design.theta2))
     return j.checks
 
 

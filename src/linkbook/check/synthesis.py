@@ -21,6 +21,7 @@ from .cells import number_at
 from .reference import evaluate
 from .reference import synthesis as ref
 from . import synthesis_dyads as dyads
+from .reference.fourbar import grashof_class
 
 EPS = float(np.finfo(float).eps)
 # The bound of the cells the solve gives (the system's determinants, K1-K3, the lengths, the
@@ -31,6 +32,7 @@ EPS = float(np.finfo(float).eps)
 # never below the 1e-9 of any other cell: at the bundled task's κ = 15 that is the 1e-9
 # itself. The margin covers the constant of those estimates (Cramer's rule on the 3×3, the
 # sums of n products): random tasks (tests/test_synthesis_book.py) reach about 130·ε·κ².
+# The lengths get it normwise (length_errors), the transmission angles through ACOS.
 SOLVE_MARGIN = 1000.0
 TASK_KEYS = ("x0", "x1", "theta2_start", "theta2_span", "theta4_start", "theta4_span")
 POINT_UNITS = {"x": "-", "y": "-", "theta2_deg": "deg", "theta4_deg": "deg", "theta2": "rad",
@@ -181,13 +183,20 @@ def solve_bound(result: dict, points: int) -> float:
     return max(ABS_TOL, SOLVE_MARGIN * EPS * kappa ** (1 if points == 3 else 2))
 
 
-def coupler_growth(result: dict) -> float:
-    """How much b² = a² + c² + d² − 2ac·K3 magnifies its terms' relative errors: the sum of
-    their sizes over b² (1 without cancellation)."""
-    a, b, c, d, k3 = (result[k] for k in ("a", "b", "c", "d", "K3"))
-    if not all(math.isfinite(v) for v in (a, b, c, k3)) or b == 0:
-        return 1.0
-    return max(1.0, (a * a + c * c + d * d + 2 * abs(a * c * k3)) / (b * b))
+def length_errors(result: dict, tol: float) -> dict[str, float]:
+    """The relative error each designed length may carry when K1-K3 are solved to `tol`
+    (solve_bound). A linear solve's error is bounded normwise: each K_i may be off by
+    tol·max(1, ‖K‖∞), which is far more than tol·|K_i| for a small one, and a = d/K1, c = d/K2
+    carry that over |K1|, |K2|. b² = a² + c² + d² − 2ac·K3 adds its terms' errors, which its
+    cancellation magnifies (over b², not over its terms' sizes)."""
+    k = np.abs(np.asarray(result["coefficients"], dtype=float))
+    a, b, c = result["a"], result["b"], result["c"]
+    if not np.isfinite(k).all() or not all(math.isfinite(v) for v in (a, b, c)) or b == 0:
+        return {"K": tol, "a": tol, "c": tol, "K3": tol, "b": tol}
+    each = tol * max(1.0, float(k.max()))
+    ra, rc, r3 = (each / max(v, 1e-300) for v in k)
+    rb = (a * a * ra + c * c * rc + abs(a * c * result["K3"]) * (ra + rc + r3)) / (b * b)
+    return {"K": each, "a": max(tol, ra), "c": max(tol, rc), "K3": r3, "b": max(tol, rb)}
 
 
 def as_designed(wb, record: BuildRecord, values: dict, params: dict) -> dict[str, float]:
@@ -200,23 +209,26 @@ def as_designed(wb, record: BuildRecord, values: dict, params: dict) -> dict[str
         return dyads.as_designed(record, task_inputs(wb, record), values, params)
     syn = record.synthesis
     design = design_of(wb, record, params[syn.task["ground"]])
-    bound = solve_bound(design.result, syn.task["points"]) * coupler_growth(design.result)
+    errors = length_errors(design.result, solve_bound(design.result, syn.task["points"]))
+    bounds = {"crank": errors["a"], "coupler": errors["b"], "rocker": errors["c"], "branch": 0}
     out = dict(params)
     for role, symbol in syn.task["designs"].items():
         want, got = params[symbol], values.get((syn.sheet, syn.cells[f"designed_{role}"]))
         if isinstance(got, (int, float)) and not isinstance(got, bool) and \
-                math.isfinite(want) and abs(got - want) <= bound * max(abs(want), 1e-300):
+                math.isfinite(want) and abs(got - want) <= bounds[role] * max(abs(want), 1e-300):
             out[symbol] = float(got)
     return out
 
 
 # ---------------------------------------------------------------- the checks
-def check_synthesis(j) -> None:
-    """Every cell of the Synthesis sheet, and the Mechanism sheet's links to the designed
-    cells, against the reference's design (j: context.Judging)."""
+def check_synthesis(j) -> Design | None:
+    """Every cell of the Synthesis sheet but its drawing (synthesis_drawing.py, which judge.py
+    runs with the design this returns; motion and path books have no such drawing yet), and the
+    Mechanism sheet's links to the designed cells, against the reference's design
+    (j: context.Judging)."""
     if _dyads(j.record):
         dyads.check_synthesis(j, task_inputs(j.wb, j.record))
-        return
+        return None
     syn = j.record.synthesis
     ground = j.params[syn.task["ground"]]
     design = design_of(j.wb, j.record, ground)
@@ -230,15 +242,29 @@ def check_synthesis(j) -> None:
     _check_points(j, design, solved)
     _check_solution(j, design, solved, n)
     _check_words(j, design)
-    _check_designed(j, design, replace(solved, tol=solved.tol * coupler_growth(res)))
+    _check_designed(j, design, solved)
     _check_error_table(j, design)
+    return design
 
 
-def _run(j, name: str, sheet: str, cells: list[str], expected, unit: str, rules=None) -> None:
+def _run(j, name: str, sheet: str, cells: list[str], expected, unit: str, rules=None,
+         slope=None, dead=None) -> None:
     from .checks import unit_scale
     c = Check("synthesis", name, j.size, 1.0, unit_scale(unit, j.size))
-    j.compare(c, sheet, cells, np.asarray(expected, dtype=float), unit, rules=rules)
+    j.compare(c, sheet, cells, np.asarray(expected, dtype=float), unit, slope, dead,
+              rules=rules)
     j.checks.append(c)
+
+
+def _output_slopes(j, theta2_deg: np.ndarray) -> dict:
+    """slope(i) for the columns that read the designed linkage's output angle by the position
+    steps (θ4 in radians, the structural error in degrees): near a dead centre (the transmission
+    angle near 0° or 180°, as at a precision point close to a branch defect) any evaluation of
+    θ4 loses digits like 1/sin μ, and so does its slope ∂θ4/∂θ2: the allowance near a limit
+    position the Sweep's θ4 gets (checks.compare)."""
+    output = j.record.synthesis.task["output"]
+    return {"generated": j.slope(theta2_deg, output, "rad"),
+            "error": j.slope(theta2_deg, f"{output}_deg", "deg")}
 
 
 def _check_points(j, design: Design, solved) -> None:
@@ -266,10 +292,20 @@ def _check_points(j, design: Design, solved) -> None:
     # the residual's terms are K·cos: its error is the coefficients' times their size
     residual = replace(solved, tol=solved.tol * (1.0 + float(np.nansum(np.abs(
         res["coefficients"])))), relative=False)
+    # cross's terms are products of a·c or c·d (each of relative error up to 2·tol): its error
+    # is that times the terms' sizes, which may cancel (the sum of their sizes over |cross|)
+    terms = np.abs(c) * (np.abs(a * np.cos(design.theta4) * np.sin(design.theta2))
+                         + np.abs(np.sin(design.theta4)) * (np.abs(a * np.cos(design.theta2))
+                                                            + d))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cancel = np.nanmax(np.append(terms / np.abs(expected["cross"]), 1.0))
+    errors = length_errors(res, solved.tol)
+    cross = replace(solved, tol=(errors["a"] + errors["c"]) * min(cancel, 1e300))
+    slopes = _output_slopes(j, np.degrees(design.theta2))
     for key, cells in syn.points.items():
         unit = POINT_UNITS.get(key, "-")
-        rules = residual if key == "residual" else solved if key == "cross" else None
-        _run(j, key, syn.sheet, list(cells), expected[key], unit, rules)
+        rules = residual if key == "residual" else cross if key == "cross" else None
+        _run(j, key, syn.sheet, list(cells), expected[key], unit, rules, slopes.get(key))
 
 
 def _check_solution(j, design: Design, solved, n: int) -> None:
@@ -298,28 +334,70 @@ def _check_solution(j, design: Design, solved, n: int) -> None:
     expected.update(zip(("sum_m11", "sum_m12", "sum_m13", "sum_m22", "sum_m23", "sum_m33"),
                         products))
     expected.update(zip(("sum_v1", "sum_v2", "sum_v3"), rhs))
+    errors = length_errors(res, solved.tol)
+    coefficient = replace(solved, tol=errors["K"], relative=False)
     for key, value in expected.items():
-        rules = solved if key.startswith(("D", "K")) else None
+        rules = coefficient if key.startswith("K") else solved if key.startswith("D") else None
         _run(j, key, syn.sheet, [cells[key]], [value], "-", rules)
     for key, value in eig.items():
         _run(j, key, syn.sheet, [cells[key]], [value], "rad" if key == "eig_phi" else "-",
              solved)
     if res["condition"] <= ref.SINGULAR_COND:
+        # λmin = q + 2p·cos(φ + 2π/3) cancels (κ² of its terms' size), and φ = ACOS(ρ)/3 moves
+        # by ρ's error over √(1 − ρ²) where two eigenvalues nearly meet (ρ near ±1)
+        meet = 1.0 + 1.0 / math.sqrt(max(1.0 - half * half, EPS))
         _run(j, "condition", syn.sheet, [cells["condition"]], [res["condition"]], "-",
-             replace(solved, tol=max(solved.tol, SOLVE_MARGIN * EPS * res["condition"] ** 2)))
+             replace(solved, tol=max(solved.tol,
+                                     SOLVE_MARGIN * EPS * res["condition"] ** 2 * meet)))
     else:
         _beyond(j, cells["condition"], ref.SINGULAR_COND)
     a, b, c = res["a"], res["b"], res["c"]
-    coupler = replace(solved, tol=solved.tol * coupler_growth(res))
     for key, value, unit in (("a", a, "length"), ("c", c, "length"), ("b", b, "length"),
                              ("b2", b * b if math.isfinite(b) else
                               (math.nan if singular else a * a + c * c + design.task["d"] ** 2
                                - 2 * a * c * res["K3"]), "length²")):
         _run(j, key, syn.sheet, [cells[key]], [value], unit,
-             coupler if key in ("b", "b2") else solved)
-    mu = np.degrees(np.array(res["transmission"], dtype=float))
-    for key, value in zip(("mu_min", "mu_max"), mu):
-        _run(j, key, syn.sheet, [cells[key]], [value], "deg", solved)
+             replace(solved, tol=errors[key[0]] * (2 if key == "b2" else 1)))
+    _check_transmission(j, design, solved)
+
+
+def _check_transmission(j, design: Design, solved) -> None:
+    """The transmission angle's extremes over the input range. μ = ACOS(cos μ), and cos μ is a
+    ratio of the designed lengths: their allowed relative error (the solve's bound, b's with
+    its cancellation) moves cos μ by up to `spread`, and ACOS turns that into up to
+    spread/sin μ, or √(2·spread) where μ is within that of 0° or 180° (acos' own modulus of
+    continuity). Where a cosine lies beyond ±1 by no more than `spread` (the linkage just
+    reaches a dead centre in the range), whether the loop closes there is round-off's: #N/A
+    or a number."""
+    syn, res = j.record.synthesis, design.result
+    keys = ("mu_min", "mu_max")
+    a, b, c, d = (res[k] for k in ("a", "b", "c", "d"))
+
+    def none(dead=None) -> None:
+        for key in keys:
+            _run(j, key, syn.sheet, [syn.cells[key]], [math.nan], "deg", dead=dead)
+    if not all(math.isfinite(v) for v in (a, b, c)) or b == 0:
+        return none()
+    t = design.task
+    cosine = ref.transmission_cosines(a, b, c, d, *np.radians([t["theta2_start"],
+                                                                t["theta2_span"]]))
+    e = length_errors(res, solved.tol)
+    size = a * a + b * b + c * c + d * d + 2 * abs(a) * d
+    spread = (2 * (a * a * e["a"] + c * c * e["c"] + abs(a) * d * e["a"] + b * b * e["b"])
+              + size * (e["b"] + e["c"])) / (2 * b * abs(c))
+    if (np.abs(cosine) > 1.0 - spread).any():
+        # at a dead centre to within the lengths' error: whether the loop closes there is
+        # round-off's, the book's own cos μ may lie beyond ±1 (#N/A) or not
+        return none(np.array([(np.abs(cosine) <= 1.0 + spread).all()]))
+    for key, u in zip(keys, (cosine.max(), cosine.min())):
+        near = abs(u) + spread
+        moved = math.acos(max(-1.0, 1.0 - spread))
+        if near < 1.0:
+            moved = min(moved, spread / math.sqrt(1.0 - near * near))
+        mu = math.degrees(math.acos(u))
+        allowed = math.degrees(moved) + solved.tol * mu
+        _run(j, key, syn.sheet, [syn.cells[key]], [mu], "deg",
+             replace(solved, tol=allowed, relative=False))
 
 
 def _beyond(j, cell: str, limit: float) -> None:
@@ -353,10 +431,27 @@ def _check_words(j, design: Design) -> None:
         WORDS["defect"] if res["branch_defect"] else WORDS["no defect"],
         "grashof": res["grashof"],
     }
+    shown = j.got(syn.sheet, [syn.cells["grashof"]])[0]
+    if exists and shown in _grashof_classes(res, length_errors(res, _solve_tol(j, design))):
+        words["grashof"] = shown
     for key, text in words.items():
         _text(j, key, syn.sheet, syn.cells[key], text)
     branch = used.copy().pop() if len(used) == 1 and branches_known else math.nan
     _run(j, "branch", syn.sheet, [syn.cells["branch"]], [branch], "-")
+
+
+def _solve_tol(j, design: Design) -> float:
+    return solve_bound(design.result, j.record.synthesis.task["points"])
+
+
+def _grashof_classes(res: dict, errors: dict) -> set[str]:
+    """Grashof's classes of the lengths within their allowed errors of the design's: more than
+    one only where s + l = p + q to within them (a change point, which round-off may tip)."""
+    from itertools import product
+    d, a, b, c = res["d"], abs(res["a"]), res["b"], abs(res["c"])
+    return {grashof_class(d, a * (1 + sa * errors["a"]), b * (1 + sb * errors["b"]),
+                          c * (1 + sc * errors["c"]))
+            for sa, sb, sc in product((-1, 0, 1), repeat=3)}
 
 
 def _text(j, key: str, sheet: str, cell: str, text: str | None) -> None:
@@ -387,10 +482,12 @@ def _check_designed(j, design: Design, solved) -> None:
         compare_exact(check, syn.sheet, [syn.cells["usable"]],
                       j.got(syn.sheet, [syn.cells["usable"]]), [usable])
         j.checks.append(check)
+    errors = length_errors(res, solved.tol)
     for role, symbol in syn.task["designs"].items():
         value = design.designed[symbol]
         unit = "-" if role == "branch" else "length"
-        rules = None if role == "branch" else solved
+        rules = None if role == "branch" else replace(solved, tol=errors[
+            {"crank": "a", "coupler": "b", "rocker": "c"}[role]])
         _run(j, f"designed {symbol}", syn.sheet, [syn.cells[f"designed_{role}"]], [value],
              unit, rules)
         _run(j, f"link to {symbol}", "Mechanism", [j.record.inputs[symbol].cell], [value],
@@ -434,6 +531,7 @@ def _check_error_table(j, design: Design) -> None:
     desired = t["theta4_start"] + (y - t["f_x0"]) / (t["f_x1"] - t["f_x0"]) * t["theta4_span"]
     generated = _generated(j, design, theta2)
     error = _wrapped(np.degrees(generated) - desired)
+    slopes = _output_slopes(j, theta2)
     expected = {"x": x, "theta2_deg": theta2, "y": y, "desired": desired,
                 "generated": generated, "error": error}
     units = {"x": "-", "theta2_deg": "deg", "y": "-", "desired": "deg", "generated": "rad",
@@ -449,6 +547,7 @@ def _check_error_table(j, design: Design) -> None:
                 if math.isfinite(largest) else [math.nan] * len(x)
             _marked(j, syn.sheet, list(cells), shown)
             continue
-        _run(j, f"error table {key}", syn.sheet, list(cells), expected[key], units[key])
+        _run(j, f"error table {key}", syn.sheet, list(cells), expected[key], units[key],
+             slope=slopes.get(key))
     _run(j, "largest error", syn.sheet, [syn.cells["largest_error"]], [largest], "deg")
     _run(j, "largest error at x", syn.sheet, [syn.cells["largest_error_x"]], [where], "-")

@@ -200,26 +200,33 @@ def _branches(a: float, c: float, d: float, theta2: np.ndarray, theta4: np.ndarr
     return assembly(a * np.exp(1j * theta2), d + c * np.exp(1j * theta4), d)
 
 
-def _transmission_at(a: float, b: float, c: float, d: float, theta2) -> np.ndarray:
-    """The transmission angle μ = ∠ABB0 (interior, [0, π]) at crank angles θ2, the same on
-    both branches; NaN where the loop cannot close."""
+def _transmission_cosine(a: float, b: float, c: float, d: float, theta2) -> np.ndarray:
+    """cos μ, μ = ∠ABB0 the transmission angle, at crank angles θ2 (the same on both
+    branches): beyond ±1 where the loop cannot close."""
     s2 = a * a + d * d - 2.0 * a * d * np.cos(np.asarray(theta2, dtype=float))
-    cos_mu = (b * b + c * c - s2) / (2.0 * b * abs(c))
-    with np.errstate(invalid="ignore"):
-        return np.where(np.abs(cos_mu) <= 1.0, np.arccos(np.clip(cos_mu, -1.0, 1.0)), np.nan)
+    return (b * b + c * c - s2) / (2.0 * b * abs(c))
+
+
+def transmission_cosines(a: float, b: float, c: float, d: float, start: float, span: float
+                         ) -> np.ndarray:
+    """cos μ where the transmission angle can take its extremes while the crank turns from
+    `start` through the signed `span` (radians). |A − B0| is monotone in θ2 between multiples
+    of π, and μ monotone in |A − B0|: the extremes are at the ends or at such a multiple inside
+    the range."""
+    lo, hi = sorted((start, start + span))
+    inner = np.arange(math.ceil(lo / math.pi), math.floor(hi / math.pi) + 1) * math.pi
+    return _transmission_cosine(a, b, c, d, np.concatenate([[lo, hi], inner]))
 
 
 def transmission_range(a: float, b: float, c: float, d: float, start: float, span: float
                        ) -> tuple[float, float]:
-    """(smallest, largest) transmission angle while the crank turns from `start` through the
-    signed `span` (radians), or (NaN, NaN) where the loop cannot close somewhere on the way.
-    |A − B0| is monotone in θ2 between multiples of π, and μ monotone in |A − B0|: the extremes
-    are at the ends or at such a multiple inside the range."""
-    lo, hi = sorted((start, start + span))
-    inner = np.arange(math.ceil(lo / math.pi), math.floor(hi / math.pi) + 1) * math.pi
-    mu = _transmission_at(a, b, c, d, np.concatenate([[lo, hi], inner]))
-    if not np.isfinite(mu).all():
+    """(smallest, largest) transmission angle (interior, [0, π]) while the crank turns from
+    `start` through the signed `span` (radians), or (NaN, NaN) where the loop cannot close
+    somewhere on the way."""
+    cosine = transmission_cosines(a, b, c, d, start, span)
+    if not (np.abs(cosine) <= 1.0).all():
         return math.nan, math.nan
+    mu = np.arccos(cosine)
     return float(mu.min()), float(mu.max())
 
 
