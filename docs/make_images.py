@@ -14,7 +14,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
+from PIL import Image, ImageOps
 
 from linkbook.book import builder
 from linkbook.book import charts
@@ -36,10 +36,16 @@ def pages(name: str, tmp: Path, sheets=("Mechanism",), dpi: int = DPI) -> list[P
 
 
 def synthesis_positions(tmp: Path) -> None:
-    """function-log10's designed linkage at its precision positions, cut from its Synthesis
-    page (the whole sheet on one page: printed finer, so that the cut reads)."""
-    page = Image.open(pages("function-log10", tmp, ("Synthesis",), dpi=3 * DPI)[0])
-    page.crop(drawing_box(page)).save(IMAGES / "function-log10-positions.png")
+    """The synthesis books' designed linkage at its precision positions (poses), cut from
+    each Synthesis page (the whole sheet on one page: printed finer, so that the cut reads),
+    and motion-3pose's whole Synthesis page."""
+    for name in ("function-log10", "motion-3pose"):
+        page = Image.open(pages(name, tmp, ("Synthesis",), dpi=3 * DPI)[0])
+        page.crop(drawing_box(page)).save(IMAGES / f"{name}-positions.png")
+    printed = page.convert("L").point(lambda v: 255 if v > 250 else 0)   # motion-3pose's page
+    whole = page.crop(ImageOps.invert(printed).getbbox())
+    whole.thumbnail((1800, 1800))
+    whole.save(IMAGES / "motion-3pose-synthesis.png")
 
 
 def drawing_box(page: Image.Image) -> tuple[int, int, int, int] | None:

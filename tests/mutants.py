@@ -188,7 +188,8 @@ MUTANTS = [
            "src/linkbook/book/synthesis_drawing.py",
            "resolve = Resolver(model, names, {t.mechanism.input_column: angle})",
            "resolve = Resolver(model, names, {t.mechanism.input_column: angles[i % len(angles)]})",
-           [("function-log10", [])], aimed_only=True, tests=SYNTHESIS_TESTS),
+           [("function-log10", []), ("motion-3pose", [])], aimed_only=True,
+           tests=SYNTHESIS_TESTS + DYADS_TESTS),
     # The Synthesis sheet (motion and path generation): aimed at the bundled synthesis books
     Mutant("synthesis dyads swapped: the free choices β2 and γ2 swapped in the pose table",
            "src/linkbook/book/synthesis_dyads.py",

@@ -168,8 +168,9 @@ def add_charts(built: Built, t: Template, model: Model) -> None:
         _force_charts(wb, t, model, meta, row)
     if "grid" in meta:
         _family_chart(wb, t, model, meta)
-    if "synthesis" in meta and meta["synthesis"]["task"]["kind"] == "function":
-        _structural_error_chart(wb, meta["synthesis"])
+    if "synthesis" in meta:
+        if meta["synthesis"]["task"]["kind"] == "function":
+            _structural_error_chart(wb, meta["synthesis"])
         if meta["synthesis"].get("drawing"):
             positions_chart(wb[meta["synthesis"]["sheet"]], meta["synthesis"]["drawing"],
                             f"x [{t.length_unit}]")
@@ -204,8 +205,8 @@ def positions_chart(ws, drawing: dict, title: str) -> None:
     """A linkage at several positions (book/synthesis_drawing.py's record), to scale in its
     live frame: one series per position through its joints, each in its own colour, named by
     its legend cell (θ2 = …), and the scale bar; beside the frame's cells."""
-    chart = _chart("The designed linkage at each precision position", title,
-                   title.replace("x", "y", 1))
+    chart = _chart(drawing.get("title", "The designed linkage at each precision position"),
+                   title, title.replace("x", "y", 1))
     for i, p in enumerate(drawing["positions"]):
         (x, first), (_, last) = (_split(p["mapped"][0][0]), _split(p["mapped"][-1][0]))
         y = _split(p["mapped"][0][1])[0]

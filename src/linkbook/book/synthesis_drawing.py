@@ -21,17 +21,41 @@ from .style import (BOLD, DERIVED_FILL, number_format, put_head, put_text, set_f
 
 
 def linkage_path(model: Model) -> list[str]:
-    """The moving links as one line through their joints (A0, A, B, B0 for a four-bar): each
-    link that continues the line from its last joint adds its other end."""
-    path: list[str] = []
-    for link in model.links:
-        if not path:
-            path = list(link)
-        elif link[0] == path[-1]:
-            path += list(link[1:])
-        elif link[-1] == path[-1]:
-            path += list(reversed(link[:-1]))
+    """The moving links as one line through their joints (A0, A, B, B0 for a four-bar; a
+    coupler triangle's sides too): each link's sides in turn, continuing from the line's end,
+    and where none continues, back along the shortest run of sides already drawn to a joint
+    where one does (a line retraced is drawn over itself)."""
+    sides = [(link[k], link[k + 1]) for link in model.links for k in range(len(link) - 1)]
+    if not sides:
+        return []
+    path, left = [sides[0][0]], list(sides)
+    while left:
+        here = path[-1]
+        nxt = next((s for s in left if here in s), None)
+        if nxt is None:
+            path += _route(sides, here, {p for s in left for p in s})[1:]
+            continue
+        left.remove(nxt)
+        path.append(nxt[1] if nxt[0] == here else nxt[0])
     return path
+
+
+def _route(sides: list[tuple[str, str]], start: str, goals: set[str]) -> list[str]:
+    """The shortest run of sides from `start` to any of `goals` (breadth first)."""
+    came = {start: None}
+    queue = [start]
+    for here in queue:
+        if here in goals:
+            route = [here]
+            while came[route[-1]] is not None:
+                route.append(came[route[-1]])
+            return route[::-1]
+        for p, q in sides:
+            for a, b in ((p, q), (q, p)):
+                if a == here and b not in came:
+                    came[b] = here
+                    queue.append(b)
+    raise ValueError(f"the links do not join {start} to {sorted(goals)}")
 
 
 def joints_at(ws, t: Template, model: Model, names: dict[str, str], head: int, col: int,

@@ -22,6 +22,7 @@ from .resolve import Resolver
 from .style import (BOLD, NOTE, TITLE, block_head, column_width, fit_heads, number_format,
                     put_head, put_text, set_formula)
 from .summary import grashof_formula
+from .synthesis_drawing import joints_at, positions_drawing
 from .synthesis import TABLE_COLUMN, _Block
 
 FORM = ("The standard dyad form (Norton §5.7): W·(e^{iβ_j} − 1) + Z·(e^{iα_j} − 1) = δ_j, "
@@ -81,12 +82,15 @@ def dyads_sheet(wb, ws, t: Template, model: Model, names: dict[str, str]) -> dic
     _checks(b, at_pose)
     _designed(b, task)
     _misses(ws, b, at_pose, at_head)
-    _fit(ws, (head, at_head))
+    drawing_head = at_head + 7
+    drawing = _drawing(ws, t, model, names, drawing_head, at_pose["theta2"])
+    _fit(ws, (head, at_head, drawing_head))
     ws.freeze_panes = "A7"
     columns = {**{f"pose_{k}": v for k, v in poses.items() if k != "j"},
                **{f"at_{k}": v for k, v in at_pose.items() if k != "j"}}
     return {"sheet": SYNTHESIS, "inputs": inputs, "cells": b.cells,
             "points": {k: tuple(v) for k, v in columns.items()}, "error": {},
+            "drawing": drawing,
             "task": {"kind": task.kind, "designs": dict(task.designs),
                      "keys": dict(task.keys)}}
 
@@ -418,6 +422,19 @@ def _misses(ws, b: _Block, at: dict[str, list[str]], head: int) -> None:
         set_formula(ws[f"{value}{r}"], formula)
         ws[f"{value}{r}"].number_format = number_format(unit, b.t.length_unit)
         b.cells[key] = f"{value}{r}"
+
+
+def _drawing(ws, t: Template, model: Model, names: dict[str, str], head: int,
+             angles: list[str]) -> dict:
+    """The designed linkage at each pose's θ2_j by the position steps, and the live frame of
+    its drawing (synthesis_drawing.py), under the table of the poses it checks."""
+    first = get_column_letter(TABLE_COLUMN)
+    put_text(ws, f"{first}{head - 1}", "The designed linkage at each pose (the position steps "
+                                       "at θ2_j), drawn to scale", BOLD)
+    positions = joints_at(ws, t, model, names, head, TABLE_COLUMN, angles)
+    drawing = positions_drawing(ws, t, positions, head, TABLE_COLUMN + 6)
+    drawing["title"] = "The designed linkage at each pose"
+    return drawing
 
 
 def _fit(ws, heads: tuple[int, ...]) -> None:

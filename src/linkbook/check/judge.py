@@ -66,10 +66,9 @@ def judge_book(wb, record: BuildRecord, values: dict, rules: Rules,
     if record.synthesis is not None:
         from .synthesis import check_synthesis
         from .synthesis_drawing import check_positions_drawing
-        design = check_synthesis(j)
+        angles = check_synthesis(j)
         if record.synthesis.drawing is not None:
-            check_positions_drawing(j, record.synthesis.drawing, record.synthesis.sheet,
-                                    np.degrees(design.theta2))
+            check_positions_drawing(j, record.synthesis.drawing, record.synthesis.sheet, angles)
     return j.checks
 
 

@@ -221,14 +221,13 @@ def as_designed(wb, record: BuildRecord, values: dict, params: dict) -> dict[str
 
 
 # ---------------------------------------------------------------- the checks
-def check_synthesis(j) -> Design | None:
-    """Every cell of the Synthesis sheet but its drawing (synthesis_drawing.py, which judge.py
-    runs with the design this returns; motion and path books have no such drawing yet), and the
-    Mechanism sheet's links to the designed cells, against the reference's design
-    (j: context.Judging)."""
+def check_synthesis(j) -> np.ndarray:
+    """Every cell of the Synthesis sheet but its drawing, and the Mechanism sheet's links to
+    the designed cells, against the reference's design (j: context.Judging). Returns the
+    reference's crank angle θ2_j at each precision point or pose, in degrees, at which
+    synthesis_drawing.py (run by judge.py) places the designed linkage."""
     if _dyads(j.record):
-        dyads.check_synthesis(j, task_inputs(j.wb, j.record))
-        return None
+        return dyads.check_synthesis(j, task_inputs(j.wb, j.record))
     syn = j.record.synthesis
     ground = j.params[syn.task["ground"]]
     design = design_of(j.wb, j.record, ground)
@@ -244,7 +243,7 @@ def check_synthesis(j) -> Design | None:
     _check_words(j, design)
     _check_designed(j, design, solved)
     _check_error_table(j, design)
-    return design
+    return np.degrees(design.theta2)
 
 
 def _run(j, name: str, sheet: str, cells: list[str], expected, unit: str, rules=None,

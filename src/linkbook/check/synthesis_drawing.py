@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .checks import Check, compare_exact
+from .checks import Check, compare, compare_exact
 from .context import Judging, slope_of
 from .drawing import _book_extents, _check_square, _need
 
@@ -33,9 +33,14 @@ def check_positions_drawing(j: Judging, drawing: dict, sheet: str, angles: np.nd
     joints = _Joints(j.solver)
     world = joints.solve(j.params, angles)      # NaN but at the fixed pivots, if not usable
     legends = Check("synthesis", "drawing legends", j.size)
-    shown = j.got(sheet, [p["title"] for p in positions])
-    compare_exact(legends, sheet, [p["title"] for p in positions], shown,
-                  [_legend(a, text) for a, text in zip(angles, shown)])
+    titles = [p["title"] for p in positions]
+    shown = j.got(sheet, titles)
+    placed = np.isfinite(angles)        # a position no design reaches: its legend is #N/A
+    compare_exact(legends, sheet, [c for c, ok in zip(titles, placed) if ok],
+                  [text for text, ok in zip(shown, placed) if ok],
+                  [_legend(a, text) for a, text, ok in zip(angles, shown, placed) if ok])
+    compare(legends, sheet, [c for c, ok in zip(titles, placed) if not ok],
+            [text for text, ok in zip(shown, placed) if not ok], np.nan, "-", j.rules)
     j.checks.append(legends)
     coordinates = {0: [], 1: []}            # per axis: (position, name, cell, mapped cell)
     for i, p in enumerate(positions):
@@ -58,9 +63,11 @@ def check_positions_drawing(j: Judging, drawing: dict, sheet: str, angles: np.nd
 
 
 def _legend(angle: float, shown) -> str:
-    """θ2 to one decimal, as the legend shows it: either rounding where θ2 is within 1e-9 of a
+    """θ2 to one decimal, as the legend shows it: in any 360° window (a pose's θ2_j = ∠W + β_j
+    may pass 180°: the same crank position), and either rounding where θ2 is within 1e-9 of a
     half-step (θ2 = 75.05, which the book's θ2 may hold as 75.04999…)."""
-    texts = [f"θ2 = {a:.1f}°" for a in (angle, angle * (1 - 1e-9), angle * (1 + 1e-9))]
+    texts = [f"θ2 = {a + turn:.1f}°" for turn in (0, 360, -360)
+             for a in (angle, angle * (1 - 1e-9), angle * (1 + 1e-9))]
     return shown if shown in texts else texts[0]
 
 

@@ -229,9 +229,10 @@ class _Judge:
         self.j.checks.append(c)
 
 
-def check_synthesis(j, inputs: dict[str, float]) -> None:
-    """Every cell of the Synthesis sheet, and the Mechanism sheet's links to the designed
-    cells, against the reference's design of the task's `inputs` (j: context.Judging)."""
+def check_synthesis(j, inputs: dict[str, float]) -> np.ndarray:
+    """Every cell of the Synthesis sheet but its drawing, and the Mechanism sheet's links to
+    the designed cells, against the reference's design of the task's `inputs`
+    (j: context.Judging). Returns the reference's crank angle at each pose, in degrees."""
     design = design_for(j.record, inputs)
     judge = _Judge(j, design)
     _check_poses(judge)
@@ -242,6 +243,7 @@ def check_synthesis(j, inputs: dict[str, float]) -> None:
     _check_at_poses(judge)
     _check_words(judge)
     _check_designed(judge)
+    return np.degrees(np.asarray(design.result["theta2"], dtype=float))
 
 
 def _minus_one(angles) -> np.ndarray:
