@@ -9,6 +9,8 @@ source's conventions onto the reference's is written out here (norton_design).
 from __future__ import annotations
 
 import math
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,7 +18,14 @@ import pytest
 from conftest import published
 from test_synthesis_motion import ROUND_TRIP, misses
 
+from linkbook.base.sheets import SYNTHESIS
+from linkbook.book import builder
 from linkbook.check.reference.synthesis_motion import motion_generation
+from linkbook.check.verifier import verify
+from linkbook.engine import evaluator as engine
+from linkbook.language.templates import from_data
+
+ROOT = Path(__file__).resolve().parents[1]
 
 NORTON_5_2 = published()["synthesis"]["norton_example_5_2"]
 NORTON_5_3 = published()["synthesis"]["norton_example_5_3"]
@@ -88,6 +97,37 @@ def test_norton_example_5_2_as_printed(example_5_2):
 def test_norton_example_5_2_passes_through_its_poses(example_5_2):
     """The printed poses are consistent with the design: it meets them on its branch."""
     assert_meets_its_poses(example_5_2)
+
+
+def test_norton_example_5_2_as_a_book(tmp_path):
+    """Example 5-2's task typed into the bundled motion-3pose template (its poses, free choices
+    and inches): the book's Synthesis sheet, evaluated by the vector engine, shows the printed
+    results, and the book verifies."""
+    i, free = NORTON_5_2["inputs"], NORTON_5_2["free_choices"]
+    x, y, alpha = norton_poses(polar(i["p21"], i["delta2"]), polar(i["p31"], i["delta3"]),
+                               i["alpha2"], i["alpha3"])
+    data = tomllib.loads((ROOT / "templates" / "motion-3pose.toml").read_text("utf-8"))
+    data["synthesis"].update(poses=[[x[j], y[j], math.degrees(alpha[j])] for j in range(3)],
+                             beta=[free["beta2"], free["beta3"]],
+                             gamma=[free["gamma2"], free["gamma3"]])
+    data["length_unit"] = "in"
+    for parameter in data["parameters"].values():
+        parameter["unit"] = "in" if parameter.get("unit") == "mm" else parameter.get("unit")
+    built, _ = builder.make(from_data("norton-5-2", data))
+    syn = built.record.synthesis
+    values = engine.evaluate(built.workbook, only={(SYNTHESIS, c) for c in syn.cells.values()})
+    cell = lambda key: values[(SYNTHESIS, syn.cells[key])]      # noqa: E731
+    shown = {"a": cell("a"), "b": cell("b"), "c": cell("c"), "d": cell("d"),
+             "z": math.hypot(cell("Z_x"), cell("Z_y")), "s": math.hypot(cell("S_x"), cell("S_y")),
+             "theta": math.degrees(math.atan2(cell("W_y"), cell("W_x"))),
+             "T_VZ": math.degrees(math.atan2(cell("v"), cell("u"))),
+             "T_1H": math.degrees(math.atan2(cell("yB0") - cell("yA0"),
+                                             cell("xB0") - cell("xA0")))}
+    assert_printed(shown, NORTON_5_2["published"], NORTON_5_2["tolerance"], unsigned=("T_VZ",))
+    path = tmp_path / "norton-5-2.xlsx"
+    built.workbook.save(path)
+    report = verify(path)
+    assert report.status == 0, [(c.name, c.mismatches[:2]) for c in report.checks if not c.ok]
 
 
 # --- Example 5-3: three positions, specified fixed pivots -------------------------------------
