@@ -691,3 +691,21 @@ def test_running_sums_are_summed_as_the_cells_add():
             assert math.copysign(1.0, got[key]) == math.copysign(1.0, w), key
     assert engine.error_code(got[("Sheet", "C399")]) == "#N/A"
     assert engine.error_code(got[("Sheet", "E2")]) == "#VALUE!"
+
+
+@pytest.mark.parametrize("formula, dr, copied", [
+    ("=A8*COS(B8)-$D$2+E$7", 3, "=A11*COS(B11)-$D$2+E$7"),
+    ('=IF(B8>0,"{x}",{1,2})+SUM(F7:F8)', 2, '=IF(B10>0,"{x}",{1,2})+SUM(F9:F10)'),
+    ("=Sweep!Z99+'Mechanism'!C6*a_2", -5, "=Sweep!Z94+'Mechanism'!C1*a_2"),
+    ("=Sweep!Z99+'Mechanism'!C6", -6, None),              # C0 is no cell
+    ("=A8+1", 1048576 - 8, "=A1048576+1"),
+    ("=A8+1", 1048576 - 7, None),                          # beyond the last row
+    ("=$A$1+B$2+1", -500, "=$A$1+B$2+1"),                  # nothing relative: any copy
+])
+def test_a_copy_down_a_column_is_its_formula_shifted(formula, dr, copied):
+    """The grouping takes a cell for a copy of the one above when its text is the template's
+    shift (engine.references.Template.shifted); the texts here are written by hand."""
+    from linkbook.engine.references import References
+    refs = References(["Sweep", "Mechanism"], {"A_2": "'Mechanism'!$C$6"})
+    _, template = refs.fast_shape(formula, "Sweep", 8, 3)
+    assert template.shifted(dr, 0) == copied
