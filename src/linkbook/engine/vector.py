@@ -117,7 +117,8 @@ def _rows_of(args, n: int, types: frozenset):
         return None
     plain = np.ones(n, bool)
     for a in flat:
-        plain &= np.fromiter((type(v) in types for v in a), bool, n)
+        if not set(map(type, a.tolist())) <= types:    # else every row is plain (most columns)
+            plain &= np.fromiter((type(v) in types for v in a), bool, n)
     xs = []
     for a in flat:
         x = np.zeros(n)
