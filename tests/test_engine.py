@@ -482,7 +482,7 @@ def numeric_book(rows: int = 600) -> openpyxl.Workbook:
         for j, name in enumerate(forms):
             if name == "u-":
                 text = f"=-A{r}"
-            elif name in "+-*/^":
+            elif name in "+-*/^" or name in vectorized.COMPARISONS:
                 text = f"=A{r}{name}B{r}"
             else:
                 text = f"={name}(A{r},B{r})" if name == "ATAN2" else f"={name}(A{r})"
@@ -512,6 +512,32 @@ def test_numeric_forms_give_formulas_own_bits_and_types():
         else:
             assert type(g) is type(w) and (g == w or (g != g and w != w)), (key, g, w)
     assert errors > 0        # the domain edges were reached: formulas made those errors
+
+
+def test_comparisons_give_formulas_own_booleans():
+    """A comparison's numeric form, row by row as a per-cell evaluation gives it, and of the
+    type the formula's next node reads (TRUE joined to text): equal floats, 0 and -0, an int
+    beside a float, text, booleans, blanks and errors."""
+    pairs = [(1.5, 1.5), (0.0, -0.0), (2.0, 3.0), (3.0, 2.0), (1e-300, 0.0), (7, 7.0),
+             ("a", "A"), ("b", 1.0), (True, 1.0), (None, 0.0), (None, ""), ("=NA()", 1.0),
+             ("=1/0", 2.0), (-1e308, 1e308)] * 3
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    names = sorted(vectorized.COMPARISONS)
+    for r, (a, b) in enumerate(pairs, start=1):
+        ws.cell(row=r, column=1, value=a)
+        ws.cell(row=r, column=2, value=b)
+        for j, name in enumerate(names):
+            ws.cell(row=r, column=3 + j, value=f"=A{r}{name}B{r}")
+        ws.cell(row=r, column=3 + len(names), value=f'=(A{r}<B{r})&""')
+    vector = engine.Engine(wb)
+    got = vector.run()
+    want = engine.Engine(wb, vectorize=False).run()
+    assert vector.stats["numeric_nodes"] == len(names) + 1
+    assert set(got) == set(want)
+    for key, w in want.items():
+        g = got[key]
+        assert type(g) is type(w) and _same_value(g, w), (key, g, w)
 
 
 def test_verifying_a_book_imports_no_scipy(tmp_path):

@@ -1,9 +1,9 @@
 """Vector calls: a compiled formula called once for every row of a group, each node of its graph
 wrapped to run on (n, 1) arrays, giving, row for row, what a per-cell call gives.
 
-Element-wise nodes (ELEMENTWISE) run on the whole arrays; arithmetic and the common math
-functions first as float-array operations on the rows of finite numbers (NUMERIC_FORMS), with
-formulas' own bits; MIN, MAX and COUNT on arrays (AGGREGATES), per row here and over whole
+Element-wise nodes (ELEMENTWISE) run on the whole arrays; arithmetic, comparisons and the common
+math functions first as float-array operations on the rows of finite numbers (NUMERIC_FORMS),
+with formulas' own bits; MIN, MAX and COUNT on arrays (AGGREGATES), per row here and over whole
 ranges outside vector calls; any other node, and an element-wise node whose output collapsed,
 runs row by row on (1, 1) slices, which is exactly what a per-cell call does.
 """
@@ -92,6 +92,13 @@ NUMERIC_FORMS = {
 }
 _NUMBER_TYPES = frozenset({float, int, np.float64, np.int64})
 
+# formulas compares two numbers as Python does (its logic operators give a Python bool). A
+# float array compares an int exactly up to 2**53: a cell's number is read as a float, and the
+# ints formulas makes (counts, lengths, sums of booleans) are far smaller.
+COMPARISONS = {"=": np.equal, "<>": np.not_equal, "<": np.less, ">": np.greater,
+               "<=": np.less_equal, ">=": np.greater_equal}
+NUMERIC_FORMS.update({name: _typed(op, bool) for name, op in COMPARISONS.items()})
+
 
 def _columns_of(args, n: int, types: frozenset):
     """The arguments of a node over n rows as object arrays of n (a scalar of `types`, or an
@@ -138,7 +145,7 @@ def _numeric_call(form, func, args, n: int):
         result, kind = form(*xs)
     plain &= np.isfinite(result)
     out = np.empty(n, object)
-    out[:] = result.tolist() if kind is float else list(result)
+    out[:] = result.tolist() if kind in (float, bool) else list(result)   # Python's types
     if not plain.all():
         rest = ~plain
         sub = func(*[a[rest].reshape(-1, 1) if a.size == n and not _is_broadcast(a) else
