@@ -540,6 +540,35 @@ def test_comparisons_give_formulas_own_booleans():
         assert type(g) is type(w) and _same_value(g, w), (key, g, w)
 
 
+def test_if_picks_as_formulas_does():
+    """IF on arrays, row by row as a per-cell evaluation gives it: conditions that are
+    booleans (a comparison's, ISNUMBER's), numbers (0, -0, 2.5), text, blanks and errors;
+    branches that are numbers, text, blanks, booleans and errors; with and without the third
+    argument; and what it gives read by the next node (a blank picked is 0: "0" as text)."""
+    conditions = ["=A{r}>0", "=ISNUMBER(A{r})", "=A{r}", '="x"', "=1/0", "=Z{r}"]
+    values = [1.5, 0.0, -0.0, 2.5, -3.0, "t", True, None, "=NA()"]
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    r = 0
+    for a in values:
+        for x in values:
+            r += 1
+            ws[f"A{r}"], ws[f"B{r}"], ws[f"C{r}"] = a, x, -7.0
+            for j, condition in enumerate(conditions):
+                test = condition.format(r=r)[1:]
+                ws.cell(row=r, column=5 + 2 * j, value=f"=IF({test},B{r},C{r})")
+                ws.cell(row=r, column=6 + 2 * j, value=f"=IF({test},B{r})")
+            ws.cell(row=r, column=5 + 2 * len(conditions), value=f'=IF(A{r}>0,B{r},C{r})&""')
+    vector = engine.Engine(wb)
+    got = vector.run()
+    want = engine.Engine(wb, vectorize=False).run()
+    assert vector.stats["numeric_nodes"] >= 2 * len(conditions)
+    assert set(got) == set(want)
+    for key, w in want.items():
+        g = got[key]
+        assert type(g) is type(w) and _same_value(g, w), (key, g, w)
+
+
 def test_verifying_a_book_imports_no_scipy(tmp_path):
     """`formulas`' statistics module imports scipy at its top, and its math module numpy.random;
     linkbook imports those modules with scipy and numpy.random standing in (issue 14: about a
