@@ -259,7 +259,8 @@ def issue_table(cases: dict, runs: int, against: Path | None, office: bool,
                                    capture_output=True, text=True, check=True).stdout
             results[case] = {"cells": int(cells), **{
                 tool: {"wall": statistics.median(w for w, _ in v),
-                       "peak_mb": statistics.median(m for _, m in v)}
+                       "peak_mb": statistics.median(m for _, m in v),
+                       "runs": v}
                 for tool, v in runs_of.items()}}
             print(f"{case}: done", file=sys.stderr, flush=True)
     return results
@@ -268,11 +269,18 @@ def issue_table(cases: dict, runs: int, against: Path | None, office: bool,
 def print_issue(results: dict, runs: int) -> None:
     """The issue's table: verify against IronCalc and LibreOffice, wall and peak memory."""
     def ratio(r: dict, a: str, b: str, key: str) -> str:
-        return f"{r[a][key] / r[b][key]:.2f}×" if a in r and b in r else "-"
+        """The median of the runs' ratios, run by run (the tools ran in turn): a ratio holds
+        while the machine's speed drifts, where a ratio of medians need not."""
+        if a not in r or b not in r:
+            return "-"
+        k = 0 if key == "wall" else 1
+        pairs = zip(r[a]["runs"], r[b]["runs"])
+        return f"{statistics.median(x[k] / y[k] for x, y in pairs):.2f}×"
 
     def both(r: dict, tool: str) -> str:
         return f"{r[tool]['wall']:.2f} s, {r[tool]['peak_mb']:.0f} MiB" if tool in r else "-"
-    print(f"\nWhole process, medians of {runs} interleaved runs (wall; peak resident memory)")
+    print(f"\nWhole process, medians of {runs} interleaved runs (wall; peak resident memory); "
+          "ratios: medians of the runs' ratios")
     print("| book (formula cells) | verify | IronCalc 0.9.1 | LibreOffice | verify / IronCalc "
           "(wall) | verify / IronCalc (peak) | verify / LibreOffice (wall) | verify / import "
           "floor (wall) |" + (" before / after (wall) |" if any("before" in r for r in
