@@ -186,10 +186,11 @@ def whole_process(name: str, args: list[str], book: Path, runs: int, office: boo
     return {tool: statistics.median(v) for tool, v in times.items()}
 
 
-def measured(command: list[str], src: Path = SRC) -> tuple[float, float]:
-    """(wall seconds, peak resident MiB) of one whole process: the operating system's own
-    accounting of the finished child (wait4), not of this script. A command that prints a JSON
-    line {"peak_mb": …} last (OFFICE: the application it waited for) has that peak if larger.
+def measured(command: list[str], src: Path = SRC) -> tuple[float, float, float]:
+    """(wall seconds, peak resident MiB, CPU seconds) of one whole process: the operating
+    system's own accounting of the finished child (wait4), not of this script. A command that
+    prints a JSON line {"peak_mb": …, "cpu": …} last (OFFICE: of the application it waited for)
+    has that peak if larger, and that CPU time added.
     Linux counts a child's peak from its fork, so this script stays small (it imports no
     numpy or openpyxl): FLOOR_NOTE says how small."""
     env = {**os.environ, "PYTHONPATH": str(src), "TQDM_DISABLE": "1"}
@@ -205,10 +206,11 @@ def measured(command: list[str], src: Path = SRC) -> tuple[float, float]:
                              f"{err.read().decode()}")
         out.seek(0)
         last = (out.read().decode().strip().splitlines() or [""])[-1]
-    peak = usage.ru_maxrss / 1024
+    peak, cpu = usage.ru_maxrss / 1024, usage.ru_utime + usage.ru_stime
     if last.startswith('{"peak_mb"'):
-        peak = max(peak, json.loads(last)["peak_mb"])
-    return seconds, peak
+        child = json.loads(last)
+        peak, cpu = max(peak, child["peak_mb"]), cpu + child["cpu"]
+    return seconds, peak, cpu
 
 
 # LibreOffice's recalculation of a book, from a process that imports only linkbook's office
@@ -219,7 +221,8 @@ from pathlib import Path
 from linkbook.engine.office import recalculate
 with tempfile.TemporaryDirectory() as d:
     recalculate(Path(sys.argv[1]), Path(d))
-print(json.dumps({"peak_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024}))
+usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+print(json.dumps({"peak_mb": usage.ru_maxrss / 1024, "cpu": usage.ru_utime + usage.ru_stime}))
 """
 COUNT_CELLS = """
 import sys, openpyxl
@@ -240,7 +243,7 @@ def issue_table(cases: dict, runs: int, against: Path | None, office: bool,
             book = Path(tmp) / f"{case}.xlsx"
             if "error" in run_job("build", name, args, book):
                 raise SystemExit(f"{case}: the book could not be built")
-            runs_of: dict[str, list[tuple[float, float]]] = {}
+            runs_of: dict[str, list[tuple[float, float, float]]] = {}
             tools = {"verify": lambda: measured([sys.executable, "-m", "linkbook", "verify",
                                                  str(book)]),
                      "floor": lambda: measured(FLOOR)}
@@ -258,9 +261,9 @@ def issue_table(cases: dict, runs: int, against: Path | None, office: bool,
             cells = subprocess.run([sys.executable, "-c", COUNT_CELLS, str(book)],
                                    capture_output=True, text=True, check=True).stdout
             results[case] = {"cells": int(cells), **{
-                tool: {"wall": statistics.median(w for w, _ in v),
-                       "peak_mb": statistics.median(m for _, m in v),
-                       "runs": v}
+                tool: {"wall": statistics.median(w for w, _, _ in v),
+                       "peak_mb": statistics.median(m for _, m, _ in v),
+                       "cpu": statistics.median(c for _, _, c in v), "runs": v}
                 for tool, v in runs_of.items()}}
             print(f"{case}: done", file=sys.stderr, flush=True)
     return results
@@ -273,7 +276,7 @@ def print_issue(results: dict, runs: int) -> None:
         while the machine's speed drifts, where a ratio of medians need not."""
         if a not in r or b not in r:
             return "-"
-        k = 0 if key == "wall" else 1
+        k = ("wall", "peak_mb", "cpu").index(key)
         pairs = zip(r[a]["runs"], r[b]["runs"])
         return f"{statistics.median(x[k] / y[k] for x, y in pairs):.2f}×"
 
@@ -282,18 +285,20 @@ def print_issue(results: dict, runs: int) -> None:
     print(f"\nWhole process, medians of {runs} interleaved runs (wall; peak resident memory); "
           "ratios: medians of the runs' ratios")
     print("| book (formula cells) | verify | IronCalc 0.9.1 | LibreOffice | verify / IronCalc "
-          "(wall) | verify / IronCalc (peak) | verify / LibreOffice (wall) | verify / import "
-          "floor (wall) |" + (" before / after (wall) |" if any("before" in r for r in
+          "(wall) | verify / IronCalc (CPU) | verify / IronCalc (peak) | verify / LibreOffice "
+          "(wall) | verify / import floor (wall) |" + (" before / after (wall; CPU) |" if any("before" in r for r in
                                                                  results.values()) else ""))
-    print("|---|---|---|---|---|---|---|---|" + ("---|" if any("before" in r for r in
+    print("|---|---|---|---|---|---|---|---|---|" + ("---|" if any("before" in r for r in
                                                              results.values()) else ""))
     for case, r in results.items():
         row = (f"| {case} ({r['cells']:,}) | {both(r, 'verify')} | {both(r, 'ironcalc')} | "
                f"{both(r, 'office')} | {ratio(r, 'verify', 'ironcalc', 'wall')} | "
+               f"{ratio(r, 'verify', 'ironcalc', 'cpu')} | "
                f"{ratio(r, 'verify', 'ironcalc', 'peak_mb')} | "
                f"{ratio(r, 'verify', 'office', 'wall')} | {ratio(r, 'verify', 'floor', 'wall')} |")
         if "before" in r:
-            row += (f" {ratio(r, 'before', 'verify', 'wall')} ({both(r, 'before')}) |")
+            row += (f" {ratio(r, 'before', 'verify', 'wall')}; CPU "
+                    f"{ratio(r, 'before', 'verify', 'cpu')} ({both(r, 'before')}) |")
         print(row)
     print("import floor: `python -c \"import numpy, openpyxl, formulas\"`; LibreOffice: its "
           "headless recalculation (soffice, started from a small Python process); peaks are "
