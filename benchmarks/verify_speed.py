@@ -284,12 +284,12 @@ def print_issue(results: dict, runs: int) -> None:
         return f"{r[tool]['wall']:.2f} s, {r[tool]['peak_mb']:.0f} MiB" if tool in r else "-"
     print(f"\nWhole process, medians of {runs} interleaved runs (wall; peak resident memory); "
           "ratios: medians of the runs' ratios")
+    before = any("before" in r for r in results.values())
     print("| book (formula cells) | verify | IronCalc 0.9.1 | LibreOffice | verify / IronCalc "
           "(wall) | verify / IronCalc (CPU) | verify / IronCalc (peak) | verify / LibreOffice "
-          "(wall) | verify / import floor (wall) |" + (" before / after (wall; CPU) |" if any("before" in r for r in
-                                                                 results.values()) else ""))
-    print("|---|---|---|---|---|---|---|---|---|" + ("---|" if any("before" in r for r in
-                                                             results.values()) else ""))
+          "(wall) | verify / import floor (wall) |"
+          + (" before / after (wall; CPU) |" if before else ""))
+    print("|---|---|---|---|---|---|---|---|---|" + ("---|" if before else ""))
     for case, r in results.items():
         row = (f"| {case} ({r['cells']:,}) | {both(r, 'verify')} | {both(r, 'ironcalc')} | "
                f"{both(r, 'office')} | {ratio(r, 'verify', 'ironcalc', 'wall')} | "
