@@ -20,8 +20,17 @@ Then, side by side in the same run, the whole-process wall time (medians of --ru
   excelmodel the ExcelModel job's process (one run; where it ran)
 with the ratios the issue's targets are stated in.
 
+--issue measures only what issue 42's targets are stated in, whole processes side by side in one
+run (medians of --runs runs, the tools interleaved run by run): the bundled four-bar, the 0.1°
+four-bar and slider-crank (with their Forces sheets) and the 1° × 51 pump grid; for each, verify,
+IronCalc and LibreOffice (wall and the process's peak memory: the operating system's own
+accounting of the finished process) and the import floor (`python -c "import numpy, openpyxl,
+formulas"`). It prints the issue's table. With --against DIR (another checkout of linkbook, e.g.
+`git worktree add /tmp/old HEAD~3`) that tree's verify runs interleaved too, as "before".
+
     python benchmarks/verify_speed.py [--json results.json] [--only fourbar-1] [--templates]
                                       [--runs 3]
+    python benchmarks/verify_speed.py --issue [--runs 5] [--against /tmp/old-linkbook]
 """
 from __future__ import annotations
 
@@ -29,6 +38,7 @@ import argparse
 import importlib.util
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -47,9 +57,13 @@ CASES = {
     "fourbar-5": ("fourbar", ["--step", "5"]),
     "fourbar-1": ("fourbar", ["--step", "1"]),
     "fourbar-0.1": ("fourbar", ["--step", "0.1"]),
+    "slider-crank-0.1": ("slider-crank", ["--step", "0.1"]),
     "pump-20x6": ("pump", []),
     "pump-1x51": ("pump", ["--step", "1", "--set", f"s1={PUMP_51}"]),
 }
+# issue 42's books: its targets are stated on these (the bundled four-bar is at its 5°)
+ISSUE_CASES = ("fourbar-5", "fourbar-0.1", "slider-crank-0.1", "pump-1x51")
+FLOOR = [sys.executable, "-c", "import numpy, openpyxl, formulas"]
 
 # Each job runs in its own interpreter and prints a JSON line: {"seconds": …, "peak_mb": …, …}.
 JOBS = {
@@ -172,6 +186,126 @@ def whole_process(name: str, args: list[str], book: Path, runs: int, office: boo
     return {tool: statistics.median(v) for tool, v in times.items()}
 
 
+def measured(command: list[str], src: Path = SRC) -> tuple[float, float, float]:
+    """(wall seconds, peak resident MiB, CPU seconds) of one whole process: the operating
+    system's own accounting of the finished child (wait4), not of this script. A command that
+    prints a JSON line {"peak_mb": …, "cpu": …} last (OFFICE: of the application it waited for)
+    has that peak if larger, and that CPU time added.
+    Linux counts a child's peak from its fork, so this script stays small (it imports no
+    numpy or openpyxl): FLOOR_NOTE says how small."""
+    env = {**os.environ, "PYTHONPATH": str(src), "TQDM_DISABLE": "1"}
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        start = time.perf_counter()
+        proc = subprocess.Popen(command, env=env, stdout=out, stderr=err)
+        _, status, usage = os.wait4(proc.pid, 0)
+        seconds = time.perf_counter() - start
+        code = proc.returncode = os.waitstatus_to_exitcode(status)
+        if code not in (0, 1):          # verify exits 1 on a failed check: still timed
+            err.seek(0)
+            raise SystemExit(f"{' '.join(command)} failed (exit {code}):\n"
+                             f"{err.read().decode()}")
+        out.seek(0)
+        last = (out.read().decode().strip().splitlines() or [""])[-1]
+    peak, cpu = usage.ru_maxrss / 1024, usage.ru_utime + usage.ru_stime
+    if last.startswith('{"peak_mb"'):
+        child = json.loads(last)
+        peak, cpu = max(peak, child["peak_mb"]), cpu + child["cpu"]
+    return seconds, peak, cpu
+
+
+# LibreOffice's recalculation of a book, from a process that imports only linkbook's office
+# module: the peak is the largest process it waited for (soffice)
+OFFICE = """
+import json, resource, sys, tempfile
+from pathlib import Path
+from linkbook.engine.office import recalculate
+with tempfile.TemporaryDirectory() as d:
+    recalculate(Path(sys.argv[1]), Path(d))
+usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+print(json.dumps({"peak_mb": usage.ru_maxrss / 1024, "cpu": usage.ru_utime + usage.ru_stime}))
+"""
+COUNT_CELLS = """
+import sys, openpyxl
+wb = openpyxl.load_workbook(sys.argv[1])
+print(sum(1 for ws in wb.worksheets for row in ws.iter_rows() for c in row
+          if isinstance(c.value, str) and c.value.startswith("=")))
+"""
+
+
+def issue_table(cases: dict, runs: int, against: Path | None, office: bool,
+                ironcalc: bool) -> dict:
+    """Issue 42's measurements: each case's whole processes, medians of `runs` runs, the tools
+    interleaved run by run (ratios hold when the machine's speed drifts)."""
+    results = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for case in ISSUE_CASES:
+            name, args = cases[case]
+            book = Path(tmp) / f"{case}.xlsx"
+            if "error" in run_job("build", name, args, book):
+                raise SystemExit(f"{case}: the book could not be built")
+            runs_of: dict[str, list[tuple[float, float, float]]] = {}
+            tools = {"verify": lambda: measured([sys.executable, "-m", "linkbook", "verify",
+                                                 str(book)]),
+                     "floor": lambda: measured(FLOOR)}
+            if against is not None:
+                tools["before"] = lambda: measured(
+                    [sys.executable, "-m", "linkbook", "verify", str(book)], against / "src")
+            if ironcalc:
+                tools["ironcalc"] = lambda: measured([sys.executable, "-c", IRONCALC,
+                                                      str(book)])
+            if office:
+                tools["office"] = lambda: measured([sys.executable, "-c", OFFICE, str(book)])
+            for _ in range(runs):
+                for tool, run in tools.items():
+                    runs_of.setdefault(tool, []).append(run())
+            cells = subprocess.run([sys.executable, "-c", COUNT_CELLS, str(book)],
+                                   capture_output=True, text=True, check=True).stdout
+            results[case] = {"cells": int(cells), **{
+                tool: {"wall": statistics.median(w for w, _, _ in v),
+                       "peak_mb": statistics.median(m for _, m, _ in v),
+                       "cpu": statistics.median(c for _, _, c in v), "runs": v}
+                for tool, v in runs_of.items()}}
+            print(f"{case}: done", file=sys.stderr, flush=True)
+    return results
+
+
+def print_issue(results: dict, runs: int) -> None:
+    """The issue's table: verify against IronCalc and LibreOffice, wall and peak memory."""
+    def ratio(r: dict, a: str, b: str, key: str) -> str:
+        """The median of the runs' ratios, run by run (the tools ran in turn): a ratio holds
+        while the machine's speed drifts, where a ratio of medians need not."""
+        if a not in r or b not in r:
+            return "-"
+        k = ("wall", "peak_mb", "cpu").index(key)
+        pairs = zip(r[a]["runs"], r[b]["runs"])
+        return f"{statistics.median(x[k] / y[k] for x, y in pairs):.2f}×"
+
+    def both(r: dict, tool: str) -> str:
+        return f"{r[tool]['wall']:.2f} s, {r[tool]['peak_mb']:.0f} MiB" if tool in r else "-"
+    print(f"\nWhole process, medians of {runs} interleaved runs (wall; peak resident memory); "
+          "ratios: medians of the runs' ratios")
+    before = any("before" in r for r in results.values())
+    print("| book (formula cells) | verify | IronCalc 0.9.1 | LibreOffice | verify / IronCalc "
+          "(wall) | verify / IronCalc (CPU) | verify / IronCalc (peak) | verify / LibreOffice "
+          "(wall) | verify / import floor (wall) |"
+          + (" before / after (wall; CPU) |" if before else ""))
+    print("|---|---|---|---|---|---|---|---|---|" + ("---|" if before else ""))
+    for case, r in results.items():
+        row = (f"| {case} ({r['cells']:,}) | {both(r, 'verify')} | {both(r, 'ironcalc')} | "
+               f"{both(r, 'office')} | {ratio(r, 'verify', 'ironcalc', 'wall')} | "
+               f"{ratio(r, 'verify', 'ironcalc', 'cpu')} | "
+               f"{ratio(r, 'verify', 'ironcalc', 'peak_mb')} | "
+               f"{ratio(r, 'verify', 'office', 'wall')} | {ratio(r, 'verify', 'floor', 'wall')} |")
+        if "before" in r:
+            row += (f" {ratio(r, 'before', 'verify', 'wall')}; CPU "
+                    f"{ratio(r, 'before', 'verify', 'cpu')} ({both(r, 'before')}) |")
+        print(row)
+    print("import floor: `python -c \"import numpy, openpyxl, formulas\"`; LibreOffice: its "
+          "headless recalculation (soffice, started from a small Python process); peaks are "
+          "counted from at least this script's own "
+          f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB")
+
+
 def formula_cells(book: Path) -> int:
     sys.path.insert(0, str(SRC))
     import openpyxl
@@ -188,9 +322,23 @@ def main() -> int:
                     help="also every bundled template at its default step")
     ap.add_argument("--runs", type=int, default=3,
                     help="runs per whole-process measurement (medians)")
+    ap.add_argument("--issue", action="store_true",
+                    help="only issue 42's table: verify, IronCalc, LibreOffice side by side")
+    ap.add_argument("--against", type=Path,
+                    help="with --issue: another checkout of linkbook, its verify timed too")
     opts = ap.parse_args()
     compile_tree(SRC)
     cases = dict(CASES)
+    if opts.issue:          # before anything else: this process must stay small (measured)
+        if opts.against is not None:
+            compile_tree(opts.against / "src")
+        results = issue_table(cases, opts.runs, opts.against,
+                              bool(__import__("shutil").which("soffice")),
+                              importlib.util.find_spec("ironcalc") is not None)
+        print_issue(results, opts.runs)
+        if opts.json:
+            Path(opts.json).write_text(json.dumps(results, indent=2))
+        return 0
     if opts.templates:
         cases.update({p.stem: (p.stem, []) for p in sorted((ROOT / "templates").glob("*.toml"))})
     have_office = bool(__import__("shutil").which("soffice"))

@@ -482,7 +482,7 @@ def numeric_book(rows: int = 600) -> openpyxl.Workbook:
         for j, name in enumerate(forms):
             if name == "u-":
                 text = f"=-A{r}"
-            elif name in "+-*/^":
+            elif name in "+-*/^" or name in vectorized.COMPARISONS:
                 text = f"=A{r}{name}B{r}"
             else:
                 text = f"={name}(A{r},B{r})" if name == "ATAN2" else f"={name}(A{r})"
@@ -512,6 +512,61 @@ def test_numeric_forms_give_formulas_own_bits_and_types():
         else:
             assert type(g) is type(w) and (g == w or (g != g and w != w)), (key, g, w)
     assert errors > 0        # the domain edges were reached: formulas made those errors
+
+
+def test_comparisons_give_formulas_own_booleans():
+    """A comparison's numeric form, row by row as a per-cell evaluation gives it, and of the
+    type the formula's next node reads (TRUE joined to text): equal floats, 0 and -0, an int
+    beside a float, text, booleans, blanks and errors."""
+    pairs = [(1.5, 1.5), (0.0, -0.0), (2.0, 3.0), (3.0, 2.0), (1e-300, 0.0), (7, 7.0),
+             ("a", "A"), ("b", 1.0), (True, 1.0), (None, 0.0), (None, ""), ("=NA()", 1.0),
+             ("=1/0", 2.0), (-1e308, 1e308)] * 3
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    names = sorted(vectorized.COMPARISONS)
+    for r, (a, b) in enumerate(pairs, start=1):
+        ws.cell(row=r, column=1, value=a)
+        ws.cell(row=r, column=2, value=b)
+        for j, name in enumerate(names):
+            ws.cell(row=r, column=3 + j, value=f"=A{r}{name}B{r}")
+        ws.cell(row=r, column=3 + len(names), value=f'=(A{r}<B{r})&""')
+    vector = engine.Engine(wb)
+    got = vector.run()
+    want = engine.Engine(wb, vectorize=False).run()
+    assert vector.stats["numeric_nodes"] == len(names) + 1
+    assert set(got) == set(want)
+    for key, w in want.items():
+        g = got[key]
+        assert type(g) is type(w) and _same_value(g, w), (key, g, w)
+
+
+def test_if_picks_as_formulas_does():
+    """IF on arrays, row by row as a per-cell evaluation gives it: conditions that are
+    booleans (a comparison's, ISNUMBER's), numbers (0, -0, 2.5), text, blanks and errors;
+    branches that are numbers, text, blanks, booleans and errors; with and without the third
+    argument; and what it gives read by the next node (a blank picked is 0: "0" as text)."""
+    conditions = ["=A{r}>0", "=ISNUMBER(A{r})", "=A{r}", '="x"', "=1/0", "=Z{r}"]
+    values = [1.5, 0.0, -0.0, 2.5, -3.0, "t", True, None, "=NA()"]
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    r = 0
+    for a in values:
+        for x in values:
+            r += 1
+            ws[f"A{r}"], ws[f"B{r}"], ws[f"C{r}"] = a, x, -7.0
+            for j, condition in enumerate(conditions):
+                test = condition.format(r=r)[1:]
+                ws.cell(row=r, column=5 + 2 * j, value=f"=IF({test},B{r},C{r})")
+                ws.cell(row=r, column=6 + 2 * j, value=f"=IF({test},B{r})")
+            ws.cell(row=r, column=5 + 2 * len(conditions), value=f'=IF(A{r}>0,B{r},C{r})&""')
+    vector = engine.Engine(wb)
+    got = vector.run()
+    want = engine.Engine(wb, vectorize=False).run()
+    assert vector.stats["numeric_nodes"] >= 2 * len(conditions)
+    assert set(got) == set(want)
+    for key, w in want.items():
+        g = got[key]
+        assert type(g) is type(w) and _same_value(g, w), (key, g, w)
 
 
 def test_verifying_a_book_imports_no_scipy(tmp_path):
@@ -691,3 +746,21 @@ def test_running_sums_are_summed_as_the_cells_add():
             assert math.copysign(1.0, got[key]) == math.copysign(1.0, w), key
     assert engine.error_code(got[("Sheet", "C399")]) == "#N/A"
     assert engine.error_code(got[("Sheet", "E2")]) == "#VALUE!"
+
+
+@pytest.mark.parametrize("formula, dr, copied", [
+    ("=A8*COS(B8)-$D$2+E$7", 3, "=A11*COS(B11)-$D$2+E$7"),
+    ('=IF(B8>0,"{x}",{1,2})+SUM(F7:F8)', 2, '=IF(B10>0,"{x}",{1,2})+SUM(F9:F10)'),
+    ("=Sweep!Z99+'Mechanism'!C6*a_2", -5, "=Sweep!Z94+'Mechanism'!C1*a_2"),
+    ("=Sweep!Z99+'Mechanism'!C6", -6, None),              # C0 is no cell
+    ("=A8+1", 1048576 - 8, "=A1048576+1"),
+    ("=A8+1", 1048576 - 7, None),                          # beyond the last row
+    ("=$A$1+B$2+1", -500, "=$A$1+B$2+1"),                  # nothing relative: any copy
+])
+def test_a_copy_down_a_column_is_its_formula_shifted(formula, dr, copied):
+    """The grouping takes a cell for a copy of the one above when its text is the template's
+    shift (engine.references.Template.shifted); the texts here are written by hand."""
+    from linkbook.engine.references import References
+    refs = References(["Sweep", "Mechanism"], {"A_2": "'Mechanism'!$C$6"})
+    _, template = refs.fast_shape(formula, "Sweep", 8, 3)
+    assert template.shifted(dr, 0) == copied

@@ -184,6 +184,44 @@ def test_rerun_equals_a_full_evaluation_with_those_inputs(books, name):
             assert all(_same(before[k], values[k]) for k in before)
 
 
+def _all_same(got: list, want: list) -> None:
+    assert len(got) == len(want)
+    bad = [(i, a, b) for i, (a, b) in enumerate(zip(got, want)) if not _same(a, b)]
+    assert not bad, bad[:5]
+
+
+def _columns(wb):
+    """(sheet, cells) of every column of every sheet, from the row above the first to beyond the
+    last (constants, formulas, empty cells and cells outside the sheet)."""
+    for ws in wb.worksheets:
+        for col in range(1, ws.max_column + 2):
+            letter = openpyxl.utils.get_column_letter(col)
+            yield ws.title, [f"{letter}{r}" for r in range(0, ws.max_row + 3)]
+
+
+def test_a_column_looked_up_together_is_what_a_full_evaluation_gives(books):
+    """verify reads the engine's values a column at a time (rerun.Values.many), at the book's
+    own inputs and at other ones: each cell as evaluate() of the book holding them gives it
+    (None where it gives none)."""
+    wb = openpyxl.load_workbook(books["fourbar"])
+    record = read_record(wb)
+    own = verifier.inputs_of(wb, record)
+    ev = engine.Engine(wb)
+    view, full = ev.run_view(), engine.evaluate(wb)
+    for sheet, cells in _columns(wb):
+        _all_same(view.many(sheet, cells), [full.get((sheet, c)) for c in cells])
+    assert view.many("Sweep", ["B5", "no cell"]) == [full[("Sweep", "B5")], None]
+    assert view.many("no sheet", ["B5"]) == [None] and view.many("Sweep", []) == []
+    new = input_sets.draw(record, "angle", own, 1, 2)
+    cells = {("Mechanism", record.inputs[k].cell): v for k, v in new.items() if v != own[k]}
+    for (sheet, cell), value in cells.items():
+        wb[sheet][cell] = value
+    moved = engine.evaluate(wb)
+    with rerun(ev, cells) as values:
+        for sheet, column in _columns(wb):
+            _all_same(values.many(sheet, column), [moved.get((sheet, c)) for c in column])
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("family", sorted(p.stem for p in templates.bundled()))
 def test_random_books_agree_at_their_other_set(family, tmp_path):

@@ -134,7 +134,7 @@ class Judging:
                 for key, where in cells.items() if is_angle(key)}
 
     def got(self, sheet: str, cells: list[str]) -> list:
-        return [self.values.get((sheet, x)) for x in cells]
+        return looked_up(self.values, sheet, cells)
 
     def compare(self, check: Check, sheet: str, cells: list[str], expected, unit: str,
                 slope=None, dead=None, sine=None, rules: Rules | None = None) -> None:
@@ -152,6 +152,13 @@ class Judging:
 
     def slope(self, inputs, key: str, unit: str, **options):
         return slope_of(self.solver, self.params, inputs, key, unit, scale=self.scale, **options)
+
+
+def looked_up(values, sheet: str, cells: list[str]) -> list:
+    """The values of `cells` of `sheet` (None where none): the engine's values (a view of its
+    grid) look a column up together, any other mapping cell by cell."""
+    many = getattr(values, "many", None)
+    return many(sheet, cells) if many else [values.get((sheet, x)) for x in cells]
 
 
 MIN_RATE = 1e-9

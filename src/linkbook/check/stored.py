@@ -3,10 +3,13 @@ value) differs whatever its value, and each value stored with a formula (what a 
 not calculate shows) is judged as its formula's value is, with the same bounds."""
 from __future__ import annotations
 
-from ..base.record import BuildRecord
+from collections import ChainMap
 from dataclasses import replace
 
+from ..base.record import BuildRecord
+
 from .checks import STORED, Check, Mismatch, Rules, show
+from .context import looked_up
 from .judge import judge_book
 from .reading import cell_order
 
@@ -61,7 +64,17 @@ def _same(a, b, error_code) -> bool:
     return a == b
 
 
-def check_stored(wb, record: BuildRecord, values: dict, stored: dict, rules: Rules) -> Check:
+def _computed(values, stored: dict) -> dict:
+    """{cell: the value its formula gives} of the cells that store one, looked up a sheet at a
+    time."""
+    by_sheet: dict[str, list[str]] = {}
+    for sheet, cell in stored:
+        by_sheet.setdefault(sheet, []).append(cell)
+    return {(sheet, cell): v for sheet, cells in by_sheet.items()
+            for cell, v in zip(cells, looked_up(values, sheet, cells))}
+
+
+def check_stored(wb, record: BuildRecord, values, stored: dict, rules: Rules) -> Check:
     """Each stored value judged as its formula's value is, with the same bounds: a value stored
     that its formula does not give (an edit of the file, a stale save) differs, named with what
     the formula gives and what is stored. Only the stored values that differ from the formula's
@@ -69,12 +82,13 @@ def check_stored(wb, record: BuildRecord, values: dict, stored: dict, rules: Rul
     from ..base.xlsx import CellError
     is_error, error_code = rules.is_error, rules.error_code
     c = Check(STORED, "value ≠ the formula's", cells=len(stored))
-    differ = {k: v for k, v in stored.items() if not _same(v, values.get(k), error_code)}
+    computed = _computed(values, stored)
+    differ = {k: v for k, v in stored.items() if not _same(v, computed.get(k), error_code)}
     # a value of another kind (TRUE for 1, the text "1.5" for 1.5) differs outright: a reader
     # that does not calculate shows it as it is, whatever the bounds say of its number
     for key in [k for k, v in differ.items()
-                if _kind(v, error_code) != _kind(values.get(k), error_code)]:
-        c.mismatches.append(Mismatch(key[0], key[1], show_stored(values.get(key), error_code),
+                if _kind(v, error_code) != _kind(computed.get(k), error_code)]:
+        c.mismatches.append(Mismatch(key[0], key[1], show_stored(computed.get(key), error_code),
                                      show_stored(differ.pop(key), error_code)))
     if not differ:
         return c
@@ -85,7 +99,7 @@ def check_stored(wb, record: BuildRecord, values: dict, stored: dict, rules: Rul
     def any_code(v) -> str | None:
         return str(v) if isinstance(v, CellError) else error_code(v)
 
-    again = judge_book(wb, record, {**values, **differ},
+    again = judge_book(wb, record, ChainMap(differ, values),
                        replace(rules, is_error=any_error, error_code=any_code))
     named = set()
     for check in again:
@@ -93,11 +107,11 @@ def check_stored(wb, record: BuildRecord, values: dict, stored: dict, rules: Rul
             key = (m.sheet, m.cell)
             if key in differ and key not in named:
                 named.add(key)
-                computed, got = values.get(key), differ[key]
-                c.mismatches.append(Mismatch(m.sheet, m.cell, show_stored(computed, error_code),
+                formula, got = computed.get(key), differ[key]
+                c.mismatches.append(Mismatch(m.sheet, m.cell, show_stored(formula, error_code),
                                              show_stored(got, any_code)))
-                if isinstance(computed, float) and isinstance(got, float):
-                    c.max_abs = max(c.max_abs, abs(got - computed))
+                if isinstance(formula, float) and isinstance(got, float):
+                    c.max_abs = max(c.max_abs, abs(got - formula))
     return c
 
 

@@ -47,7 +47,7 @@ def verify(path: Path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Repo
     try:
         if engine == "vector":
             evaluation = engines.Engine(wb)
-            values = evaluation.run()
+            values = evaluation.run_view()
         elif engine == "formulas":
             # ExcelModel rounds number constants to 15 decimals (engine.evaluate's
             # excel_model_constants): judged with the relative bound, as LibreOffice is

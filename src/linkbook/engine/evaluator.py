@@ -82,6 +82,7 @@ from .errors import CircularReferenceError, EngineError, UnsupportedFormulaError
 from .groups import Group, Grouper, Member
 from .order import cell_order, closure, downstream, group_deps, untangled_components
 from .plan import Planner
+from .rerun import Values
 from .running import running_sum_input
 from .references import (RefDesc, References, cell_name, cells_read, formula_shape,
                          sheet_prefix)
@@ -168,6 +169,16 @@ class Engine:
 
     # ---- pipeline
     def run(self) -> dict[tuple[str, str], object]:
+        self._evaluate_all()
+        return self._values()
+
+    def run_view(self) -> Values:
+        """run(), its values read where the engine holds them (rerun.Values, a mapping like
+        run()'s dict) instead of copied into a dict of every cell."""
+        self._evaluate_all()
+        return Values(self)
+
+    def _evaluate_all(self) -> None:
         self._prepare()
         # Overflow warnings would only repeat what the #NUM!/#VALUE! results say; 'ignore' and
         # numpy's default 'warn' give the same values.
@@ -177,7 +188,6 @@ class Engine:
         batches = {id(g.batch): g.batch for g in self.groups}.values()   # groups share them
         self.stats["row_by_row_nodes"] = sum(b.row_by_row for b in batches)
         self.stats["numeric_nodes"] = sum(b.numeric for b in batches)
-        return self._values()
 
     def _prepare(self) -> None:
         """Group, plan, allocate and order: everything but the evaluation."""

@@ -19,7 +19,7 @@ from ..base.xlsx import coordinate_to_tuple
 READ_SKELETONS: dict[str, set[str]] = {}
 
 
-@dataclass
+@dataclass(slots=True)     # one a formula cell: hundreds of thousands in a big book
 class Member:
     """A formula cell of a group."""
     row: int

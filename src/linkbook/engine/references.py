@@ -151,18 +151,22 @@ class Template:
         out.append(text)
         return tuple(out), tuple(rows)
 
+    @functools.cached_property
+    def _down_format(self) -> tuple[str, tuple[int, ...], int, int]:
+        """_down as one format string with a field for each relative row, those rows, and
+        their smallest and largest (a copy down the column is one format call)."""
+        texts, rows = self._down
+        escaped = [t.replace("{", "{{").replace("}", "}}") for t in texts]
+        return "{}".join(escaped), rows, min(rows, default=0), max(rows, default=0)
+
     def shifted(self, dr: int, dc: int) -> str | None:
         """The text of this formula copied dr rows down and dc columns right (None if a
         reference would leave the sheet)."""
         if dc == 0:
-            texts, rows = self._down
-            out = [texts[0]]
-            for value, text in zip(rows, texts[1:]):
-                value += dr
-                if not 1 <= value <= MAX_ROW:
-                    return None
-                out += (str(value), text)
-            return "".join(out)
+            text, rows, lowest, highest = self._down_format
+            if rows and (lowest + dr < 1 or highest + dr > MAX_ROW):
+                return None
+            return text.format(*map(dr.__add__, rows))
         texts, slots = self._relative
         out = [texts[0]]
         for (is_row, value), text in zip(slots, texts[1:]):

@@ -1,5 +1,6 @@
-"""A book evaluated again with other values in some of its constant cells, after Engine.run():
-what verify judges at its other input sets.
+"""The values of a book the engine has evaluated, read where the engine holds them (Values: a
+mapping like run()'s dict, without a copy of every cell), and the book evaluated again with
+other values in some of its constant cells (rerun): what verify judges at its other input sets.
 
 Only the formulas downstream of the changed cells can give other values, and of those only the
 ones asked for are evaluated: a formula cell is evaluated when it is first looked up, with the
@@ -38,15 +39,15 @@ def rerun(engine, inputs: dict[tuple[str, str], object]) -> Iterator[Mapping]:
         engine.grid = kept
 
 
-class Rerun(Mapping):
-    """(sheet, 'B7') -> value, as run() gives it, of a book whose changed inputs the engine's
-    grid holds; each formula downstream of them evaluated when first asked for."""
+_FLOATS = {float, np.float64}
 
-    def __init__(self, engine, places: list[tuple[str, int, int]]):
+
+class Values(Mapping):
+    """(sheet, 'B7') -> value, as run()'s dict gives it, read from the engine's value grid as
+    it stands (after run(); inside a rerun, that rerun's)."""
+
+    def __init__(self, engine):
         self.engine = engine
-        self.deps = {g.gid: group_deps(g, engine.owner) for g in engine.groups}
-        self.moved = downstream(engine.groups, engine.grid, places, self.deps)
-        self.done: set[int] = set()
 
     def _place(self, key) -> tuple[str, int, int] | None:
         """(sheet, row, col) of a cell of the value grid; None for any other key (run()'s
@@ -61,6 +62,9 @@ class Rerun(Mapping):
             return None
         return sheet, row, col
 
+    def _ready(self, gids) -> None:
+        """Make the groups `gids` hold their values (here they do: run() evaluated them)."""
+
     def __getitem__(self, key):
         place = self._place(key)
         if place is None:
@@ -72,18 +76,38 @@ class Rerun(Mapping):
             if (row, col) not in engine.constants.get(sheet, {}):
                 raise KeyError(key)         # an empty cell: run() gives none either
             return public_value(engine.grid[sheet][row, col], False)
-        if gid in self.moved and gid not in self.done:
-            self._evaluate(gid)
+        self._ready({gid})
         return public_value(engine.grid[sheet][row, col], True)
 
-    def _evaluate(self, gid: int) -> None:
-        """Group gid and what it needs of the groups that moved, in the engine's order."""
-        need = (closure({gid}, self.deps) & self.moved) - self.done
-        with np.errstate(all="ignore"):
-            for component in self.engine.order:
-                if need.intersection(component):
-                    self.engine._evaluate_component(component)
-                    self.done.update(component)
+    def get(self, key, default=None):
+        try:
+            return self[key]
+        except KeyError:
+            return default
+
+    def many(self, sheet: str, cells: list[str]) -> list:
+        """[self.get((sheet, cell)) for cell in cells], looked up together (a column of a
+        table: one lookup of the groups that own them)."""
+        grid = self.engine.grid.get(sheet)
+        try:
+            rows, cols = (np.array(x, dtype=np.int64) for x in
+                          zip(*map(coordinate_to_tuple, cells)))
+        except (TypeError, ValueError):             # no cells, or one that is no address
+            grid = None
+        if grid is None:
+            return [self.get((sheet, cell)) for cell in cells]
+        inside = (rows < grid.shape[0]) & (cols < grid.shape[1])   # beyond: no value, None
+        rows, cols = np.where(inside, rows, 0), np.where(inside, cols, 0)
+        owners = np.where(inside, self.engine.owner[sheet][rows, cols], -1)
+        self._ready(set(owners.tolist()) - {-1})
+        values = self.engine.grid[sheet][rows, cols]
+        if owners.min() >= 0 and set(map(type, values.tolist())) <= _FLOATS:
+            return values.astype(float).tolist()      # formula numbers: floats, as public_value
+        constants = self.engine.constants.get(sheet, {})
+        return [public_value(v, True) if gid >= 0
+                else public_value(v, False) if ok and (r, c) in constants else None
+                for v, gid, r, c, ok in zip(values.tolist(), owners.tolist(), rows.tolist(),
+                                            cols.tolist(), inside.tolist())]
 
     def __iter__(self):
         engine = self.engine
@@ -98,3 +122,27 @@ class Rerun(Mapping):
         return sum(map(len, self.engine.constants.values())) + sum(
             len(g.members) for g in self.engine.groups)
 
+
+class Rerun(Values):
+    """Values of a book whose changed inputs the engine's grid holds; each formula downstream
+    of them evaluated when first asked for."""
+
+    def __init__(self, engine, places: list[tuple[str, int, int]]):
+        super().__init__(engine)
+        self.deps = {g.gid: group_deps(g, engine.owner) for g in engine.groups}
+        self.moved = downstream(engine.groups, engine.grid, places, self.deps)
+        self.done: set[int] = set()
+
+    def _ready(self, gids) -> None:
+        waiting = (set(gids) & self.moved) - self.done
+        if waiting:
+            self._evaluate(waiting)
+
+    def _evaluate(self, gids: set[int]) -> None:
+        """Groups `gids` and what they need of the groups that moved, in the engine's order."""
+        need = (closure(gids, self.deps) & self.moved) - self.done
+        with np.errstate(all="ignore"):
+            for component in self.engine.order:
+                if need.intersection(component):
+                    self.engine._evaluate_component(component)
+                    self.done.update(component)

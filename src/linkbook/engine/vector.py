@@ -1,10 +1,10 @@
 """Vector calls: a compiled formula called once for every row of a group, each node of its graph
 wrapped to run on (n, 1) arrays, giving, row for row, what a per-cell call gives.
 
-Element-wise nodes (ELEMENTWISE) run on the whole arrays; arithmetic and the common math
-functions first as float-array operations on the rows of finite numbers (NUMERIC_FORMS), with
-formulas' own bits; MIN, MAX and COUNT on arrays (AGGREGATES), per row here and over whole
-ranges outside vector calls; any other node, and an element-wise node whose output collapsed,
+Element-wise nodes (ELEMENTWISE) run on the whole arrays; arithmetic, comparisons and the common
+math functions first as float-array operations on the rows of finite numbers (NUMERIC_FORMS),
+with formulas' own bits; IF on arrays where its condition is a boolean or a number; MIN, MAX and
+COUNT on arrays (AGGREGATES), per row here and over whole ranges outside vector calls; any other node, and an element-wise node whose output collapsed,
 runs row by row on (1, 1) slices, which is exactly what a per-cell call does.
 """
 from __future__ import annotations
@@ -92,6 +92,13 @@ NUMERIC_FORMS = {
 }
 _NUMBER_TYPES = frozenset({float, int, np.float64, np.int64})
 
+# formulas compares two numbers as Python does (its logic operators give a Python bool). A
+# float array compares an int exactly up to 2**53: a cell's number is read as a float, and the
+# ints formulas makes (counts, lengths, sums of booleans) are far smaller.
+COMPARISONS = {"=": np.equal, "<>": np.not_equal, "<": np.less, ">": np.greater,
+               "<=": np.less_equal, ">=": np.greater_equal}
+NUMERIC_FORMS.update({name: _typed(op, bool) for name, op in COMPARISONS.items()})
+
 
 def _columns_of(args, n: int, types: frozenset):
     """The arguments of a node over n rows as object arrays of n (a scalar of `types`, or an
@@ -117,7 +124,8 @@ def _rows_of(args, n: int, types: frozenset):
         return None
     plain = np.ones(n, bool)
     for a in flat:
-        plain &= np.fromiter((type(v) in types for v in a), bool, n)
+        if not set(map(type, a.tolist())) <= types:    # else every row is plain (most columns)
+            plain &= np.fromiter((type(v) in types for v in a), bool, n)
     xs = []
     for a in flat:
         x = np.zeros(n)
@@ -137,7 +145,7 @@ def _numeric_call(form, func, args, n: int):
         result, kind = form(*xs)
     plain &= np.isfinite(result)
     out = np.empty(n, object)
-    out[:] = result.tolist() if kind is float else list(result)
+    out[:] = result.tolist() if kind in (float, bool) else list(result)   # Python's types
     if not plain.all():
         rest = ~plain
         sub = func(*[a[rest].reshape(-1, 1) if a.size == n and not _is_broadcast(a) else
@@ -225,6 +233,44 @@ def _aggregate_call(name: str, func, args, n: int):
     return out.reshape(n, 1).view(Array)
 
 
+# IF's condition on the rows IF takes as arrays: a boolean (a comparison's, ISNUMBER's) or a
+# number; formulas' IF picks `x if condition else y` for those, a text gives #VALUE! and an
+# error itself (formulas' call takes those rows).
+_CONDITION_TYPES = frozenset({bool, np.bool_, float, int, np.float64, np.int64})
+
+
+def _if_call(func, args, n: int):
+    """IF over n rows: on the rows whose condition is of _CONDITION_TYPES, the object of the
+    branch it picks (a blank read as 0, as formulas' IF reads its arguments; FALSE for a
+    missing third argument), `func` on the rest. None when an argument is not an object array
+    of one value or of n, or a scalar (the caller runs `func`)."""
+    if len(args) not in (2, 3):
+        return None
+    cols = []
+    for a in args:
+        if isinstance(a, np.ndarray):
+            if a.size not in (1, n) or a.dtype != object:
+                return None
+            a = a.reshape(-1)
+        else:
+            a = np.array([a], object)
+        cols.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
+    branches = cols[1:] if len(cols) == 3 else [cols[1], np.full(n, False, object)]
+    conditions = cols[0].tolist()
+    plain = np.fromiter((type(c) in _CONDITION_TYPES for c in conditions), bool, n)
+    truth = np.fromiter((p and bool(c) for c, p in zip(conditions, plain.tolist())), bool, n)
+    out = np.empty(n, object)
+    out[:] = [0 if v is sh.EMPTY else v for v in np.where(truth, *branches).tolist()]
+    if not plain.all():
+        rest = ~plain
+        sub = func(*[a[rest].reshape(-1, 1) if a.size == n and not _is_broadcast(a) else
+                     np.asarray(a[:1], object).reshape(1, 1) for a in cols])
+        if not isinstance(sub, np.ndarray) or sub.size != int(rest.sum()):
+            return None
+        out[rest] = sub.reshape(-1)
+    return out.reshape(n, 1).view(Array)
+
+
 def _ranges_node(func, name: str):
     """Wrap a MIN, MAX or COUNT node for calls outside vector calls: one result over every value
     of its arguments (the ranges' values in order, row by row), computed on arrays where
@@ -273,10 +319,12 @@ class _NotScalar(Exception):
     """A row-by-row node returned more than one value: the group cannot be vectorized."""
 
 
-def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=None):
+def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=None,
+                 choice: bool = False):
     """Wrap a node of the compiled graph for (n, 1) calls.  A node with a numeric form runs it
     on the rows of finite numbers, MIN, MAX and COUNT (`aggregate`, their name) on the rows of
-    plain numbers (AGGREGATES).  Element-wise nodes run once; if their output is not (n, 1)
+    plain numbers (AGGREGATES), IF (`choice`) on the rows of a boolean or numeric condition
+    (_if_call).  Element-wise nodes run once; if their output is not (n, 1)
     (an exception collapsed it), or the node is not element-wise, it runs row by row on (1, 1)
     slices, exactly as in a per-cell call."""
     def node(*args, **kw):
@@ -290,6 +338,11 @@ def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=
                 return out
         if aggregate is not None and not kw:
             out = _aggregate_call(aggregate, func, args, n)
+            if out is not None:
+                batch.numeric += 1
+                return out
+        if choice and not kw:
+            out = _if_call(func, args, n)
             if out is not None:
                 batch.numeric += 1
                 return out
@@ -313,4 +366,4 @@ def wrap(func, name: str, batch: Batch | None):
     if batch is None:
         return _ranges_node(func, name) if name in AGGREGATES else func
     return _vector_node(func, batch, name in ELEMENTWISE, NUMERIC_FORMS.get(name),
-                        name if name in AGGREGATES else None)
+                        name if name in AGGREGATES else None, name == "IF")
