@@ -11,11 +11,13 @@ binary link's angle and the ternary's, as a quantity of the points (docs/coupled
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
 
 from ..expressions import scalar
+from .triad_iterations import DEFAULT_ITERATIONS, converged, ternary_frame
 from ..group import Bar, Turn, solve_group
 from ..positions import Positions
 from ..rates import Rates
@@ -62,18 +64,18 @@ def cross(ux, uy, vx, vy):
     return ux * vy - uy * vx
 
 
-def determinant(joints, pivots_xy):
+def determinant(joints, pivots_xy, b: float, c: float):
     """J11·J22 − J12·J21 of the book's system in (angle of the first binary link, angle of the
-    ternary's first side) with residuals (|E − B|² − b²)/2 and (|F − C|² − c²)/2: J11 =
-    (D − A)×(E − B), J12 = (E − D)×(E − B), J21 = (D − A)×(F − C), J22 = (F − D)×(F − C);
-    zero exactly where the group is at a dead centre."""
+    ternary's first side) with residuals (|E − B|² − b²)/2b and (|F − C|² − c²)/2c: J11 =
+    (D − A)×(E − B)/b, J12 = (E − D)×(E − B)/b, J21 = (D − A)×(F − C)/c, J22 =
+    (F − D)×(F − C)/c; zero exactly where the group is at a dead centre."""
     (dx, dy), (ex, ey), (fx, fy) = joints
     (ax, ay), (bx, by), (cx, cy) = pivots_xy
     j11 = cross(dx - ax, dy - ay, ex - bx, ey - by)
     j12 = cross(ex - dx, ey - dy, ex - bx, ey - by)
     j21 = cross(dx - ax, dy - ay, fx - cx, fy - cy)
     j22 = cross(fx - dx, fy - dy, fx - cx, fy - cy)
-    return j11 * j22 - j12 * j21
+    return (j11 * j22 - j12 * j21) / (b * c)
 
 
 def place(solver: Positions, step: Mapping) -> None:
@@ -84,14 +86,24 @@ def place(solver: Positions, step: Mapping) -> None:
     joints = solve_group(solver.n, 3, bars(solver, pivots, lengths, sides), sketch,
                          [Turn(0, 1, 2, sense(sketch))], solver.size, solver.tol_f)
     moving = solver.moves(*pivots)
+    turning = sense(sketch)
+    frame = ternary_frame(sides, turning)
+    solver.put(f"gamma_{names[0]}", turning * abs(math.atan2(frame[1], frame[0])), True)
+    count = step.get("iterations", DEFAULT_ITERATIONS)
+    at = [solver.points[p] for p in pivots]
+    iterations, joints = converged(names[0], count, joints, at, lengths, sides, frame, sketch,
+                                   solver.turns)
+    for key, value in iterations.items():
+        solver.put(key, value, False)
+    angles = {}
     for name, pivot, (x, y) in zip(names, pivots, joints):
         px, py = solver.points[pivot]
-        solver.column(step, f"theta_{name}", f"theta_{name}", np.arctan2(y - py, x - px),
-                      moving)
+        angles[name] = solver.column(step, f"theta_{name}", f"theta_{name}",
+                                     np.arctan2(y - py, x - px), moving)
     (x0, y0), (x1, y1) = joints[0], joints[1]
     first = f"{names[0]}{names[1]}"
-    solver.column(step, f"theta_{first}", f"theta_{first}", np.arctan2(y1 - y0, x1 - x0),
-                  moving)
+    ternary = solver.column(step, f"theta_{first}", f"theta_{first}",
+                            np.arctan2(y1 - y0, x1 - x0), moving)
     keys = {}
     for name, (x, y) in zip(names, joints):
         keys[name] = {"x": solver.column(step, f"x{name}", f"x{name}", x, moving),
@@ -99,12 +111,11 @@ def place(solver: Positions, step: Mapping) -> None:
     for name in names:
         solver.new_point({"point": name}, keys[name], moving, loop=True)
     for name, pivot, length in zip(names, pivots, lengths):
-        solver.add_link(pivot, name, solver.out[f"theta_{name}"], f"theta_{name}", length)
+        solver.add_link(pivot, name, solver.out[angles[name]], angles[name], length)
     for k, side in enumerate(sides):
         a, b = names[k], names[(k + 1) % 3]
         (ax, ay), (bx, by) = joints[k], joints[(k + 1) % 3]
-        solver.add_link(a, b, np.arctan2(by - ay, bx - ax), f"theta_{first}" if k == 0
-                        else None, side)
+        solver.add_link(a, b, np.arctan2(by - ay, bx - ax), ternary if k == 0 else None, side)
 
 
 def rates(motion: Rates, step: Mapping) -> None:
@@ -140,7 +151,7 @@ def rates(motion: Rates, step: Mapping) -> None:
                      motion.angle(names[0], names[1]), True)
     joints = [(motion.points[n][0].a, motion.points[n][1].a) for n in names]
     at = [(motion.points[p][0].a, motion.points[p][1].a) for p in pivots]
-    motion.out[f"det_{names[0]}"] = determinant(joints, at)
+    motion.out[f"det_{names[0]}"] = determinant(joints, at, lengths[1], lengths[2])
 
 
 def topology(step: Mapping, length_input: str | None) -> Topology:
