@@ -157,6 +157,7 @@ def test_the_rates_agree_with_finite_differences_of_the_positions():
     distances) against central differences of the reference's own positions."""
     joints = [(35.0, 25.0), (60.0, 30.0), (45.0, 45.0)]
     description, _, _ = _description(20.0, ((80.0, 0.0), (10.0, 70.0)), joints, joints)
+    description["steps"][1]["iterations"] = 20     # the row at 80° follows the one at 0°
     h, t, speed = 1e-3, 80.0, 10.0       # degrees, degrees, rad/s
     rows = solve(description, {"omega_in": speed, "alpha_in": 0.0},
                  np.array([0.0, t - h, t, t + h]))
