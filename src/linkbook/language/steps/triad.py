@@ -158,11 +158,11 @@ class _Writer:
         phi = self.add(f"phi_0_{n}", f"φ(0)", RAD,
                        f"IF(ISNUMBER({{{final_phi}@above}}),{{{final_phi}@above}},"
                        f"ATAN2(({sx0})-({px}),({sy0})-({py})))",
-                       f"iteration 0: angle of {self.pivots[0]}→{n}, from the row above")
+                       f"iteration 0: angle of {self.pivots[0]}→{n}")
         theta = self.add(f"th_0_{n}", f"θ(0)", RAD,
                          f"IF(ISNUMBER({{{final_theta}@above}}),{{{final_theta}@above}},"
                          f"ATAN2(({sx1})-({sx0}),({sy1})-({sy0})))",
-                         f"iteration 0: angle of {p[0]}→{p[1]}, from the row above")
+                         f"iteration 0: angle of {p[0]}→{p[1]}")
         for k in range(self.iterations):
             joints = self.joints(phi, theta, gamma, f"i{k}")
             (r1, r2), (j11, j12, j21, j22) = self.jacobian(phi, theta, gamma, joints, k)
