@@ -32,6 +32,7 @@ FAST_TESTS = ["tests/test_verdict.py", "tests/test_published.py", "tests/test_mo
 NON_GRASHOF = ["--set", "a1=100", "--set", "a2=60", "--set", "a3=50", "--set", "a4=40"]
 DEAD_CENTRE = ["--set", "a1=10", "--set", "a2=20", "--set", "a3=4", "--set", "a4=6",
                "--set", "b3=3", "--set", "c3=2", "--step", "10"]
+TRIAD = [("tests/data/triad-sixbar.toml", [])]     # the triad's mutants: its example book
 NEAR_CHANGE_POINT = ["--set", "a4=42.69"]       # s + l exceeds p + q by 1e-4 of it
 RAM_DEAD_CENTRE = ["--set", "a4=100", "--set", "a5=300", "--set", "b1=-190"]
 # A Jansen leg whose knee angles (θ of the links p and q at C) reach below -180° in radians, out
@@ -57,6 +58,18 @@ class Mutant:
 
 
 MUTANTS = [
+    Mutant("triad: a sign of its Jacobian (J12 negated)", "src/linkbook/language/steps/triad.py",
+           'f"{_p(cross(v, u))}/{ln}", f"iteration {k}: ∂r{i}/∂{w}")',
+           'f"{\'-\' if (i, j) == (1, 2) else \'\'}{_p(cross(v, u))}/{ln}", '
+           'f"iteration {k}: ∂r{i}/∂{w}")', TRIAD, aimed_only=True),
+    Mutant("triad: one Newton iteration fewer than the step writes",
+           "src/linkbook/language/steps/triad.py",
+           "for k in range(self.iterations):", "for k in range(self.iterations - 1):", TRIAD,
+           aimed_only=True),
+    Mutant("triad: its first guess in the other assembly (φ from the sketch turned half a turn)",
+           "src/linkbook/language/steps/triad.py",
+           'f"ATAN2(({sx0})-({px}),({sy0})-({py})))"', 'f"ATAN2(({px})-({sx0}),({py})-({sy0})))"',
+           TRIAD, aimed_only=True),
     Mutant("sign: a dyad's output angle ϕ + ψ for ϕ − ψ", "src/linkbook/language/steps/dyad.py",
            'f"{{{angle}}}-{{{branch}}}*{{{psi.key}}}{q_offset}"',
            'f"{{{angle}}}+{{{branch}}}*{{{psi.key}}}{q_offset}"'),

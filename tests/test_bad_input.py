@@ -107,8 +107,8 @@ TOML_CASES = [
     ("a required key missing", FOURBAR_TOML.replace('type = "dyad"', 'tpye = "dyad"'),
      "mechanism.steps[1] (step B).type: is missing ('tpye' is not a key: did you mean "
      "'type'?)"),
-    ("a step of an unknown type", FOURBAR_TOML.replace('type = "dyad"', 'type = "triad"'),
-     "(triad B).type: must be one of crank, dyad, slider"),
+    ("a step of an unknown type", FOURBAR_TOML.replace('type = "dyad"', 'type = "tetrad"'),
+     "(tetrad B).type: must be one of crank, dyad, slider"),
     ("a symbol that is no identifier", FOURBAR_TOML.replace("a2 = {", "2a = {"),
      "mine.toml: parameters.2a: is not a symbol: letters, digits and _, starting with a letter"),
     ("a link of one point", FOURBAR_TOML.replace('links = [["A0", "A"]', 'links = [["A0"]'),

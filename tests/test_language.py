@@ -83,7 +83,7 @@ BAD = [
      ["parameters.a1.name", "cell reference"]),
     ("a link through an undefined point", _set("mechanism.links", [["A0", "Q"]]),
      ["links[0][1]", "'Q' is not defined"]),
-    ("an unknown step type", _step("B", "type", "triad"), ["type", "must be one of"]),
+    ("an unknown step type", _step("B", "type", "tetrad"), ["type", "must be one of"]),
     ("an expression that does not parse", _step("B", "p_length", "a3*(a4"),
      ["(dyad B).p_length", "is not an expression"]),
     ("an unknown function", _step("B", "p_length", "COSH(a3)"), ["unknown function COSH"]),
@@ -336,12 +336,16 @@ steps = [
   { type = "distance", between = ["C3", "S"], key = "d_CS" },
   { type = "expression", key = "ratio", formula = "d_CS/s_rod + IF(s_S > 0, 1, -1)" },
   { type = "expression", key = "k", formula = "SQRT(a1^2 + a2^2)/MAX(a3, a4)", unit = "-" },
+  { type = "triad", points = ["X1", "X2", "X3"], pivots = ["A", "Q", "R"], lengths = [104.043, 92.195, 155.322], sides = [72.111, 25.0, 68.007], sketch = [[110, 60], [50, 100], [70, 115]], iterations = 5, columns = { theta_X1X2 = { key = "tern", symbol = "θt" } } },
 ]
 """
 
 
-def _every_option(**values) -> templates.Template:
+def _every_option(drop: tuple[str, ...] = (), **values) -> templates.Template:
+    """EVERY_OPTION with these parameter values, without the steps of the types in `drop`."""
     data = tomllib.loads(EVERY_OPTION)
+    steps = data["mechanism"]["steps"]
+    steps[:] = [s for s in steps if s["type"] not in drop]
     for k, v in values.items():
         data["parameters"][k]["value"] = v
     return templates.from_data("every-option", data)
@@ -377,7 +381,9 @@ def test_every_option_on_random_dimensions():
         "e6": st.floats(-40, 40), "side": st.sampled_from([1, -1]),
         "br": st.sampled_from([1, -1])}))
     def check(values):
-        b, computed = builder.make(_every_option(**values))
+        # the triad's random dimensions are test_triad_book's (its rows near a limit position
+        # make the judge take many slopes: it would double this test's time)
+        b, computed = builder.make(_every_option(drop=("triad",), **values))
         checks = checks_of(b, computed)
         bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:2]]
         assert not bad, (values, bad[:5])

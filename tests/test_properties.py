@@ -170,12 +170,16 @@ def test_random_dimensions_match_the_reference(family):
     check()
 
 
+# Step types no bundled template uses yet, and where their property test is instead
+NOT_BUNDLED = {"triad": "test_triad_book.py (docs/coupled-loops.md: why not yet bundled)"}
+
+
 def test_every_step_type_is_covered():
     """The bundled templates, and so the property tests above, use every step type of the
-    mechanism language at least once."""
+    mechanism language at least once (but those of NOT_BUNDLED, tested at random elsewhere)."""
     used = {step["type"] for name in FAMILIES
             for step in templates.load(name).mechanism.description["steps"]}
-    assert used == set(STEP_KEYS), set(STEP_KEYS) - used
+    assert used == set(STEP_KEYS) - set(NOT_BUNDLED), set(STEP_KEYS) - used
 
 
 MAGNITUDE_EXAMPLES = examples(60)

@@ -12,7 +12,8 @@ from ..language.model import Model
 # A table's formula is rendered once for all its cells: a control character in it (style.ROW,
 # grid.COL, motion.SWEEP_ROW) stands for a row number or a column's letters.
 _PLACEHOLDER = re.compile("[\x00-\x1f]")
-LAST_ROW = "1048576"      # the longest a placeholder's text can be anywhere
+LAST_ROW = "1048576"
+ABOVE_SUFFIX = "@above"   # {key@above}: the key's cell in the row above (excel.PLACEHOLDER)      # the longest a placeholder's text can be anywhere
 
 
 class Resolver:
@@ -34,6 +35,8 @@ class Resolver:
     def __call__(self, key: str) -> str:
         if key in self.cells:
             return self.cells[key]
+        if key.endswith(ABOVE_SUFFIX):    # no row above in this block: the step starts afresh
+            return "NA()"
         if key in self.names:
             return self.names[key]
         q = self._by_key.get(key)

@@ -33,6 +33,7 @@ def header(symbol: str, unit: str, length_unit: str) -> str:
 
 
 ROW = "\x00"   # stands for the row number in a table formula rendered once for all rows
+ABOVE = "\x03"  # ... and for the number of the row above it (a continuation)
 
 TITLE = Font(bold=True, size=14)
 BOLD = Font(bold=True)

@@ -13,10 +13,10 @@ from openpyxl.utils import column_index_from_string, get_column_letter
 
 from ..base.sheets import DASH, SWEEP
 from ..language.model import COLUMN, DEG, RAD, Model
-from .resolve import Resolver
+from .resolve import ABOVE_SUFFIX, Resolver
 from ..language.templates import Template
 from .package import Formula
-from .style import (NOTE, ROW, TITLE, fit_labels, header, number_format, numbers_only, put,
+from .style import (ABOVE, NOTE, ROW, TITLE, fit_labels, header, number_format, numbers_only, put,
                     put_head, put_text, table_style, unit_text)
 
 
@@ -72,8 +72,9 @@ def sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
                        f"{mech.input_word}s where the loop cannot close.", NOTE)
     head_row, first = 4, SWEEP_FIRST_ROW
     formulas: dict[str, str] = {}
-    resolve = Resolver(model, names, {k: f"{letters[k]}{ROW}" for k, _ in columns},
-                       place=str(first + len(angles)))
+    cells = {k: f"{letters[k]}{ROW}" for k, _ in columns}
+    cells.update({f"{k}{ABOVE_SUFFIX}": f"{letters[k]}{ABOVE}" for k, _ in columns})
+    resolve = Resolver(model, names, cells, place=str(first + len(angles)))
     for i, (key, q) in enumerate(columns, start=1):
         ws.column_dimensions[letters[key]].width = 12
         if q is None:
@@ -95,9 +96,10 @@ def sweep_table(ws, t: Template, model: Model, names: dict[str, str]) -> dict:
     styles = {key: table_style(ws, formats[key]) for key in formulas}
     for r, angle in enumerate(angles, start=first):
         put(ws, r, 1, angle, angle_style)
-        row_text = str(r)
+        row_text, above = str(r), str(r - 1)    # the first row's above is the header
         for key, text in formulas.items():
-            put(ws, r, columns_at[key], Formula(text.replace(ROW, row_text)), styles[key])
+            put(ws, r, columns_at[key], Formula(text.replace(ROW, row_text).replace(ABOVE, above)),
+                styles[key])
     last = first + len(angles) - 1
     if model.closes:
         letters.update(_assembly_columns(ws, letters, model.closes, first, last, head_row,

@@ -285,7 +285,7 @@ class Compiler:
         if kind not in STEPS:
             raise DescriptionError(f"{field}.type", f"must be one of {', '.join(STEPS)} "
                                                     f"(got {kind!r})")
-        label = step.get("point") or step.get("key")
+        label = step.get("point") or step.get("key") or _group_label(step.get("points"))
         field = f"{self.field}.steps[{i}] ({kind} {label})" if isinstance(label, str) else field
         self.step_name = f"{kind} {label}"
         self.model.where = field
@@ -323,6 +323,13 @@ class Compiler:
                                                    f"{', '.join(order)}")
 
 
+def _group_label(points: object) -> str | None:
+    """A group's points as its label in messages ("D E F"), if they are names."""
+    if isinstance(points, list) and points and all(isinstance(p, str) for p in points):
+        return " ".join(points)
+    return None
+
+
 def parameter_kinds(origin: str, table: dict, defaults: dict[str, str] | None = None
                     ) -> dict[str, str]:
     """Each parameter's kind: `kind` of its entry, else its default (an older template's symbol
@@ -355,6 +362,11 @@ def compile_mechanism(name: str, data: dict, kinds: dict[str, str], origin: str,
         param, out = grid
         if param not in kinds:
             raise DescriptionError(f"{origin}: grid.parameter", f"{param!r} is not a parameter")
+        group = next((r["field"] for r in c.records if r["type"] == "triad"), None)
+        if group is not None:       # a grid cell is one self-contained formula: no row above
+            raise DescriptionError(f"{origin}: grid", f"{group} is solved by iterations "
+                                                      "continued from row to row, which a "
+                                                      "grid's self-contained cells cannot do")
         if out not in {q.key for q in model.of_role(COLUMN)}:
             raise DescriptionError(f"{origin}: grid.output", f"{out!r} is not a shown column")
     return Mechanism(name, dict(c.kinds), c.input_key, c.input_symbol, lambda: model, grid,

@@ -151,9 +151,11 @@ def unconvertible(mechanism: Mechanism, model: Model) -> tuple[str, str] | None:
             if want is None:
                 continue
             for j, item in enumerate(raw if isinstance(raw, list) else [raw]):
-                found = _Dimensions(dims).check(item, want)
-                if found:
-                    return f"{field}.{k}" + (f"[{j}]" if isinstance(raw, list) else ""), found
+                for sub in item if isinstance(item, list) else [item]:   # a sketch's [x, y]
+                    found = _Dimensions(dims).check(sub, want)
+                    if found:
+                        return f"{field}.{k}" + (f"[{j}]" if isinstance(raw, list) else ""), \
+                            found
     return _unconvertible_force_key(description, {**dims, METRES: -1})
 
 

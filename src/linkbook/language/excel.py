@@ -22,7 +22,8 @@ from dataclasses import dataclass
 from typing import Callable
 
 # ---------------------------------------------------------------- placeholders
-PLACEHOLDER = re.compile(r"\{(\w+)\}")
+# {key@above}: the key's cell in the row above (a sweep's continuation; NA() elsewhere)
+PLACEHOLDER = re.compile(r"\{(\w+(?:@above)?)\}")
 
 
 def references(formula: str) -> list[str]:

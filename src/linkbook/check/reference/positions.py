@@ -54,7 +54,9 @@ def size_of(steps: list[Mapping], step_types: Mapping[str, StepType],
         total += abs(x) + abs(y)
     for step in steps:
         for field in step_types[step["type"]].length_fields:
-            if field in step:
+            if isinstance(step.get(field), (list, tuple)):     # a group's lengths
+                total += sum(abs(scalar(v, params)) for v in step[field])
+            elif field in step:
                 value = evaluate(step[field], params)   # a swept length: its largest value
                 total += float(np.nanmax(np.abs(value), initial=0.0)) \
                     if isinstance(value, np.ndarray) else abs(scalar(step[field], params))

@@ -90,9 +90,31 @@ def still(x: Taylor) -> Taylor:
 DEAD_CENTRE = 1e-7
 
 
+def hadamard_ratio(jac: list[list[np.ndarray]]) -> np.ndarray:
+    """|det J| over the product of its rows' lengths, per row: 1 where the constraint
+    gradients are orthogonal, 0 where they are dependent (for two, the sine between them)."""
+    m = np.stack([np.stack(np.broadcast_arrays(*line), axis=-1) for line in jac], axis=-2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.abs(np.linalg.det(m)) / np.prod(np.linalg.norm(m, axis=-1), axis=-1)
+
+
+def _t_solve_large(jac: list[list[np.ndarray]], rhs: list[np.ndarray]
+                   ) -> tuple[list, np.ndarray]:
+    """jac·x = rhs per row for three unknowns or more (LAPACK); NaN and marked where jac is
+    singular to within DEAD_CENTRE (its Hadamard ratio)."""
+    m = np.stack([np.stack(np.broadcast_arrays(*line), axis=-1) for line in jac], axis=-2)
+    b = np.stack(np.broadcast_arrays(*rhs), axis=-1)
+    dead = ~(hadamard_ratio(jac) > DEAD_CENTRE)
+    safe = np.where(dead[..., None, None], np.eye(len(rhs)), m)
+    x = np.linalg.solve(safe, np.where(dead[..., None], 0.0, b)[..., None])[..., 0]
+    return [np.where(dead, np.nan, x[..., k]) for k in range(len(rhs))], dead
+
+
 def t_solve(jac: list[list[np.ndarray]], rhs: list[np.ndarray]) -> tuple[list, np.ndarray]:
-    """jac·x = rhs per row (1×1 or 2×2); NaN where jac is singular. Also the rows where a 2×2
+    """jac·x = rhs per row; NaN where jac is singular. Also the rows where a 2×2 (or larger)
     jac is singular to within DEAD_CENTRE (the rates there are NaN and marked)."""
+    if len(rhs) > 2:
+        return _t_solve_large(jac, rhs)
     with np.errstate(divide="ignore", invalid="ignore"):
         if len(rhs) == 1:
             d = jac[0][0]
@@ -111,7 +133,8 @@ def implicit(residuals, z0: list[np.ndarray], knowns: dict, still: dict
              ) -> tuple[list[Taylor], np.ndarray, np.ndarray]:
     """The unknowns z(t) with residuals(z, knowns) = 0, z(0) = z0 (see the section's comment),
     the rows at a dead centre, and per row how far from one (a 2×2 system's sine between its
-    gradients; 1 for one unknown, whose step measures its own)."""
+    gradients, a larger one's Hadamard ratio; 1 for one unknown, whose step measures its
+    own)."""
     k = len(z0)
     jac = [[None] * k for _ in range(k)]
     for j in range(k):
@@ -127,4 +150,6 @@ def implicit(residuals, z0: list[np.ndarray], knowns: dict, still: dict
         (a, b), (c, d) = jac
         with np.errstate(divide="ignore", invalid="ignore"):
             sine = np.abs(a * d - b * c) / (np.hypot(a, b) * np.hypot(c, d))
+    elif k > 2:     # a group's: how far its gradients are from dependent
+        sine = hadamard_ratio(jac)
     return [Taylor(z, d, dd) for z, d, dd in zip(z0, z1, z2)], dead, sine

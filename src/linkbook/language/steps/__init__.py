@@ -9,13 +9,13 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
 
-from . import crank, distance, dyad, expression, point, slide, slider, slot, vector
+from . import crank, distance, dyad, expression, point, slide, slider, slot, triad, vector
 from .step_type import COMMON_KEYS, StepType
 
 STEPS: dict[str, StepType] = {
     "crank": crank.STEP, "dyad": dyad.STEP, "slider": slider.STEP, "slide": slide.STEP,
     "point": point.STEP, "slot": slot.STEP, "vector": vector.STEP, "distance": distance.STEP,
-    "expression": expression.STEP,
+    "expression": expression.STEP, "triad": triad.STEP,
 }
 
 

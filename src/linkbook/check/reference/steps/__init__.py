@@ -8,7 +8,7 @@ more entry (a test may add one at run time).
 from __future__ import annotations
 
 from ..step_type import StepType
-from . import crank, distance, dyad, expression, point, slide, slider, slot, vector
+from . import crank, distance, dyad, expression, point, slide, slider, slot, triad, vector
 
 STEP_TYPES: dict[str, StepType] = {
     "crank": crank.STEP,
@@ -20,4 +20,5 @@ STEP_TYPES: dict[str, StepType] = {
     "vector": vector.STEP,
     "distance": distance.STEP,
     "expression": expression.STEP,
+    "triad": triad.STEP,
 }

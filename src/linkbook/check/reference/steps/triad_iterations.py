@@ -1,0 +1,127 @@
+"""The triad's Newton iterations as the book writes them (docs/coupled-loops.md), judged one
+iteration at a time: each iteration's residuals, Jacobian and correction are what the
+reference's own geometry gives at the book's own iterate (the angle φ of the first binary
+link, the angle θ of the ternary's first side), so that a wrong cell is found where it is,
+not only where its error reaches the solution.
+
+At an iterate (φ, θ) the joints are placed by the reference's own construction (the ternary's
+third joint from its sides by constraints.triangle_apex), the residuals are
+(|E − B|² − b²)/2b and (|F − C|² − c²)/2c, the Jacobian their derivatives by Taylor
+arithmetic (taylor.py), and the correction LAPACK's solve of J·Δ = r. The first iterate is the
+row above's solution (the reference's own), or where the row above did not close (and on the
+first row) the sketch's angles. Where the book's iterates are not given (the reference asked
+on its own, for a slope), the iterates are the reference's own, from that start.
+
+The book's triad closes on a row where its iterations converge (the last correction at most
+TOLERANCE): the reference's solution stands there and is NaN on the other rows (`converged`),
+so that a row the written iterations do not reach is #N/A, and the next row starts from the
+sketch, in both.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..constraints import triangle_apex
+from ..taylor import Taylor, t_cos, t_sin
+
+DEFAULT_ITERATIONS = 6      # the language's default (docs/coupled-loops.md)
+TOLERANCE = 1e-9            # rad: a row converged where its last correction is at most this
+
+
+def ternary_frame(sides: list[float], sense: float) -> tuple[float, float]:
+    """The third joint in the frame of the first side (its first joint at the origin, the
+    second on +x at |side 0|): (u, v), v signed by the link's turning sense."""
+    cx, cy = triangle_apex(sides[0], sides[2], sides[1])
+    return cx, sense * cy
+
+
+def _joints(phi, theta, pivot, length, side, frame):
+    """D, E, F (Taylor pairs) at the angles φ, θ (Taylor)."""
+    u, v = frame
+    dx = Taylor(pivot[0]) + length * t_cos(phi)     # Taylor first: not numpy's element loop
+    dy = Taylor(pivot[1]) + length * t_sin(phi)
+    c, s = t_cos(theta), t_sin(theta)
+    ex, ey = dx + side * c, dy + side * s
+    fx, fy = dx + u * c - v * s, dy + u * s + v * c
+    return (dx, dy), (ex, ey), (fx, fy)
+
+
+def residuals(phi, theta, pivots, lengths, sides, frame):
+    """(r1, r2) at the iterate: (|E − B|² − b²)/2b and (|F − C|² − c²)/2c."""
+    _, e, f = _joints(phi, theta, pivots[0], lengths[0], sides[0], frame)
+    out = []
+    for joint, pivot, length in ((e, pivots[1], lengths[1]), (f, pivots[2], lengths[2])):
+        dx, dy = joint[0] - Taylor(pivot[0]), joint[1] - Taylor(pivot[1])
+        out.append((dx * dx + dy * dy - length * length) / (2.0 * length))
+    return out
+
+
+def iteration(phi: np.ndarray, theta: np.ndarray, pivots, lengths, sides, frame) -> dict:
+    """Residuals, Jacobian and correction at the iterate, per row."""
+    by_phi = residuals(Taylor(phi, 1.0), Taylor(theta), pivots, lengths, sides, frame)
+    by_theta = residuals(Taylor(phi), Taylor(theta, 1.0), pivots, lengths, sides, frame)
+    r = [np.asarray(x.a, dtype=float) for x in by_phi]
+    jac = np.stack([np.stack(np.broadcast_arrays(by_phi[i].b, by_theta[i].b), axis=-1)
+                    for i in (0, 1)], axis=-2)
+    det = np.linalg.det(jac)
+    ok = np.isfinite(det) & (det != 0.0)
+    safe = np.where(ok[:, None, None], jac, np.eye(2))
+    step = np.linalg.solve(safe, np.stack(r, axis=-1)[..., None])[..., 0]
+    step = np.where(ok[:, None], step, math.nan)
+    return {"r1": r[0], "r2": r[1], "J11": jac[:, 0, 0], "J12": jac[:, 0, 1],
+            "J21": jac[:, 1, 0], "J22": jac[:, 1, 1], "dphi": step[:, 0], "dth": step[:, 1]}
+
+
+def start(solved, pivots, sketch: list[float]) -> tuple[np.ndarray, np.ndarray]:
+    """Each row's first iterate: the row above's solution where it closed, else the sketch's
+    angles (from the row's own pivot of the first binary link)."""
+    (dx, dy), (ex, ey) = solved[0], solved[1]
+    ax, ay = pivots[0]
+    above_phi = np.roll(np.arctan2(dy - ay, dx - ax), 1)
+    above_theta = np.roll(np.arctan2(ey - dy, ex - dx), 1)
+    closed = np.isfinite(above_phi) & np.isfinite(above_theta)
+    closed[0] = False
+    phi0 = np.arctan2(sketch[1] - ay, sketch[0] - ax)
+    theta0 = np.full_like(phi0, math.atan2(sketch[3] - sketch[1], sketch[2] - sketch[0]))
+    return np.where(closed, above_phi, phi0), np.where(closed, above_theta, theta0)
+
+
+def iteration_columns(n: str, count: int, solved, pivots, lengths, sides, frame, sketch,
+                      shown: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Every iteration column of the triad whose first joint is `n`, keyed as the book keys
+    them; `shown`: the book's own iterates where known (reference.solve's `turns`)."""
+    out: dict[str, np.ndarray] = {}
+    phi, theta = start(solved, pivots, sketch)
+    step = {}
+    for k in range(count):
+        out[f"phi_{k}_{n}"], out[f"th_{k}_{n}"] = phi, theta
+        at_phi = shown.get(f"phi_{k}_{n}", phi)
+        at_theta = shown.get(f"th_{k}_{n}", theta)
+        step = iteration(np.asarray(at_phi, dtype=float), np.asarray(at_theta, dtype=float),
+                         pivots, lengths, sides, frame)
+        for name, value in step.items():
+            out[f"{name}_{k}_{n}"] = value
+        phi, theta = at_phi - step["dphi"], at_theta - step["dth"]
+    out[f"conv_{n}"] = np.maximum(np.abs(step["dphi"]), np.abs(step["dth"]))
+    return out
+
+
+def converged(n: str, count: int, solved, pivots, lengths, sides, frame, sketch,
+              shown: Mapping[str, np.ndarray]) -> tuple[dict[str, np.ndarray], list]:
+    """The iteration columns, and the solved joints kept only on the rows where the written
+    iterations converge. A row dropped makes the next row start from the sketch, which may
+    change whether that one converges: repeated until no row changes."""
+    closed = np.isfinite(solved[0][0]) & np.isfinite(solved[1][0]) & np.isfinite(solved[2][0])
+    while True:
+        kept = [(np.where(closed, x, math.nan), np.where(closed, y, math.nan))
+                for x, y in solved]
+        columns = iteration_columns(n, count, kept, pivots, lengths, sides, frame, sketch,
+                                    shown)
+        still = closed & (columns[f"conv_{n}"] <= TOLERANCE)
+        if (still == closed).all():
+            return columns, kept
+        closed = still
