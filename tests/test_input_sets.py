@@ -231,7 +231,7 @@ def test_random_books_agree_at_their_other_set(family, tmp_path):
     from test_properties import dimensions, through_a_pivot, with_values
     base = templates.load(family)
 
-    @settings(max_examples=examples(25, at_least=3), deadline=None, derandomize=True,
+    @settings(max_examples=examples(20, at_least=3), deadline=None, derandomize=True,
               suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
     @given(dimensions(base))
     def check(values):

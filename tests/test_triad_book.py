@@ -17,6 +17,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings, strategies as st
 
 from conftest import ROOT, checks_of, examples
+from test_triad_reference import conditioning
 from linkbook.base.errors import InputError
 from linkbook.book import builder
 from linkbook.check.reference import solve
@@ -67,24 +68,6 @@ def _assembly(crank, b0, c0, joints, sketch) -> dict:
                 sxF=sketch[2][0], syF=sketch[2][1])
 
 
-def _conditioning(ends, joints) -> float:
-    """|det| over the product of its rows' lengths of the six distances' Jacobian (0 at a dead
-    centre of the group, 1 at best)."""
-    rows = []
-    for k, (p, j) in enumerate(zip(ends, joints)):
-        line = np.zeros(6)
-        line[2 * k:2 * k + 2] = np.subtract(j, p)
-        rows.append(line)
-    for k in range(3):
-        m = (k + 1) % 3
-        line = np.zeros(6)
-        line[2 * k:2 * k + 2] = np.subtract(joints[k], joints[m])
-        line[2 * m:2 * m + 2] = -line[2 * k:2 * k + 2]
-        rows.append(line)
-    jac = np.array(rows)
-    return abs(np.linalg.det(jac)) / np.prod(np.linalg.norm(jac, axis=1))
-
-
 STEP = 15.0
 
 
@@ -109,7 +92,7 @@ def test_random_triads_agree_with_the_reference_cell_by_cell(crank, b0, c0, d, e
     angles = np.arange(0.0, 360.0 + STEP / 2, STEP)
     ref = solve(data["mechanism"], params, angles)
     assume(np.isfinite(ref["xD"]).all())
-    assume(all(_conditioning([(crank * math.cos(t), crank * math.sin(t)), b0, c0],
+    assume(all(conditioning([(crank * math.cos(t), crank * math.sin(t)), b0, c0],
                              [(ref[f"x{n}"][i], ref[f"y{n}"][i]) for n in "DEF"]) > 0.02
                for i, t in enumerate(np.radians(angles)) if np.isfinite(ref["xD"][i])))
     b, values = _book(data, step=STEP)

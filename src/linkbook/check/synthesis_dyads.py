@@ -286,13 +286,20 @@ def _check_dyad(judge: _Judge, dyad: str) -> None:
     for v, value in numerators.items():
         judge.cell(f"{k}_N{v}_re", value.real, "length")
         judge.cell(f"{k}_N{v}_im", value.imag, "length")
+    _judge_system(judge, k, condition, {first: m - g, second: d.points[0] - m})
+
+
+def _judge_system(judge: _Judge, k: str, condition: float, vectors: dict[str, complex]
+                  ) -> None:
+    """A dyad's condition number (or that it lies beyond the limit), its system in words, and
+    its two vectors (W and Z, or U and S) by parts."""
     if condition <= ref.SINGULAR_COND:
         judge.cell(f"{k}_condition", condition, "-", lever=condition)
     else:
         _beyond(judge, f"{k}_condition", ref.SINGULAR_COND)
     judge.text(f"{k}_system", WORDS["singular" if condition > ref.SINGULAR_COND
                                    else "solvable"])
-    for v, vector in ((first, m - g), (second, d.points[0] - m)):
+    for v, vector in vectors.items():
         judge.cell(f"{v}_x", vector.real, "length")
         judge.cell(f"{v}_y", vector.imag, "length")
 
@@ -323,15 +330,7 @@ def _check_dyad_about_pivot(judge: _Judge, dyad: str) -> None:
     for name, value in (("F", float(np.sum(sigma ** 2))), ("t1", sigma[0] ** 2),
                         ("t2", sigma[1] ** 2)):
         judge.cell(f"{k}_{name}", value, "length²")
-    if condition <= ref.SINGULAR_COND:
-        judge.cell(f"{k}_condition", condition, "-", lever=condition)
-    else:
-        _beyond(judge, f"{k}_condition", ref.SINGULAR_COND)
-    judge.text(f"{k}_system", WORDS["singular" if condition > ref.SINGULAR_COND
-                                   else "solvable"])
-    for v, vector in ((first, m - g), (second, d.points[0] - m)):
-        judge.cell(f"{v}_x", vector.real, "length")
-        judge.cell(f"{v}_y", vector.imag, "length")
+    _judge_system(judge, k, condition, {first: m - g, second: d.points[0] - m})
     for j in (2, 3):
         judge.cell(f"{key}{j}", math.degrees(d.rotations[dyad][j - 1]), "deg", judge.lever)
 
