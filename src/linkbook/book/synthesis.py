@@ -178,13 +178,15 @@ def _fit(ws, *heads: int) -> None:
                             if isinstance(ws.cell(row, c).value, str)])
 
 
-def _table_head(ws, head: int, title: str, columns) -> dict[str, str]:
+def _table_head(ws, head: int, title: str, columns, height: float | None = HEAD_HEIGHT
+                ) -> dict[str, str]:
     """A table's bold title above row `head` and its headers in it, from TABLE_COLUMN on; the
-    column letter of each key."""
+    column letter of each key. `height`: the header row's, or None to leave it to fit_heads."""
     first = get_column_letter(TABLE_COLUMN)
     ws[f"{first}{head - 1}"] = title
     ws[f"{first}{head - 1}"].font = BOLD
-    ws.row_dimensions[head].height = HEAD_HEIGHT
+    if height is not None:
+        ws.row_dimensions[head].height = height
     letter = {}
     for i, (key, text) in enumerate(columns, start=TABLE_COLUMN):
         put_head(ws, head, i, text)

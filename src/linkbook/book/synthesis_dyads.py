@@ -23,7 +23,7 @@ from .style import (BOLD, NOTE, TITLE, block_head, column_width, fit_heads, numb
                     put_head, put_text, set_formula)
 from .summary import grashof_formula
 from .synthesis_drawing import joints_at, positions_drawing
-from .synthesis import TABLE_COLUMN, _Block
+from .synthesis import TABLE_COLUMN, _Block, _table_head
 
 FORM = ("The standard dyad form (Norton §5.7): W·(e^{iβ_j} − 1) + Z·(e^{iα_j} − 1) = δ_j, "
         "j = 2, 3, for the crank's dyad; U and S with γ_j for the rocker's. In real and "
@@ -130,15 +130,10 @@ def _task(b: _Block, task: DyadTask) -> dict[str, str]:
 
 
 def _head(ws, head: int, title: str, columns) -> dict[str, str]:
-    """A table's bold title above row `head` and its headers in it, from TABLE_COLUMN on."""
-    first = get_column_letter(TABLE_COLUMN)
-    ws[f"{first}{head - 1}"] = title
-    ws[f"{first}{head - 1}"].font = BOLD
-    letter = {}
-    for i, (key, text) in enumerate(columns, start=TABLE_COLUMN):
-        put_head(ws, head, i, text)
-        letter[key] = get_column_letter(i)
-        ws.column_dimensions[letter[key]].width = 5 if key == "j" else 12
+    """synthesis.py's table head, its header row left to _fit, its columns 12 wide (j: 5)."""
+    letter = _table_head(ws, head, title, columns, height=None)
+    for key, column in letter.items():
+        ws.column_dimensions[column].width = 5 if key == "j" else 12
     return letter
 
 
