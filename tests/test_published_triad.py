@@ -160,3 +160,19 @@ def test_a_book_at_each_printed_pose_agrees_with_the_reference(printed, name):
         for where in ("now", "row"):
             assert book[where] == pytest.approx(ref, abs=1e-9 * size), (pose, where)
             assert abs(book[where][0] - pose[0]) <= CASE[name]["tolerance"], (pose, where)
+
+
+def test_six_poses_where_the_source_says_six():
+    """Activity 5's own data, p2 = 7: "there will be six poses". From sketches near the six
+    printed for p2 = 6.99, the reference reaches six poses at p2 = 7, each nearest (in θ) to
+    the printed pose it was sketched from: six different assemblies, none reached twice."""
+    i = dict(CASE["activity_5"]["inputs"], p2=7.0)
+    printed = [pose[0] for pose in CASE["activity_5"]["poses"]]
+    poses = [_reference(_data(i, _sketch(i, pose))) for pose in CASE["activity_5"]["poses"]]
+    for theta, x, y in poses:       # a pose by the source's equations: vertex 1 p1 from (0, 0)
+        assert _sauer_xy(theta, i) == pytest.approx((x, y), abs=1e-12 * _size(i))
+        assert math.hypot(x, y) == pytest.approx(i["p1"], abs=1e-12 * _size(i))
+    found = [theta for theta, _, _ in poses]
+    assert min(np.diff(sorted(found))) > 1e-3, found
+    for k, theta in enumerate(found):
+        assert int(np.argmin(np.abs(np.subtract(printed, theta)))) == k, (k, theta, printed)
