@@ -66,9 +66,8 @@ Modules of the engine: references (what a formula reads: descriptors, shapes, th
 adapter (the one place that touches `formulas`' internals: its tokenizer, compiled pipes,
 ExcelModel), vector (vector calls), groups (cells into groups of one shape), plan (each group's
 mode and compiled function), order (the order of evaluation), running (running sums), grammar
-(the fast parser), scan (row recurrences), rerun (after run(), the book again with other values in some constant
-cells: only what moves with them and is asked for), and
-this one: the public entry points and the Engine that runs the steps above.
+(the fast parser), scan (row recurrences), rerun (after run(), the book again with other
+values in some constant cells: only what moves with them and is asked for), and this one: the public entry points and the Engine that runs the steps above.
 """
 
 from __future__ import annotations
