@@ -150,7 +150,7 @@ EXPRESSIONS = [
     "SQRT(A{r})", "EXP(A{r})", "LN(A{r})", "ABS(A{r})", "DEGREES(A{r})", "RADIANS(A{r})",
     "ATAN2(A{r},B{r})", "MOD(A{r},B{r})", "PI()*A{r}", "ISNUMBER(A{r})", "ISNUMBER(A{r}>B{r})",
     "IF(A{r}>B{r},A{r},B{r})", "IF(A{r},B{r})", "IF(A{r}>0,B{r},NA())", "IF(B{r},2,1.5)*A{r}",
-    "(A{r}>B{r})*3", "A{r}+2*B{r}-1E-9/B{r}",
+    "(A{r}>B{r})*3", "A{r}+2*B{r}-1E-9/B{r}", "ATAN2(A{r},B{r})-MOD(A{r},B{r})*ABS(B{r})",
     "MAX(A{r},B{r})", 'A{r}&"t"',       # outside the fast form: the cell path, in the scan
 ]
 

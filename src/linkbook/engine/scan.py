@@ -44,6 +44,7 @@ _ARITHMETIC = {"+": "+", "-": "-", "*": "*"}
 # formulas compares (type id, value) pairs: 0 for numbers. The pair's comparison gives the
 # type of result formulas gives (a numpy bool where a numpy number decides it).
 _COMPARISONS = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
+_FLOAT_RESULTS = frozenset({*_ARITHMETIC, "/", "^", "U-", "%", "PI"})     # Python floats
 _NUMBER, _BOOL, _TEXT = "n", "b", "s"
 _NUMBERS = frozenset({float, int, np.float64})
 _NAMESPACE = {"Off": Off, "NUMBERS": _NUMBERS, "atan2": np.arctan2, "mod": np.mod,
@@ -223,8 +224,7 @@ class _Writer:
     def float_kind(self, i: int) -> bool:
         """Is node i's value always a Python float (what arithmetic gives)?"""
         node = self.nodes[i]
-        return node[0] == "call" and (node[1] in _ARITHMETIC or node[1] in {"/", "^", "u-",
-                                                                             "%", "PI"})
+        return node[0] == "call" and node[1].upper() in _FLOAT_RESULTS
 
     def _kind(self, node) -> frozenset[str]:
         if node[0] == "input":
@@ -265,60 +265,72 @@ class _Writer:
     def _call(self, i: int, scope: "_Scope") -> None:
         _, name, args = self.nodes[i]
         name = name.upper()
-        v = f"v{i}"
-        if name in _ARITHMETIC:
-            a, b = (self.number(k, scope) for k in args)
-            self.finite(scope, f"{v} = {a} {_ARITHMETIC[name]} {b}", v)
-        elif name == "/":
-            a, b = (self.number(k, scope) for k in args)
-            self.line(scope, f"if not {b}: raise Off")
-            self.finite(scope, f"{v} = {a} / {b}", v)
-        elif name == "^":
-            a, b = (self.number(k, scope) for k in args)
-            self.line(scope, f"{v} = {a} ** {b}")      # a complex power: not a float
-            self.line(scope, f"if type({v}) is not float or {v} - {v}: raise Off")
-        elif name == "U-":
-            self.line(scope, f"{v} = -{self.number(args[0], scope)}")
-        elif name == "%":
-            self.line(scope, f"{v} = {self.number(args[0], scope)} / 100.0")
-        elif name == "U+":
-            self.line(scope, f"{v} = {self.value(args[0], scope)}")
-        elif name in _COMPARISONS:
-            if any(self.kind(k) != {_NUMBER} for k in args):
-                raise _Unwritten
-            a, b = (self.value(k, scope) for k in args)
-            self.line(scope, f"{v} = (0, {a}) {_COMPARISONS[name]} (0, {b})")
-        elif name == "IF" and len(args) in (2, 3):
-            self._if(i, args, scope)
-        elif name == "ISNUMBER" and len(args) == 1:
-            kind = self.kind(args[0])
-            if len(kind) != 1:
-                raise _Unwritten
-            self.value(args[0], scope)          # its errors are the cell path's
-            # formulas gives an array of booleans: a numpy bool where it is the cell's value,
-            # a Python bool where a node reads it (as an object array)
-            truth = kind == {_NUMBER}
-            last = i == len(self.nodes) - 1
-            self.line(scope, f"{v} = {('np_true' if truth else 'np_false') if last else truth}")
-        elif name == "NA" and not args:
-            self.line(scope, "raise Off")
-            self.line(scope, f"{v} = None")
-        elif name == "PI" and not args:
-            self.line(scope, f"{v} = {math.pi!r}")
-        elif name in _UFUNCS and len(args) == 1:
-            self.finite(scope, f"{v} = u_{name}({self.number(args[0], scope)})", v)
-        elif name == "ATAN2" and len(args) == 2:
-            x, y = (self.number(k, scope) for k in args)
-            self.line(scope, f"if {x} == 0 and {y} == 0: raise Off")
-            self.finite(scope, f"{v} = atan2({y}, {x})", v)
-        elif name == "MOD" and len(args) == 2:
-            x, y = (self.number(k, scope) for k in args)
-            self.line(scope, f"if {y} == 0: raise Off")
-            self.finite(scope, f"{v} = mod({x}, {y})", v)
-        else:
+        write, arity = _CALLS.get(name, (None, ()))
+        if write is None or len(args) not in arity:
             raise _Unwritten
+        write(self, name, i, args, scope)
 
-    def _if(self, i: int, args, scope: "_Scope") -> None:
+    def _arithmetic(self, name: str, i: int, args, scope: "_Scope") -> None:
+        a, b = (self.number(k, scope) for k in args)
+        self.finite(scope, f"v{i} = {a} {_ARITHMETIC[name]} {b}", f"v{i}")
+
+    def _divide(self, name: str, i: int, args, scope: "_Scope") -> None:
+        a, b = (self.number(k, scope) for k in args)
+        self.line(scope, f"if not {b}: raise Off")            # formulas: #DIV/0!
+        self.finite(scope, f"v{i} = {a} / {b}", f"v{i}")
+
+    def _power(self, name: str, i: int, args, scope: "_Scope") -> None:
+        a, b = (self.number(k, scope) for k in args)
+        self.line(scope, f"v{i} = {a} ** {b}")
+        # a complex power is no float; 0 ** -1 and an overflow raise (ArithmeticError)
+        self.line(scope, f"if type(v{i}) is not float or v{i} - v{i}: raise Off")
+
+    def _unary(self, name: str, i: int, args, scope: "_Scope") -> None:
+        if name == "U+":        # formulas passes the value itself on
+            self.line(scope, f"v{i} = {self.value(args[0], scope)}")
+        elif name == "U-":
+            self.line(scope, f"v{i} = -{self.number(args[0], scope)}")
+        else:                   # %
+            self.line(scope, f"v{i} = {self.number(args[0], scope)} / 100.0")
+
+    def _compare(self, name: str, i: int, args, scope: "_Scope") -> None:
+        if any(self.kind(k) != {_NUMBER} for k in args):
+            raise _Unwritten
+        a, b = (self.value(k, scope) for k in args)
+        self.line(scope, f"v{i} = (0, {a}) {_COMPARISONS[name]} (0, {b})")
+
+    def _isnumber(self, name: str, i: int, args, scope: "_Scope") -> None:
+        kind = self.kind(args[0])
+        if len(kind) != 1:
+            raise _Unwritten
+        self.value(args[0], scope)          # its errors are the cell path's
+        # formulas gives an array of booleans: a numpy bool where it is the cell's value,
+        # a Python bool where a node reads it (as an object array)
+        truth = kind == {_NUMBER}
+        last = i == len(self.nodes) - 1
+        self.line(scope, f"v{i} = {('np_true' if truth else 'np_false') if last else truth}")
+
+    def _na(self, name: str, i: int, args, scope: "_Scope") -> None:
+        self.line(scope, "raise Off")
+        self.line(scope, f"v{i} = None")
+
+    def _pi(self, name: str, i: int, args, scope: "_Scope") -> None:
+        self.line(scope, f"v{i} = {math.pi!r}")
+
+    def _ufunc(self, name: str, i: int, args, scope: "_Scope") -> None:
+        self.finite(scope, f"v{i} = u_{name}({self.number(args[0], scope)})", f"v{i}")
+
+    def _atan2(self, name: str, i: int, args, scope: "_Scope") -> None:
+        x, y = (self.number(k, scope) for k in args)
+        self.line(scope, f"if {x} == 0 and {y} == 0: raise Off")
+        self.finite(scope, f"v{i} = atan2({y}, {x})", f"v{i}")
+
+    def _mod(self, name: str, i: int, args, scope: "_Scope") -> None:
+        x, y = (self.number(k, scope) for k in args)
+        self.line(scope, f"if {y} == 0: raise Off")
+        self.finite(scope, f"v{i} = mod({x}, {y})", f"v{i}")
+
+    def _if(self, name: str, i: int, args, scope: "_Scope") -> None:
         if self.kind(args[0]) - {_NUMBER, _BOOL}:
             raise _Unwritten
         condition = self.value(args[0], scope)
@@ -333,6 +345,17 @@ class _Writer:
         """An assignment, then Off where its value is not finite (formulas makes it #NUM!)."""
         self.line(scope, assignment)
         self.line(scope, f"if {v} - {v}: raise Off")
+
+
+# The calls a fast form writes: (the writer, the numbers of arguments it takes).
+_CALLS = {**{name: (_Writer._arithmetic, (2,)) for name in _ARITHMETIC},
+          **{name: (_Writer._compare, (2,)) for name in _COMPARISONS},
+          **{name: (_Writer._unary, (1,)) for name in ("U+", "U-", "%")},
+          **{name: (_Writer._ufunc, (1,)) for name in _UFUNCS},
+          "/": (_Writer._divide, (2,)), "^": (_Writer._power, (2,)),
+          "IF": (_Writer._if, (2, 3)), "ISNUMBER": (_Writer._isnumber, (1,)),
+          "NA": (_Writer._na, (0,)), "PI": (_Writer._pi, (0,)),
+          "ATAN2": (_Writer._atan2, (2,)), "MOD": (_Writer._mod, (2,))}
 
 
 class _Scope:
