@@ -122,7 +122,6 @@ class Scan:
         cells.sort(key=lambda c: c[:2])
         self.sheet = groups[gids[0]].sheet
         self.cells = [c[2:] + (c[0],) for c in cells]   # (group, member, col, fast, row)
-        self.fast_groups = sum(f is not None for f in fast.values())
 
     def run(self, grid: dict[str, np.ndarray], cell_path, stats: dict) -> None:
         """Every cell in order: its fast form's value, or the cell path's (cell_path(g, i))
