@@ -190,10 +190,10 @@ def test_fast_forms_give_the_cell_paths_bits_and_types():
     assert errors > len(EXPRESSIONS)        # the domain edges were reached
 
 
-def test_what_is_no_row_recurrence_is_left_to_the_cell_order():
-    """A column reading the row below is no recurrence: a true cycle through it still raises;
-    a running value that reads a row above in another column's group through a range is left
-    to the cell order, and agrees."""
+def test_what_is_no_row_recurrence_is_left_to_the_general_cycle_path():
+    """A column reading the row below is no recurrence: a true cycle through it still raises.
+    Two columns reading each other's rows above through a range are none either: split into
+    cells as before, and the values agree."""
     wb = openpyxl.Workbook()
     ws = wb.active
     for r in range(1, 5):
