@@ -28,7 +28,11 @@ Method
    topological order of their strongly connected components; a group that reads itself (a running
    column) or a cycle of groups is evaluated cell by cell in cell-level topological order, but
    for a running sum (running.py: each cell the cell above plus a term), whose terms are one
-   vector call and whose sum runs down the rows.
+   vector call and whose sum runs down the rows, and a row recurrence (scan.py: one-column
+   groups that read each other only in their row or rows above, as a Newton iteration that
+   starts from the row above's solution), evaluated in one pass down the rows, each cell by
+   its formula written as a Python function on floats, or by the cell path where that cannot
+   give the cell path's value.
 4. *Modes.*
    - ``vector``: single-cell inputs only, functions from ELEMENTWISE and ROW_BY_ROW only.  The
      function is called once with an (n, 1) object array per input.  Each node of the compiled
@@ -62,9 +66,8 @@ Modules of the engine: references (what a formula reads: descriptors, shapes, th
 adapter (the one place that touches `formulas`' internals: its tokenizer, compiled pipes,
 ExcelModel), vector (vector calls), groups (cells into groups of one shape), plan (each group's
 mode and compiled function), order (the order of evaluation), running (running sums), grammar
-(the fast parser), rerun (after run(), the book again with other values in some constant
-cells: only what moves with them and is asked for), and
-this one: the public entry points and the Engine that runs the steps above.
+(the fast parser), scan (row recurrences), rerun (after run(), the book again with other
+values in some constant cells: only what moves with them and is asked for), and this one: the public entry points and the Engine that runs the steps above.
 """
 
 from __future__ import annotations
@@ -84,6 +87,7 @@ from .order import cell_order, closure, downstream, group_deps, untangled_compon
 from .plan import Planner
 from .rerun import Values
 from .running import running_sum_input
+from .scan import row_order, scans_of
 from .references import (RefDesc, References, cell_name, cells_read, formula_shape,
                          sheet_prefix)
 from .vector import VECTOR_SAFE, Batch
@@ -150,8 +154,9 @@ class Engine:
     """One evaluation of one workbook; `stats` tells how it was grouped and run."""
 
     def __init__(self, wb, vectorize: bool = True, only=None,
-                 excel_model_constants: bool = False):
+                 excel_model_constants: bool = False, scan: bool = True):
         self.wb = wb
+        self.scan = scan            # row recurrences as scans (scan.py); False: cell by cell
         self.excel_model_constants = excel_model_constants
         self.only = only
         self.vectorize = vectorize
@@ -164,7 +169,7 @@ class Engine:
         self.stats = dict(formula_cells=0, shapes=0, compiled=0, reused=0, vector_groups=0,
                           cell_groups=0, each_groups=0, cyclic_cells=0, tokenized_cells=0,
                           vector_fallbacks=0, row_by_row_nodes=0, split_groups=0,
-                          running_sums=0)
+                          running_sums=0, scans=0, scan_cells=0, scan_cell_path=0)
         self.planner = Planner(self.refs, self.stats, vectorize)
 
     # ---- pipeline
@@ -202,8 +207,11 @@ class Engine:
         for g in self.groups:
             self.planner.plan(g)
         self._allocate()
-        self.order, self.self_reading = untangled_components(self.groups, self.owner,
-                                                             self.member, self.stats)
+        self.order, self.self_reading = untangled_components(
+            self.groups, self.owner, self.member, self.stats,
+            keep=lambda c: self.scan and row_order(c, self.groups, self.owner) is not None)
+        self.scans = (scans_of(self.order, self.self_reading, self.groups, self.owner)
+                      if self.scan else {})
 
     # ---- storage
     def _allocate(self):
@@ -338,6 +346,10 @@ class Engine:
                 self._evaluate_cell(g, i)
             return
         if len(component) == 1 and self._evaluate_running_sum(self.groups[component[0]]):
+            return
+        scan = self.scans.get(component[0])
+        if scan is not None:
+            scan.run(self.grid, self._evaluate_cell, self.stats)
             return
         for gid, i in cell_order(self.groups, set(component), self.owner, self.member,
                                  self.stats):

@@ -81,8 +81,8 @@ def components_of(groups: list[Group], owner) -> tuple[list[list[int]], set[int]
     return out, self_reading
 
 
-def untangled_components(groups: list[Group], owner, member,
-                         stats: dict) -> tuple[list[list[int]], set[int]]:
+def untangled_components(groups: list[Group], owner, member, stats: dict,
+                         keep=lambda component: False) -> tuple[list[list[int]], set[int]]:
     """components_of() after splitting the groups that tie several groups into one cycle.
 
     A group joins cells by shape, not by position, so two groups can read each other
@@ -92,7 +92,8 @@ def untangled_components(groups: list[Group], owner, member,
     spans several columns is split into one group per column; where no such group is left,
     the smallest groups are split into single cells; and again, until every cycle left is
     real (a column that reads itself, or a circular reference).  A sweep column stays
-    whole."""
+    whole, and so does a cycle of one-column groups that `keep` takes (a row recurrence,
+    evaluated as a scan: scan.py)."""
     while True:
         components, self_reading = components_of(groups, owner)
         victims = []
@@ -103,6 +104,8 @@ def untangled_components(groups: list[Group], owner, member,
             wide = [g for g in parts if len(set(g.cols.tolist())) > 1]
             if wide:
                 victims += [(g, lambda m: m.col) for g in wide]
+                continue
+            if keep(component):
                 continue
             splittable = [len(g.members) for g in parts if len(g.members) > 1]
             victims += [(g, lambda m: (m.row, m.col)) for g in parts
