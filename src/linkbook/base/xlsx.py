@@ -518,7 +518,10 @@ def coordinates_to_lists(coordinates: list[str]) -> tuple[list[int], list[int]]:
     expression engine, not one call per cell; any other spelling ('$B$7', 'b7') cell by cell.
     ValueError for an empty list or one that is no cell address, TypeError for one that is no
     text, as coordinate_to_tuple would raise."""
-    text = " ".join(coordinates) + " " if all(type(c) is str for c in coordinates) else ""
+    try:
+        text = " ".join(coordinates) + " "
+    except TypeError:                           # one is no text: coordinate_to_tuple says so
+        text = ""
     if coordinates and _PLAIN_ADDRESSES.fullmatch(text):
         letters, digits = _LETTERS_RUN.findall(text), _DIGITS_RUN.findall(text)
         if len(digits) == len(coordinates):     # one address each, no space inside any
