@@ -10,7 +10,7 @@ from pathlib import Path
 
 import openpyxl
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from openpyxl.workbook.defined_name import DefinedName
 
@@ -492,3 +492,33 @@ def test_nesting_beyond_the_limit_is_beyond_it():
 
 def test_brackets_inside_strings_and_quoted_sheet_names_do_not_nest():
     assert xlsx._nesting('IF(A1="((((",(\'(a)\'!B1))') == 2
+
+
+# addresses as a table's column spells them, and spellings that take the cell-by-cell path
+_ADDRESS = st.one_of(
+    st.builds(lambda col, row: f"{openpyxl.utils.get_column_letter(col)}{row}",
+              st.integers(1, 16_384), st.integers(1, 1_048_576)),
+    st.sampled_from(["$B$7", "b7", "AB007", "A1 B2", "", "B7\n", "ABCD1", "B", "7", "B٣"]))
+
+
+@settings(max_examples=examples(100), deadline=None)
+@given(st.lists(_ADDRESS, max_size=30))
+@example(["B7", "A1 B2"]).via("a space inside an address: two addresses' worth of runs")
+@example(["B7", "$B$8", "XFD1048576"]).via("a spelling the one-pass reading leaves alone")
+def test_a_list_of_addresses_reads_as_each_address_alone(cells):
+    """coordinates_to_lists (the engine's column lookups, read in a few passes) against
+    coordinate_to_tuple of each address alone: the same rows and columns, or the same kind of
+    error; a plain address's reading is openpyxl's too."""
+    from openpyxl.utils.cell import coordinate_to_tuple as openpyxls
+    try:
+        want = [xlsx.coordinate_to_tuple(c) for c in cells]
+    except ValueError:
+        want = None
+    if want is None or not cells:
+        with pytest.raises(ValueError):
+            xlsx.coordinates_to_lists(cells)
+        return
+    rows, columns = xlsx.coordinates_to_lists(cells)
+    assert list(zip(rows, columns)) == want
+    plain = [(c, w) for c, w in zip(cells, want) if re.fullmatch(r"[A-Z]+[0-9]+", c)]
+    assert [openpyxls(c) for c, _ in plain] == [w for _, w in plain]

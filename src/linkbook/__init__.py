@@ -32,20 +32,13 @@ def build(template: str | Path, output: str | Path | None = None, *, sets=(), st
     it); `values` stores computed values too. Returns the path written (default: <name>.xlsx
     here); `output`'s folder must exist. Raises InputError or CannotWrite with one line.
     """
-    from .book import builder
+    from .book.builder import build_template
     from .language import templates
-    from .base.files import check_output
     if isinstance(sets, str):
         raise templates.InputError("sets", f'must be a list of KEY=VALUE texts, such as '
                                            f'["a2=45"] (got the text {sets!r})')
-    t = templates.load(str(template))
-    if unit is not None:
-        t = templates.with_unit(t, unit, templates.ARGUMENTS["unit"])
-    t = templates.with_overrides(t, list(sets), step, branch, templates.ARGUMENTS)
-    path = check_output(Path(output) if output is not None else Path(f"{t.name}.xlsx"),
-                        "output", (".xlsx",))
-    builder.build_file(t, path, values)
-    return path
+    return build_template(template, output, sets=sets, step=step, branch=branch, unit=unit,
+                          values=values, names=templates.ARGUMENTS)[0]
 
 
 def verify(path: str | Path, engine: str = "vector", seed: int | None = None):

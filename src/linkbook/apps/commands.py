@@ -202,13 +202,11 @@ def build(args) -> int:
         raise InputError("build", "give a template name or .toml file, or --all")
     if args.outdir:
         raise InputError("--outdir", "goes with --all; use -o for one workbook")
-    t = templates.load(args.template)
-    if args.unit:
-        t = templates.with_unit(t, args.unit)
-    t = templates.with_overrides(t, args.assignments, args.step, args.branch)
-    from ..base.files import check_output
-    out = check_output(Path(args.output or f"{t.name}.xlsx"), "-o", (".xlsx",))
-    from ..book.builder import build_file
-    warn(build_file(t, out, args.values))
+    from ..book.builder import build_template
+    # an empty -o or --unit is as if not given
+    out, built = build_template(args.template, args.output or None, sets=args.assignments,
+                                step=args.step, branch=args.branch, unit=args.unit or None,
+                                values=args.values)
+    warn(built)
     print(f"wrote {out}")
     return 0

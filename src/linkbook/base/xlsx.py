@@ -29,8 +29,8 @@ from dataclasses import dataclass
 from pathlib import PurePosixPath
 from xml.etree.ElementTree import iterparse
 
-__all__ = ["Unsupported", "Refused", "read", "coordinate_to_tuple", "column_index",
-           "column_letter", "xml_text", "xml_attribute", "NOT_IN_XML"]
+__all__ = ["Unsupported", "Refused", "read", "coordinate_to_tuple", "coordinates_to_lists",
+           "column_index", "column_letter", "xml_text", "xml_attribute", "NOT_IN_XML"]
 
 MAIN = "{http://schemas.openxmlformats.org/spreadsheetml/2006/main}"
 REL = "{http://schemas.openxmlformats.org/officeDocument/2006/relationships}"
@@ -504,6 +504,31 @@ def coordinate_to_tuple(coordinate: str) -> tuple[int, int]:
     if not m:
         raise ValueError(f"{coordinate!r} is not a cell address")
     return int(m[2]), column_index(m[1])
+
+
+# addresses as a table's columns spell them, each followed by a space: 'B7 B8 B9 '
+_PLAIN_ADDRESSES = re.compile(r"(?:[A-Z]{1,3}[0-9]+ )*")
+_LETTERS_RUN = re.compile(r"[A-Z]+")
+_DIGITS_RUN = re.compile(r"[0-9]+")
+
+
+def coordinates_to_lists(coordinates: list[str]) -> tuple[list[int], list[int]]:
+    """The rows and the columns of `coordinates`, as coordinate_to_tuple gives each: a list of
+    plain addresses ('B7', 'B8', …: a column of a table) read in a few passes of the regular
+    expression engine, not one call per cell; any other spelling ('$B$7', 'b7') cell by cell.
+    ValueError for an empty list or one that is no cell address, TypeError for one that is no
+    text, as coordinate_to_tuple would raise."""
+    try:
+        text = " ".join(coordinates) + " "
+    except TypeError:                           # one is no text: coordinate_to_tuple says so
+        text = ""
+    if coordinates and _PLAIN_ADDRESSES.fullmatch(text):
+        letters, digits = _LETTERS_RUN.findall(text), _DIGITS_RUN.findall(text)
+        if len(digits) == len(coordinates):     # one address each, no space inside any
+            index = {run: column_index(run) for run in set(letters)}
+            return list(map(int, digits)), list(map(index.__getitem__, letters))
+    rows, columns = zip(*map(coordinate_to_tuple, coordinates))
+    return list(rows), list(columns)
 
 
 @functools.lru_cache(maxsize=None)     # a book has few distinct column letters

@@ -18,7 +18,7 @@ from ..base.files import write_atomic
 from ..language.excel import is_direction
 from ..language.model import COLUMN
 from ..base.pause import gc_paused
-from ..language.templates import Sweep, Template
+from ..language.templates import FLAGS, Sweep, Template
 from ..base.xlsx import column_letter, xml_text
 
 
@@ -205,6 +205,25 @@ def _cut(degs: list[float], full_turn: float | None = 0.0) -> float:
 
 
 @gc_paused
+def build_template(template: str | Path, output: str | Path | None = None, *, sets=(),
+                   step=None, branch: str | None = None, unit: str | None = None,
+                   values: bool = False, names: dict[str, str] = FLAGS
+                   ) -> tuple[Path, workbook.Built]:
+    """One workbook from a bundled template's name or a .toml file, with `unit`, `sets`, `step`
+    and `branch` applied, written to `output` (None: <name>.xlsx here): the build of both
+    `linkbook build` and linkbook.build. `names`: what the messages call the arguments
+    (templates.FLAGS for the command, templates.ARGUMENTS for the API)."""
+    from ..base.files import check_output
+    from ..language import templates
+    t = templates.load(str(template))
+    if unit is not None:
+        t = templates.with_unit(t, unit, names["unit"])
+    t = templates.with_overrides(t, list(sets), step, branch, names)
+    path = check_output(Path(output) if output is not None else Path(f"{t.name}.xlsx"),
+                        names["output"], (".xlsx",))
+    return path, build_file(t, path, values)
+
+
 def build_file(t: Template, path: Path, with_values: bool = False) -> workbook.Built:
     built, values = make(t, values_needed=with_values)
 

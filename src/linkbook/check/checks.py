@@ -229,14 +229,22 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
                     check.limit(exp, tol, relative, grows=False), allowed)
 
 
+_NUMBER_TYPES = frozenset({float, int})
+
+
 def _agreeing(check: Check, sheet: str, cells: list[str], got: list, expected: np.ndarray,
               period: float | None, rules: Rules) -> list[int]:
     """The cells that agree within the strict bound, counted into `check` as compare's loop
     counts them, taken as arrays (most cells of a book); the indexes of the others, for that
     loop to judge one by one."""
-    # exactly a float or an int (no error value, bool or numpy scalar: the loop takes those)
-    number = np.fromiter((type(v) is float or type(v) is int for v in got), bool, len(got))
-    value = np.array([v if n else math.nan for v, n in zip(got, number.tolist())], dtype=float)
+    # exactly a float or an int (no error value, bool or numpy scalar: the loop takes those);
+    # a column of numbers only (most of a book) is taken whole
+    if set(map(type, got)) <= _NUMBER_TYPES:
+        number, value = np.ones(len(got), dtype=bool), np.array(got, dtype=float)
+    else:
+        number = np.fromiter((type(v) in _NUMBER_TYPES for v in got), bool, len(got))
+        value = np.array([v if n else math.nan for v, n in zip(got, number.tolist())],
+                         dtype=float)
     diff = value - expected
     if period:
         diff = (diff + period / 2) % period - period / 2

@@ -135,19 +135,21 @@ def _check_numbers_only(j: Judging) -> list[Check]:
         first, last = column.rows
         if column.sweep is not None:
             letter, (r0, r1) = sweep.columns[column.sweep], sweep.rows
-            sources = [(sweep.sheet, f"{letter}{r}") for r in range(r0, r1 + 1)]
+            source_sheet, sources = sweep.sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)]
             name = column.sweep
         else:
-            sources = [(pos.sheet, pos.joints[joint][column.axis]) if joint else None
+            source_sheet = pos.sheet
+            sources = [pos.joints[joint][column.axis] if joint else None
                        for joint in column.joints]
             name = f"joints {'xy'[column.axis]}"
         c = Check(column.sheet, f"{name} numbers only", j.size)
-        for r, source in zip(range(first, last + 1), sources):
-            cell = f"{column.column}{r}"
-            want = j.values.get(source) if source else None
+        cells = [f"{column.column}{r}" for r in range(first, last + 1)][:len(sources)]
+        # each column and its sources looked up together, not cell by cell
+        wants = iter(j.got(source_sheet, [s for s in sources if s]))
+        for cell, got, source in zip(cells, j.got(column.sheet, cells), sources):
+            want = next(wants) if source else None
             if not isinstance(want, (int, float)) or isinstance(want, bool):
                 want = DASH
-            got = j.values.get((column.sheet, cell))
             c.cells += 1
             c.judged.add((column.sheet, cell))
             if got != want or isinstance(got, bool):

@@ -72,10 +72,12 @@ def verify(path: Path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Repo
         stored = stored_values(wb, path, formulas & judged)
         if stored:
             checks.append(check_stored(wb, record, values, stored, rules))
+        count, unjudged = len(formulas), sorted(formulas - judged, key=cell_order)
+        # a cell's key each, a big book's largest sets: gone before the other sets are judged
+        del formulas, judged, stored
         sets = [] if evaluation is None else _judge_other_sets(
             wb, record, evaluation, rules, params, seed)
-        return Report(str(path), record.mechanism, engine, checks, len(formulas),
-                      sorted(formulas - judged, key=cell_order), params,
+        return Report(str(path), record.mechanism, engine, checks, count, unjudged, params,
                       mechanism_size(record, params),
                       likely_causes(wb, checks + [c for s in sets for c in s.checks]),
                       sheets=list(wb.sheetnames), replaced=replaced, absent=absent,

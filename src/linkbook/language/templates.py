@@ -27,8 +27,9 @@ EXCEL_MAX_COLUMNS = 16_384
 
 # What a message calls each override: the command line's flags, or the Python API's arguments
 # (linkbook.build(sets=..., step=..., branch=..., unit=...)).
-FLAGS = {"set": "--set", "step": "--step", "branch": "--branch", "unit": "--unit"}
-ARGUMENTS = {"set": "sets", "step": "step", "branch": "branch", "unit": "unit"}
+FLAGS = {"set": "--set", "step": "--step", "branch": "--branch", "unit": "--unit", "output": "-o"}
+ARGUMENTS = {"set": "sets", "step": "step", "branch": "branch", "unit": "unit",
+             "output": "output"}
 
 
 @dataclass(frozen=True)
