@@ -12,7 +12,7 @@ import math
 import re
 
 import pytest
-from conftest import built, checks_of
+from conftest import HANG_GUARD_S, built, checks_of
 from openpyxl.utils import get_column_letter
 from openpyxl.utils.cell import column_index_from_string, coordinate_from_string
 
@@ -300,7 +300,7 @@ def test_gnumeric_imports_every_chart(needs, tmp_path):
     book, out = tmp_path / "fourbar.xlsx", tmp_path / "fourbar.gnumeric"
     builder.build_file(templates.load("fourbar"), book)
     subprocess.run(["ssconvert", str(book), str(out)], check=True, capture_output=True,
-                   timeout=300)
+                   timeout=HANG_GUARD_S)
     with zipfile.ZipFile(book) as z:
         charts = sum(1 for n in z.namelist() if re.fullmatch(r"xl/charts/chart\d+\.xml", n))
     graphs = len(re.findall(r"<gnm:SheetObjectGraph\b", gzip.decompress(out.read_bytes())
