@@ -28,15 +28,12 @@ NON_GRASHOF = ("a1=100", "a2=60", "a3=50", "a4=40")
 
 
 @pytest.fixture(scope="module")
-def books(tmp_path_factory) -> dict[str, Path]:
-    folder = tmp_path_factory.mktemp("books")
-    out = {}
-    for name in BUNDLED:
-        out[name] = folder / f"{name}.xlsx"
-        builder.build_file(template(name), out[name])
-    out["non-grashof"] = folder / "non-grashof.xlsx"
-    builder.build_file(template("fourbar", NON_GRASHOF), out["non-grashof"])
-    return out
+def books(bundled_books, tmp_path_factory) -> dict[str, Path]:
+    """Every bundled book (conftest's, built once for the run: read only here) and a
+    non-Grashof four-bar."""
+    path = tmp_path_factory.mktemp("books") / "non-grashof.xlsx"
+    builder.build_file(template("fourbar", NON_GRASHOF), path)
+    return {**bundled_books, "non-grashof": path}
 
 
 def _same(a, b) -> bool:

@@ -8,7 +8,7 @@ import sys
 import openpyxl
 import pytest
 
-from conftest import ROOT
+from conftest import HANG_GUARD_S, ROOT
 
 ENV_PATH = str(ROOT / "src")
 
@@ -18,7 +18,7 @@ def run(*args, cwd=None):
     env = dict(os.environ, PYTHONPATH=ENV_PATH)
     env.pop("PYTHONUNBUFFERED", None)   # stdout block-buffered into a pipe, as users have it
     return subprocess.run([sys.executable, "-m", "linkbook", *args], cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=300)
+                          capture_output=True, text=True, timeout=HANG_GUARD_S)
 
 
 def test_list_shows_every_bundled_template():
@@ -62,11 +62,11 @@ def test_the_process_ends_cleanly_without_stdout_and_under_a_profiler():
     import os
     env = dict(os.environ, PYTHONPATH=ENV_PATH)
     closed = subprocess.run(f'"{sys.executable}" -m linkbook list >&-', shell=True, env=env,
-                            capture_output=True, text=True, timeout=300)
+                            capture_output=True, text=True, timeout=HANG_GUARD_S)
     assert closed.returncode == 0 and closed.stderr == "", closed.stderr
     # a profiler reports after the command returns: the exit is then Python's own
     profiled = subprocess.run([sys.executable, "-m", "cProfile", "-m", "linkbook", "list"],
-                              env=env, capture_output=True, text=True, timeout=300)
+                              env=env, capture_output=True, text=True, timeout=HANG_GUARD_S)
     assert profiled.returncode == 0 and "function calls" in profiled.stdout, profiled.stderr
 
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import openpyxl
 import pytest
-from conftest import UNO_PYTHON, template
+from conftest import HANG_GUARD_S, UNO_PYTHON, template
 
 from linkbook.book import builder
 from linkbook.book import package
@@ -132,7 +132,7 @@ def test_controls_added_to_a_sheet_without_relationships(tmp_path):
 # ---------------------------------------------------------------- LibreOffice's own view
 def _probe(path: Path, moves, cells) -> dict:
     run = subprocess.run([UNO_PYTHON, str(PROBE), str(path), "Mechanism", json.dumps(moves),
-                          json.dumps(cells)], capture_output=True, text=True, timeout=240)
+                          json.dumps(cells)], capture_output=True, text=True, timeout=HANG_GUARD_S)
     assert run.returncode == 0, run.stderr[-2000:]
     return json.loads(run.stdout.strip().splitlines()[-1])
 

@@ -14,7 +14,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from conftest import examples
+from conftest import HANG_GUARD_S, examples
 from openpyxl import Workbook
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -174,7 +174,7 @@ def test_gnumeric_reads_every_bundled_book_and_its_charts(needs, name, bundled_b
     path = bundled_books[name]
     out = tmp_path / "gnumeric.xlsx"
     run = subprocess.run([office.ssconvert_path(), str(path), str(out)],
-                         capture_output=True, text=True, timeout=300)
+                         capture_output=True, text=True, timeout=HANG_GUARD_S)
     assert run.returncode == 0 and out.is_file(), run.stderr
     unknown = [line for line in (run.stderr + run.stdout).splitlines()
                if line.strip() and not any(w.fullmatch(line) for w in KNOWN_WARNINGS)]

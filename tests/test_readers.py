@@ -18,6 +18,7 @@ from pathlib import Path
 
 import openpyxl
 import pytest
+from conftest import HANG_GUARD_S
 from defusedxml import ElementTree
 
 # every bundled book read by three third-party readers, built two ways: the full suite (CI)
@@ -52,7 +53,7 @@ def books(needs, tmp_path_factory) -> dict[str, dict[str, Path]]:
         folder = tmp_path_factory.mktemp("lxml" if use_lxml == "True" else "no-lxml")
         run = subprocess.run([sys.executable, "-m", "linkbook", "build", "--all", "--values",
                               "--outdir", str(folder)], env=_env(use_lxml), capture_output=True,
-                             text=True, timeout=600)
+                             text=True, timeout=2 * HANG_GUARD_S)
         assert run.returncode == 0, run.stderr
         made[backend] = {p.stem: p for p in sorted(folder.glob("*.xlsx"))}
     names = [by_name.keys() for by_name in made.values()]

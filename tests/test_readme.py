@@ -15,7 +15,7 @@ import json
 import openpyxl
 import pytest
 
-from conftest import ROOT, template
+from conftest import HANG_GUARD_S, ROOT, template
 from linkbook.base.sheets import read_meta
 from linkbook.book import builder
 from linkbook.engine import evaluator as engine
@@ -31,7 +31,7 @@ def _run_block(code: str, cwd: Path, *paths: Path) -> subprocess.CompletedProces
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(map(str, [ROOT / "src", *paths])),
                MPLBACKEND="Agg")
     return subprocess.run([sys.executable, "-c", code], cwd=cwd, env=env, capture_output=True,
-                          text=True, timeout=300)
+                          text=True, timeout=HANG_GUARD_S)
 
 
 def _block_with(text: str) -> str:

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import UNO_PYTHON, template
+from conftest import HANG_GUARD_S, UNO_PYTHON, template
 from linkbook.apps.cli import main
 from linkbook.book import builder
 from linkbook.check.verifier import report_of
@@ -55,7 +55,8 @@ def saved_by_libreoffice(needs, built, tmp_path_factory) -> Path:
         subprocess.run([office.soffice_path(), f"-env:UserInstallation={Path(profile).as_uri()}",
                         "--headless", "--norestore", "--convert-to", "xlsx", "--outdir",
                         str(out), *sorted(str(built / f"{name}.xlsx") for name in BUNDLED)],
-                       check=True, stdin=subprocess.DEVNULL, capture_output=True, timeout=600)
+                       check=True, stdin=subprocess.DEVNULL, capture_output=True,
+                       timeout=2 * HANG_GUARD_S)
     return out
 
 
@@ -65,7 +66,8 @@ def saved_by_gnumeric(needs, built, tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("gnumeric")
     for book in sorted(built / f"{name}.xlsx" for name in BUNDLED):
         subprocess.run([office.ssconvert_path(), "--recalc", str(book), str(out / book.name)],
-                       check=True, stdin=subprocess.DEVNULL, capture_output=True, timeout=300)
+                       check=True, stdin=subprocess.DEVNULL, capture_output=True,
+                       timeout=HANG_GUARD_S)
     return out
 
 
@@ -82,7 +84,7 @@ def edited_in_libreoffice(needs, built, tmp_path_factory) -> dict[str, tuple[Pat
         cells = {f"Mechanism!{record.inputs[s].cell}": v for s, v in edits.items()}
         shown = subprocess.run([UNO_PYTHON, str(EDITOR), str(built / f"{name}.xlsx"),
                                 str(out / f"{name}.xlsx"), json.dumps(cells)], check=True,
-                               capture_output=True, text=True, timeout=300).stdout
+                               capture_output=True, text=True, timeout=HANG_GUARD_S).stdout
         books[name] = (out / f"{name}.xlsx", json.loads(shown))
     return books
 

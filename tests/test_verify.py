@@ -23,11 +23,13 @@ BUNDLED = sorted(p.stem for p in templates.bundled())
 
 def _small(name: str) -> templates.Template:
     """A bundled template with fewer rows (a 30-unit step: every formula shape is still there)
-    and a coarser fine sweep under the pump grid, so that ExcelModel (about 75 ms per
+    and, under the pump grid, a coarser fine sweep and two of its values (two columns: the
+    grid's formulas and how they reach across), so that ExcelModel (about 75 ms per
     1,000-character grid formula, a few ms per cell) finishes in seconds."""
     t = templates.load(name)
     t = dataclasses.replace(t, sweep=dataclasses.replace(t.sweep, step=max(t.sweep.step, 30.0)))
-    return dataclasses.replace(t, stroke_step=20.0) if t.mechanism.grid else t
+    return dataclasses.replace(t, stroke_step=20.0, grid_values=t.grid_values[:2]) \
+        if t.mechanism.grid else t
 
 
 def _same(a, b) -> bool:

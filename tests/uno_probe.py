@@ -31,15 +31,22 @@ PROPS = {"Spin": ("SpinValueMin", "SpinValueMax", "SpinIncrement", None, "SpinVa
                     "ScrollValue")}
 
 
-def connect(pipe: str, deadline: float):
+HANG_GUARD_S = 300      # conftest's: only a hung LibreOffice takes this long to listen
+
+
+def connect(pipe: str, office: subprocess.Popen):
+    """The office's context, once it listens on the pipe: waited for as long as the office
+    runs (a loaded machine starts it slowly), not for a fixed time; HANG_GUARD_S only
+    against a hang."""
     local = uno.getComponentContext()
     resolver = local.ServiceManager.createInstanceWithContext(
         "com.sun.star.bridge.UnoUrlResolver", local)
+    give_up = time.monotonic() + HANG_GUARD_S
     while True:
         try:
             return resolver.resolve(f"uno:pipe,name={pipe};urp;StarOffice.ComponentContext")
         except Exception:
-            if time.time() > deadline:
+            if office.poll() is not None or time.monotonic() > give_up:
                 raise
             time.sleep(0.3)
 
@@ -104,7 +111,7 @@ def running_office(name: str):
             start_new_session=True)
         desktop = None
         try:
-            ctx = connect(pipe, time.time() + 60)
+            ctx = connect(pipe, office)
             desktop = ctx.ServiceManager.createInstanceWithContext(
                 "com.sun.star.frame.Desktop", ctx)
             yield desktop
