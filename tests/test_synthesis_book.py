@@ -132,7 +132,7 @@ def test_random_tasks_give_the_references_design_or_na(task):
             if usable else _is_na(got)
 
 
-BOOK_EXAMPLES = examples(50)
+BOOK_EXAMPLES = examples(100)
 # The outcomes the random tasks through the book must reach at the default profile (the fast
 # profile's handful need not): a design on each branch, a non-Grashof design, a branch defect.
 OUTCOMES_REACHED = ("open", "crossed", "non-Grashof", "branch defect")
@@ -194,7 +194,7 @@ def test_random_tasks_through_the_book_verify():
         reached[outcome] = reached.get(outcome, 0) + 1
 
     check()
-    if BOOK_EXAMPLES >= 50:
+    if BOOK_EXAMPLES >= 100:
         assert set(OUTCOMES_REACHED) <= set(reached), reached
 
 
