@@ -186,3 +186,16 @@ def test_random_masses_and_loads_on_random_triads_agree_with_the_reference(coars
 
     check()
     assert min(balanced) >= rows_of(built) - 1, balanced
+
+
+@pytest.mark.libreoffice
+def test_libreoffice_recalculates_the_forces_like_the_reference(needs, tmp_path):
+    """LibreOffice's full recalculation of the example with masses (the Forces sheet's
+    Cramer's rule over the Newton iterations' solution) agrees with the reference in every
+    formula cell."""
+    needs("libreoffice")
+    import linkbook
+    path = linkbook.build(FORCES, tmp_path / "triad-forces.xlsx")
+    report = linkbook.verify(path, engine="libreoffice")
+    assert report.status == 0, [(c.name, c.mismatches[:2]) for c in report.checks if not c.ok]
+    assert any(c.block == SHEET for c in report.checks)
