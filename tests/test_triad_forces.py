@@ -22,6 +22,7 @@ from test_forces_book import assert_power_balance, assert_verified, with_values
 from test_slotted_forces import DRAWS, RATES, rows_of
 from test_properties import in_load_domain
 from test_triad_reference import conditioning
+from linkbook.base.errors import InputError
 from linkbook.book import builder
 from linkbook.check.checks import Rules
 from linkbook.check.forces import forces
@@ -199,3 +200,44 @@ def test_libreoffice_recalculates_the_forces_like_the_reference(needs, tmp_path)
     report = linkbook.verify(path, engine="libreoffice")
     assert report.status == 0, [(c.name, c.mismatches[:2]) for c in report.checks if not c.ok]
     assert any(c.block == SHEET for c in report.checks)
+
+
+def _hung(data: dict, joint: str, first: bool = False) -> dict:
+    """The template with a dyad G hung from the triad's joint, its link to G0 on the ground,
+    a mass on the link joint–G and a force at G; its link listed first in `links` or last."""
+    mech = data["mechanism"]
+    mech["ground"]["G0"] = [-40, 40]
+    hung = [[joint, "G"]]
+    mech["links"] = (hung if first else []) + mech["links"] + ([] if first else hung) + \
+        [["G0", "G"]]
+    mech["steps"].append({"type": "dyad", "point": "G", "p": joint, "q": "G0",
+                          "p_length": 50, "q_length": 40, "branch": 1})
+    mech["bodies"].append({"joints": [joint, "G"], "mass": 0.5, "inertia": 0.0002,
+                           "centre": {"frame": [joint, "G"], "local": [25, 5]}})
+    mech["loads"].append({"at": "G", "force": [10, 20]})
+    data["sweep"]["step"] = STEP
+    return data
+
+
+@pytest.mark.parametrize("joint", ["D", "E"])
+def test_a_group_hung_from_a_joint_of_the_triad(joint):
+    """A later group's reaction at a joint of the triad enters its equations: at D it acts
+    on the binary link A-D (the pin's carrier: its moment about A, so g), at E on the ternary
+    (its three equations). The book verifies and balances power on every row."""
+    t = templates.from_data("triad-hung", _hung(_data(), joint))
+    built, values = builder.make(t)
+    assert_verified(built, values)
+    assert assert_power_balance(t, built, values) >= rows_of(built) - 1
+
+
+def test_a_joint_of_the_triad_carried_by_a_later_link_is_refused_in_one_line():
+    """The same dyad with its link E-G listed first: that link would carry the pin at E, which
+    joins three links the book's groups cannot share out (the force analysis' existing limit,
+    docs/language.md): refused in one line naming the file and the step."""
+    with pytest.raises(InputError) as caught:
+        templates.from_data("triad-hung", _hung(_data(), "E", first=True),
+                            origin="triad-hung.toml")
+    message = str(caught.value)
+    assert "\n" not in message, message
+    assert message.startswith("triad-hung.toml: mechanism.steps[2] (dyad G): force analysis: "
+                              "the pin E "), message
