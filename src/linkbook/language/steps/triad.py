@@ -312,14 +312,7 @@ def forces(w, rec: dict) -> None:
     units = [_unit(w, q[k], p[k], _k(rec["links"][k])) for k in range(3)]
     normal = [_normal_part(w, links[k], ternary, q[k], p[k], _k(rec["links"][k]))
               for k in range(3)]
-    arms = [w.arm(p[k], p[0]) for k in (1, 2)]
-    columns = [(units[0][0], units[0][1], ZERO)] + \
-        [(u[0], u[1], cross(r, u)) for u, r in zip(units[1:], arms)]
-    (tx, ty), moment = w.resultant(ternary), w.moment(ternary, p[0])
-    known = (lin((-1, tx), *((1, mul(g, u[1])) for g, u in zip(normal, units))),
-             lin((-1, ty), *((-1, mul(g, u[0])) for g, u in zip(normal, units))),
-             lin((-1, moment), *((-1, mul(g, dot(r, u)))
-                                 for g, u, r in zip(normal[1:], units[1:], arms))))
+    columns, known = _ternary_equations(w, ternary, p, units, normal)
     det = w.w.alias(f"_Dtriad_{p[0]}", _det3(*columns))
     w.solved.update({ternary.number, *(b.number for b in links)})
     for k in range(3):
@@ -331,6 +324,21 @@ def forces(w, rec: dict) -> None:
                        lin((1, mul(f, u[1])), (1, mul(g, u[0]))))
         fx, fy = w.resultant(links[k])
         w.outer(links[k], q[k], lin((1, x), (-1, fx)), lin((1, y), (-1, fy)), where)
+
+
+def _ternary_equations(w, ternary, points, units, normal):
+    """The ternary's ΣF = 0 and ΣM = 0 about N0 as A·f = b in f_0, f_1, f_2: A's columns (u_k,
+    r_k × u_k), r_k = N_k − N0 in metres (0 for k = 0), and b = −(its known loads) − Σ g_k·n_k
+    (n_k's moment r_k × n_k = r_k·u_k)."""
+    arms = [w.arm(n, points[0]) for n in points[1:]]
+    columns = [(units[0][0], units[0][1], ZERO)] + \
+        [(u[0], u[1], cross(r, u)) for u, r in zip(units[1:], arms)]
+    (tx, ty), moment = w.resultant(ternary), w.moment(ternary, points[0])
+    known = (lin((-1, tx), *((1, mul(g, u[1])) for g, u in zip(normal, units))),
+             lin((-1, ty), *((-1, mul(g, u[0])) for g, u in zip(normal, units))),
+             lin((-1, moment), *((-1, mul(g, dot(r, u)))
+                                 for g, u, r in zip(normal[1:], units[1:], arms))))
+    return columns, known
 
 
 def _unit(w, pivot: str, joint: str, length: str) -> tuple[str, str]:
