@@ -33,6 +33,7 @@ NON_GRASHOF = ["--set", "a1=100", "--set", "a2=60", "--set", "a3=50", "--set", "
 DEAD_CENTRE = ["--set", "a1=10", "--set", "a2=20", "--set", "a3=4", "--set", "a4=6",
                "--set", "b3=3", "--set", "c3=2", "--step", "10"]
 TRIAD = [("tests/data/triad-sixbar.toml", [])]     # the triad's mutants: its example book
+TRIAD_FORCES = [(f"{FORCES}/triad-sixbar.toml", [])]  # its forces' mutants: it with masses
 NEAR_CHANGE_POINT = ["--set", "a4=42.69"]       # s + l exceeds p + q by 1e-4 of it
 RAM_DEAD_CENTRE = ["--set", "a4=100", "--set", "a5=300", "--set", "b1=-190"]
 # A Jansen leg whose knee angles (θ of the links p and q at C) reach below -180° in radians, out
@@ -70,6 +71,16 @@ MUTANTS = [
            "src/linkbook/language/steps/triad.py",
            'f"ATAN2(({sx0})-({px}),({sy0})-({py})))"', 'f"ATAN2(({px})-({sx0}),({py})-({sy0})))"',
            TRIAD, aimed_only=True),
+    Mutant("triad force: the sign of a binary link's force across it (g_k) flipped",
+           "src/linkbook/language/steps/triad.py",
+           'text = f"{_p(w.moment(link, pivot))}/({{{TO_METRES}}}*{length})"',
+           'text = f"-{_p(w.moment(link, pivot))}/({{{TO_METRES}}}*{length})"',
+           TRIAD_FORCES, aimed_only=True, tests=["tests/test_triad_forces.py"]),
+    Mutant("triad force: the ternary's known loads' moment taken about N1, its arms from N0",
+           "src/linkbook/language/steps/triad.py",
+           "w.resultant(ternary), w.moment(ternary, points[0])",
+           "w.resultant(ternary), w.moment(ternary, points[1])",
+           TRIAD_FORCES, aimed_only=True, tests=["tests/test_triad_forces.py"]),
     Mutant("sign: a dyad's output angle ϕ + ψ for ϕ − ψ", "src/linkbook/language/steps/dyad.py",
            'f"{{{angle}}}-{{{branch}}}*{{{psi.key}}}{q_offset}"',
            'f"{{{angle}}}+{{{branch}}}*{{{psi.key}}}{q_offset}"'),

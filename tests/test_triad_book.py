@@ -137,16 +137,6 @@ def test_a_triad_that_closes_on_stretches_of_the_turn_is_na_exactly_between():
     assert {"theta_D", "xD", "yF"} <= named, named
 
 
-def test_masses_on_a_triad_are_refused_in_one_line():
-    data = _data()
-    data["mechanism"]["bodies"] = [{"joints": ["D", "E", "F"], "mass": 1.0,
-                                    "centre": {"frame": ["D", "E"], "distance": 10.0}}]
-    with pytest.raises(InputError) as caught:
-        _book(data)
-    message = str(caught.value)
-    assert "\n" not in message and "(triad D E F)" in message and "force analysis" in message
-
-
 def test_a_triad_in_a_grid_is_refused_in_one_line():
     data = _data()
     data["grid"] = {"parameter": "a2", "output": "yF", "values": [10.0, 12.0]}

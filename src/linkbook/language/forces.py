@@ -23,7 +23,8 @@ the one that places the pin's point carries it and the others are joined to it. 
 reference's, which verify compares with): T12 or F_in; F{i}{j}x, F{i}{j}y, F{i}{j} (its size);
 a block j's guide i (1: the ground) force N{i}{j} (along the line turned +90°) as F{i}{j}x,
 F{i}{j}y, F{i}{j} and its couple M{i}{j}; a slot's link i on its block j, N{i}{j} across the
-slot, as F{i}{j}x, F{i}{j}y, F{i}{j};
+slot, as F{i}{j}x, F{i}{j}y, F{i}{j}; a triad's binary link P–N on its ternary, along P→N
+and across it, Fa_N and Fn_N (steps/triad.py);
 shaking_x, shaking_y, shaking, shaking_moment (what the moving links do to the frame, about the
 origin); a centre of mass G{j}: xG{j}, yG{j}, axG{j}, ayG{j}.
 """

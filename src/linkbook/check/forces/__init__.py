@@ -75,6 +75,8 @@ with "_" between them, "2_13", in a mechanism of ten bodies or more):
 - for a slot's block j in the link i: ``N{i}{j}``, the link's force on it across the slot (its
   direction, angle(slot_frame) + ``slot_angle``, turned +90°), ``F{i}{j}x``, ``F{i}{j}y``,
   ``F{i}{j}``; no couple;
+- for a triad's binary link P–N (a strut, its step's topology): ``Fa_N``, ``Fn_N``, its pin
+  force on the ternary resolved along P→N and across it (P→N turned +90°);
 - ``shaking_x``, ``shaking_y``, ``shaking``: the force the moving links exert on the ground
   (through the ground pins, the fixed guides with their couples and the actuator's ground
   end); ``shaking_moment``: its moment about the frame's origin, the motor's reaction −T12
@@ -96,7 +98,7 @@ import numpy as np
 from ..reference import solve
 from .equations import SINGULAR, System, actuator_line, equations, solve_rows
 from .loads import Rows, cross, read_loads
-from .topology import GROUND, Topology, topology
+from .topology import GROUND, Topology, body_of, topology
 
 __all__ = ["forces", "topology", "LENGTH_UNITS", "SINGULAR"]
 
@@ -145,9 +147,31 @@ def _report(top: Topology, system: System, x: np.ndarray) -> dict:
             ax, ay = (a / rows.m for a in rows.rate("a", body.centre))
             n = body.number
             out[f"xG{n}"], out[f"yG{n}"], out[f"axG{n}"], out[f"ayG{n}"] = x, y, ax, ay
+    out.update(_struts(top, system, out))
     out["bodies"] = {b.number: tuple(b.joints) for b in top.bodies}
     out["joints"] = joints
     return out
+
+
+def _struts(top: Topology, system: System, out: dict) -> dict:
+    """Each strut's (a triad's binary link P–N) force on the link it holds at N, along P→N
+    (Fa_N) and across it, turned +90° (Fn_N): the pin force F{i}{j} between the two, turned
+    into the strut's on the other link and resolved. A strut pinned to that link through a
+    third body (the pin carried by neither) has none."""
+    found = {}
+    for pivot, joint, onto in top.struts:
+        link, other = body_of(top, (pivot, joint), "strut"), body_of(top, onto, "strut")
+        pin = next((r for r in system.reactions if r.point == joint and r.normal is None
+                    and {r.i, r.j} == {link.number, other.number}), None)
+        if pin is None:
+            continue
+        sign = 1.0 if pin.i == link.number else -1.0
+        fx, fy = sign * out[pin.key + "x"], sign * out[pin.key + "y"]
+        (px, py), (nx, ny) = system.rows.position(pivot), system.rows.position(joint)
+        length = np.hypot(nx - px, ny - py)
+        ux, uy = (nx - px) / length, (ny - py) / length
+        found[f"Fa_{joint}"], found[f"Fn_{joint}"] = fx * ux + fy * uy, fy * ux - fx * uy
+    return found
 
 
 def forces(description: Mapping, params: Mapping[str, float], angles_deg,

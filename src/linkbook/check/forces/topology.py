@@ -62,6 +62,9 @@ class Topology:
     crank: Body | None                         # the body the motor turns
     actuator: tuple[str, str] | None            # (P, R): the actuator pushes R away from P
     pairs: list[Pair]                          # the sliding pairs, in the order of their steps
+    # (P, N, onto): a link P–N whose force at N on the link holding `onto` is also reported
+    # along P→N and across it (a triad's binary links: reference/step_type.Topology.struts)
+    struts: list[tuple[str, str, tuple[str, ...]]] = field(default_factory=list)
 
     def pair(self, i: int, j: int) -> str:
         """Two body numbers as a key's suffix: "23", or "2_13" from ten bodies on."""
@@ -242,7 +245,8 @@ def topology(description: Mapping) -> Topology:
     for number, body in enumerate(bodies, start=GROUND + 1):
         body.number = number
     _attach_entries(description.get("bodies") or [], bodies)
-    top = Topology(bodies, fixed, crank, actuator, pairs)
+    top = Topology(bodies, fixed, crank, actuator, pairs,
+                   [strut for _, _, made in steps for strut in made.struts])
     _count(top)
     return top
 

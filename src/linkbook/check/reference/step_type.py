@@ -57,7 +57,10 @@ class Topology(NamedTuple):
     turns with its link beside its points' (a slide's: its point to p; a slotted link's: its
     pivot to the pin in its slot); `turns`: (U, V), the direction a vector step measures, its
     links and pair a slotted link's (pivot U) and the block at V's only where another step
-    is carried by U→V or slides on it and no other step's link holds both (`slotted`)."""
+    is carried by U→V or slides on it and no other step's link holds both (`slotted`);
+    `struts`: (P, N, onto) for a link P–N whose pin force at N on the link holding the points
+    `onto` the report also gives along P→N and across it (a triad's binary links on its
+    ternary: Fa_N, Fn_N)."""
     links: tuple[tuple[str, ...], ...] = ()
     crank: bool = False
     carried: tuple[str, str, str, bool] | None = None
@@ -65,6 +68,7 @@ class Topology(NamedTuple):
     actuator: tuple[str, str] | None = None
     frame: tuple[str, str] | None = None
     turns: tuple[str, str] | None = None
+    struts: tuple[tuple[str, str, tuple[str, ...]], ...] = ()
 
 
 def slotted(steps: list) -> list:

@@ -16,8 +16,10 @@ solve the same Jacobian at the solution once for the velocities, once for the ac
 from __future__ import annotations
 
 from ..columns import Column, Sym, quantity
-from ..excel import Expr, cross, dot, guard, lin, mul, one_group, sq
-from ..model import ALIAS, AREA, COLUMN, LENGTH, RAD, DescriptionError, Quantity
+from ..excel import ZERO, Expr, cross, dot, guard, lin, mul, one_group, sq
+from ..mechanisms import TO_METRES
+from ..model import (ALIAS, AREA, COLUMN, LENGTH, NEWTON, RAD, DescriptionError,
+                     Quantity)
 from .step_type import StepType, Topology, fixed, schema_keys
 
 ITERATIONS = 6        # Newton iterations per row unless the step says (docs/coupled-loops.md)
@@ -296,9 +298,78 @@ def rates(w, rec: dict) -> None:
 
 
 def forces(w, rec: dict) -> None:
-    """Not written yet: the group's six unknown pin forces need a 6×6 system."""
-    raise DescriptionError(rec["field"], "the force analysis of a triad is not written yet: "
-                                         "give its links no mass and no load")
+    """The group's pin forces (docs/coupled-loops.md, "Forces"). Binary link k, from its pivot
+    P_k to its joint N_k, puts on the ternary at N_k the force f_k·u_k + g_k·n_k (u_k the unit
+    vector P_k→N_k, n_k it turned +90°): its moment balance about P_k gives g_k; the ternary's
+    ΣF = 0 and ΣM = 0 about N0 are then linear in f_0, f_1, f_2, solved by Cramer's rule over
+    a determinant that is zero where the binary links' lines meet in one point (#N/A there);
+    each binary link's force balance gives its pivot's force."""
+    p, q, where = rec["points"], rec["pivots"], rec["field"]
+    ternary = w.body(*p)
+    links = [w.body(q[k], p[k]) for k in range(3)]
+    for k in range(3):
+        w.carrier(p[k], [links[k], ternary], where)
+    units = [_unit(w, q[k], p[k], _k(rec["links"][k])) for k in range(3)]
+    normal = [_normal_part(w, links[k], ternary, q[k], p[k], _k(rec["links"][k]))
+              for k in range(3)]
+    columns, known = _ternary_equations(w, ternary, p, units, normal)
+    det = w.w.alias(f"_Dtriad_{p[0]}", _det3(*columns))
+    w.solved.update({ternary.number, *(b.number for b in links)})
+    for k in range(3):
+        solved = [known if i == k else c for i, c in enumerate(columns)]
+        f = _component(w, links[k], ternary, q[k], p[k], "a", guard(det, _det3(*solved)),
+                       "along")
+        u, g = units[k], normal[k]
+        x, y = w.inner(links[k], ternary, p[k], lin((1, mul(f, u[0])), (-1, mul(g, u[1]))),
+                       lin((1, mul(f, u[1])), (1, mul(g, u[0]))))
+        fx, fy = w.resultant(links[k])
+        w.outer(links[k], q[k], lin((1, x), (-1, fx)), lin((1, y), (-1, fy)), where)
+
+
+def _ternary_equations(w, ternary, points, units, normal):
+    """The ternary's ΣF = 0 and ΣM = 0 about N0 as A·f = b in f_0, f_1, f_2: A's columns (u_k,
+    r_k × u_k), r_k = N_k − N0 in metres (0 for k = 0), and b = −(its known loads) − Σ g_k·n_k
+    (n_k's moment r_k × n_k = r_k·u_k)."""
+    arms = [w.arm(n, points[0]) for n in points[1:]]
+    columns = [(units[0][0], units[0][1], ZERO)] + \
+        [(u[0], u[1], cross(r, u)) for u, r in zip(units[1:], arms)]
+    (tx, ty), moment = w.resultant(ternary), w.moment(ternary, points[0])
+    known = (lin((-1, tx), *((1, mul(g, u[1])) for g, u in zip(normal, units))),
+             lin((-1, ty), *((-1, mul(g, u[0])) for g, u in zip(normal, units))),
+             lin((-1, moment), *((-1, mul(g, dot(r, u)))
+                                 for g, u, r in zip(normal[1:], units[1:], arms))))
+    return columns, known
+
+
+def _unit(w, pivot: str, joint: str, length: str) -> tuple[str, str]:
+    """The unit vector pivot→joint of a binary link of this length."""
+    (nx, ny), (px, py) = w.pos(joint), w.pos(pivot)
+    return (f"{_p(lin((1, nx), (-1, px)))}/{length}", f"{_p(lin((1, ny), (-1, py)))}/{length}")
+
+
+def _normal_part(w, link, ternary, pivot: str, joint: str, length: str) -> str:
+    """g: the binary link turns about its pivot, so its force on the ternary has the moment
+    of its known loads there, L·g = M(pivot) (#N/A where the joint is)."""
+    text = f"{_p(w.moment(link, pivot))}/({{{TO_METRES}}}*{length})"
+    return _component(w, link, ternary, pivot, joint, "n",
+                      f"IF(ISNUMBER({w.pos(joint)[0]}),{text},NA())", "across")
+
+
+def _component(w, link, ternary, pivot: str, joint: str, kind: str, text: str,
+               way: str) -> str:
+    """The column of a binary link's force on the ternary along its link or across it."""
+    pair = tuple(sorted((link.number, ternary.number)))
+    return w.add(f"F{kind}_{joint}", f"F{kind}({joint})", NEWTON, text,
+                 f"link {link.number} on link {ternary.number} at {joint}, {way} "
+                 f"{pivot}→{joint}{' turned +90°' if kind == 'n' else ''}",
+                 (2, pair, 1 if kind == "a" else 2))
+
+
+def _det3(a: tuple[str, str, str], b: tuple[str, str, str], c: tuple[str, str, str]) -> str:
+    """The determinant of the 3×3 matrix of these columns."""
+    return lin((1, mul(a[0], lin((1, mul(b[1], c[2])), (-1, mul(b[2], c[1]))))),
+               (-1, mul(a[1], lin((1, mul(b[0], c[2])), (-1, mul(b[2], c[0]))))),
+               (1, mul(a[2], lin((1, mul(b[0], c[1])), (-1, mul(b[1], c[0]))))))
 
 
 def topology(rec: dict, length_input: str | None) -> Topology:

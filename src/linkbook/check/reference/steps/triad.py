@@ -155,9 +155,12 @@ def rates(motion: Rates, step: Mapping) -> None:
 
 
 def topology(step: Mapping, length_input: str | None) -> Topology:
-    """Three binary links, pivot to joint, and the ternary link through the three joints."""
+    """Three binary links, pivot to joint, and the ternary link through the three joints; each
+    binary link's force on the ternary is also resolved along the link and across it (the
+    book's unknowns, docs/coupled-loops.md)."""
     names, pivots = [str(n) for n in step["points"]], [str(p) for p in step["pivots"]]
-    return Topology(links=tuple(zip(pivots, names)) + (tuple(names),))
+    return Topology(links=tuple(zip(pivots, names)) + (tuple(names),),
+                    struts=tuple((p, n, tuple(names)) for p, n in zip(pivots, names)))
 
 
 STEP = StepType(place=place, rates=rates, length_fields=("lengths", "sides"),
