@@ -116,9 +116,9 @@ def test_a_triad_that_closes_on_stretches_of_the_turn_is_na_exactly_between():
     """A crank of 20 mm that the triad follows only near θ = 0, 70°-100° and 320°-360°: the
     book's solution is #N/A on exactly the rows where the reference finds none. Each stretch
     after a gap starts from the sketch again, in the book by Newton in its two angles, in the
-    reference in the six coordinates: from the sketch at 70° both reach one assembly and every
-    cell agrees; from the sketch at 320° they reach two different ones, and verify names the
-    solution's columns there (not passed)."""
+    reference in the six coordinates: from the sketch at 70° both reach one assembly; from the
+    sketch at 320° they reach two different ones, and verify names that stretch, and only
+    that one, as such (not passed), where every cell agrees with the book's assembly."""
     joints = [(35.0, 25.0), (60.0, 30.0), (45.0, 45.0)]
     params = _assembly(20.0, (80.0, 0.0), (10.0, 70.0), joints, joints)
     b, values = _book(_data(8, **params), step=5)
@@ -128,13 +128,31 @@ def test_a_triad_that_closes_on_stretches_of_the_turn_is_na_exactly_between():
     assert np.count_nonzero(np.diff(closes.astype(int)) == 1) == 2    # two restarts
     for key in JOINTS:
         np.testing.assert_array_equal(np.isfinite(_column(b, values, key)), closes)
+    assert not _mismatches(b, values)
     first = b.meta["sweep"]["rows"][0]
-    rows = {int("".join(ch for ch in m.cell if ch.isdigit())) - first
-            for _, _, m in _mismatches(b, values) if m.sheet == "Sweep"}
     second = int(np.nonzero(np.diff(closes.astype(int)) == 1)[0][1]) + 1    # 320°
-    assert rows and min(rows) == second, sorted(rows)
-    named = {name for c in checks_of(b, values) for name in [c.name] if not c.ok}
-    assert {"theta_D", "xD", "yF"} <= named, named
+    last = len(angles) - 1
+    named = [line for c in checks_of(b, values) for line in c.assembly]
+    assert named == [f"Sweep rows {first + second}–{first + last}: the book's assembly of the "
+                     f"triad D differs from the reference's after a restart at row "
+                     f"{first + second}"], named
+
+
+def test_verify_names_the_stretch_in_another_assembly_in_one_line(tmp_path, capsys):
+    """`linkbook verify` of the book above: exit status 2 (not passed, nothing differs), and
+    the stretch named in one line of the verdict."""
+    from linkbook.apps.cli import main
+    joints = [(35.0, 25.0), (60.0, 30.0), (45.0, 45.0)]
+    data = _data(8, **_assembly(20.0, (80.0, 0.0), (10.0, 70.0), joints, joints))
+    data["sweep"]["step"] = 5
+    path = tmp_path / "stretches.xlsx"
+    builder.build_file(templates.from_data("triad", data), path)
+    assert main(["verify", str(path)]) == 2
+    said = capsys.readouterr().out.splitlines()
+    verdict = [line for line in said if line.startswith("CANNOT JUDGE")]
+    assert len(verdict) == 1 and "DIFFER" not in "".join(said), said
+    assert "Sweep rows 69–77: the book's assembly of the triad D differs from the reference's " \
+           "after a restart at row 69" in verdict[0], verdict
 
 
 def test_masses_on_a_triad_are_refused_in_one_line():
