@@ -123,7 +123,10 @@ def pytest_terminal_summary(terminalreporter):
             f"{family:24} {TALLY[(family, 'examples')]:5d} examples, "
             f"{TALLY[(family, 'with rows that cannot close')]:5d} with rows that cannot close"
             + (f", {TALLY[(family, 'tasks with no design')]} tasks with no design"
-               if (family, "tasks with no design") in TALLY else ""))
+               if (family, "tasks with no design") in TALLY else "")
+            + (f", {TALLY[(family, 'in another assembly after a restart')]} in another "
+               "assembly after a restart"
+               if (family, "in another assembly after a restart") in TALLY else ""))
 
 
 # ---------------------------------------------------------------- applications a test needs
