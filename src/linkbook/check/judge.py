@@ -116,18 +116,16 @@ def note_other_assembly(j: Judging, ref: dict, row_of) -> None:
         if not rows.size:
             continue
         c = Check("assembly", f"triad {first_joint}", j.size)
+        differs = f"the book's assembly of the triad {first_joint} differs from the reference's"
         if row_of is None:
-            c.assembly.append(f"the current position ({j.record.position.sheet}): the book's "
-                              f"assembly of the triad {first_joint} differs from the "
-                              "reference's after a restart from the sketch")
-        for run in np.split(rows, np.flatnonzero(np.diff(rows) > 1) + 1):
-            if row_of is None:
-                break
-            a, b = row_of(int(run[0])), row_of(int(run[-1]))
-            how = (f"after a restart at row {a}" if codes[run[0]] == RESTARTED
-                   else f"from row {a} (its Newton from the row above)")
-            c.assembly.append(f"{j.record.sweep.sheet} rows {a}–{b}: the book's assembly of the "
-                              f"triad {first_joint} differs from the reference's {how}")
+            c.assembly.append(f"the current position ({j.record.position.sheet}): {differs} "
+                              "after a restart from the sketch")
+        else:
+            for run in np.split(rows, np.flatnonzero(np.diff(rows) > 1) + 1):
+                a, b = row_of(int(run[0])), row_of(int(run[-1]))
+                how = (f"after a restart at row {a}" if codes[run[0]] == RESTARTED
+                       else f"from row {a} (its Newton from the row above)")
+                c.assembly.append(f"{j.record.sweep.sheet} rows {a}–{b}: {differs} {how}")
         j.checks.append(c)
 
 
