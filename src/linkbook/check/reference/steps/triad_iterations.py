@@ -160,16 +160,20 @@ def book_method(count: int, n_rows: int, pivots, lengths, sides, frame, sketch
 RESTARTED, CONTINUED = 2, 1     # other_assembly's codes of a row in another assembly
 
 
+def _turn_apart(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """|a − b| of two angles, whole turns left out (at most π)."""
+    return np.abs((a - b + math.pi) % (2 * math.pi) - math.pi)
+
+
 def other_assembly(phi: np.ndarray, theta: np.ndarray, solved, pivots) -> np.ndarray:
     """Per row: 0 where the book's method (book_method's φ, θ) reaches the continuation's
     solution `solved` (the joints) or none; where it reaches one the continuation has not,
     RESTARTED if that row started from the sketch, else CONTINUED (from the row above)."""
     (dx, dy), (ex, ey) = solved[0], solved[1]
     ax, ay = pivots[0]
-    wrap = lambda a: np.abs((a + math.pi) % (2 * math.pi) - math.pi)     # noqa: E731
     with np.errstate(invalid="ignore"):
-        apart = np.maximum(wrap(np.arctan2(dy - ay, dx - ax) - phi),
-                           wrap(np.arctan2(ey - dy, ex - dx) - theta))
+        apart = np.maximum(_turn_apart(np.arctan2(dy - ay, dx - ax), phi),
+                           _turn_apart(np.arctan2(ey - dy, ex - dx), theta))
         other = np.isfinite(phi) & ~(apart <= SAME)
     restarted = ~np.isfinite(np.roll(phi, 1))
     restarted[0] = True
