@@ -22,8 +22,8 @@ from linkbook.apps import preview
 from linkbook.language import templates
 
 IMAGES = Path(__file__).resolve().parent / "images"
-DRAWINGS = ("boom-cylinder", "garage-door", "hoeken", "jansen", "toggle-press", "watt-sixbar",
-            "whitworth")
+DRAWINGS = ("boom-cylinder", "garage-door", "hoeken", "jansen", "toggle-press", "triad-sixbar",
+            "watt-sixbar", "whitworth")
 DPI = 110
 
 

@@ -99,6 +99,14 @@ def checks_of(b, values):
     return check_book(b.workbook, b.record, values, engine.is_error, engine.error_code)
 
 
+def passes_or_names_another_assembly(report) -> bool:
+    """Exit status 0, or 2 for no reason but a triad's book reaching another assembly than the
+    reference's (judge.note_other_assembly): the only named verdict a random triad may draw."""
+    return report.status == 0 or (report.status == 2 and bool(report.other_assembly)
+                                  and not report.unjudged and not report.not_judged
+                                  and report.error is None)
+
+
 def value_at(b, values, key: str, angle: float, sheet: str = "Sweep"):
     """The sweep value of column `key` on the row whose input angle is `angle`."""
     ws = b.workbook[sheet]
@@ -123,7 +131,10 @@ def pytest_terminal_summary(terminalreporter):
             f"{family:24} {TALLY[(family, 'examples')]:5d} examples, "
             f"{TALLY[(family, 'with rows that cannot close')]:5d} with rows that cannot close"
             + (f", {TALLY[(family, 'tasks with no design')]} tasks with no design"
-               if (family, "tasks with no design") in TALLY else ""))
+               if (family, "tasks with no design") in TALLY else "")
+            + (f", {TALLY[(family, 'in another assembly after a restart')]} in another "
+               "assembly after a restart"
+               if (family, "in another assembly after a restart") in TALLY else ""))
 
 
 # ---------------------------------------------------------------- applications a test needs

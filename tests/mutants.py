@@ -32,7 +32,7 @@ FAST_TESTS = ["tests/test_verdict.py", "tests/test_published.py", "tests/test_mo
 NON_GRASHOF = ["--set", "a1=100", "--set", "a2=60", "--set", "a3=50", "--set", "a4=40"]
 DEAD_CENTRE = ["--set", "a1=10", "--set", "a2=20", "--set", "a3=4", "--set", "a4=6",
                "--set", "b3=3", "--set", "c3=2", "--step", "10"]
-TRIAD = [("tests/data/triad-sixbar.toml", [])]     # the triad's mutants: its example book
+TRIAD = [("triad-sixbar", [])]      # the triad's mutants: the bundled triad six-bar
 TRIAD_FORCES = [(f"{FORCES}/triad-sixbar.toml", [])]  # its forces' mutants: it with masses
 NEAR_CHANGE_POINT = ["--set", "a4=42.69"]       # s + l exceeds p + q by 1e-4 of it
 RAM_DEAD_CENTRE = ["--set", "a4=100", "--set", "a5=300", "--set", "b1=-190"]

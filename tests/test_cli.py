@@ -29,7 +29,7 @@ def test_list_shows_every_bundled_template():
                             "quick-return", "shaper", "garage-door", "tk-fourbar",
                             "jansen", "watt-sixbar", "whitworth", "toggle-press", "hoeken",
                             "boom-cylinder", "function-log10", "motion-3pose",
-                            "path-timing"])
+                            "path-timing", "triad-sixbar"])
     assert "[crank, dyad, point]" in next(line for line in out.stdout.splitlines()
                                           if line.startswith("fourbar "))
 

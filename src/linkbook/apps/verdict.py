@@ -42,6 +42,7 @@ def _as_data(report) -> dict:
         "likely_causes": _ranges(report, report.causes),
         "unjudged": _ranges(report, report.unjudged),
         "not_judged": _ranges(report, report.not_judged),
+        "other_assembly": report.other_assembly,
         "replaced_by_constants": [f"{s}!{c}" for s, c in report.replaced],
         "stored_values_differ": report.stored_differ,
         "max_abs_diff": report.max_abs if usable else None, "inputs": report.inputs,
@@ -102,7 +103,7 @@ def _print_report(report, verbose: bool = False) -> None:
         unsure = "".join(f"; not judged: {what}" for what in _cannot_judge(report))
         print(f"DISAGREES: {report.differing} cells differ{kinds}, likely cause {causes}; "
               f"{compared}, max |Δ| {report.max_abs:.2e}{unsure}")
-    elif report.unjudged or report.not_judged:
+    elif report.unjudged or report.not_judged or report.other_assembly:
         print(f"CANNOT JUDGE {'; '.join(_cannot_judge(report))}; {compared}")
     else:
         skipped = [f"input set {s.number}" for s in report.input_sets if s.skipped is not None]
@@ -119,7 +120,8 @@ def _cannot_judge(report) -> list[str]:
              (report.not_judged, "too near a singular position (their rounding bound reaches "
                                  f"{DETERMINED:.0%} of their value)"))
     return [f"{_cells(len(cells))} {why}: "
-            f"{cell_ranges(_in_book_order(report, cells))}" for cells, why in kinds if cells]
+            f"{cell_ranges(_in_book_order(report, cells))}" for cells, why in kinds if cells] \
+        + report.other_assembly
 
 
 def _print_checks(shown: list, causes) -> None:

@@ -63,6 +63,9 @@ class Check:
     # of their value (see `determines`)
     not_judged: list[tuple[str, str]] = field(default_factory=list)
     mismatches: list[Mismatch] = field(default_factory=list)
+    # one line per stretch of rows where the book's method reaches another assembly than the
+    # reference's continuation (judge.note_other_assembly): named, not passed
+    assembly: list[str] = field(default_factory=list)
     judged: set[tuple[str, str]] = field(default_factory=set, repr=False)  # (sheet, cell)
 
     @property
@@ -130,6 +133,7 @@ class Check:
                 "max_abs_diff": self.max_abs, "na_expected": self.na_expected,
                 "na_agree": self.na_agree, "dead_centre": self.dead_centre,
                 "not_judged": len(self.not_judged), "ok": self.ok,
+                "other_assembly": self.assembly,
                 "mismatches": [m.__dict__ for m in self.mismatches[:20]]}
 
 

@@ -80,6 +80,7 @@ def _check_sweep(j: Judging) -> None:
     j.scale = math.degrees(1.0) if mech.input_is_angle else j.size
     j.turns = j.shown_angles(sweep.sheet, {key: sweep.cells(key) for key in sweep.columns})
     j.ref = j.solver.solve(j.params, j.angles, j.turns)
+    note_other_assembly(j, j.ref, lambda i: sweep.rows[0] + i)
     for key in sweep.columns:
         if key == mech.input_column or key in ASSEMBLY_COLUMNS:
             continue
@@ -96,10 +97,36 @@ def _check_position(j: Judging) -> None:
                        mech.input_is_angle)
     j.turns_now = j.shown_angles(pos.sheet, {key: [cell] for key, cell in pos.cells.items()})
     j.one = j.solver.solve(j.params, np.array([j.angle]), j.turns_now)
+    note_other_assembly(j, j.one, None)
     for key, cell in pos.cells.items():
         unit = column_unit(j.model, key)
         j.run("position", key, pos.sheet, [cell], expected_of(j.one, key), unit,
               j.slope(np.array([j.angle]), key, unit))
+
+
+def note_other_assembly(j: Judging, ref: dict, row_of) -> None:
+    """A check naming each stretch of rows (`row_of`: the sheet's row of a reference row; None:
+    the current position) where the book's method, Newton in two angles from the sketch or
+    the row above, reaches another assembly than the reference's continuation in six
+    coordinates (reference/steps/triad.py). The reference judges the book's cells there in the
+    book's assembly, but which assembly is meant the data do not say: named, not passed."""
+    from .reference.steps.triad_iterations import RESTARTED
+    for first_joint, codes in ref.get("other_assembly", {}).items():
+        rows = np.flatnonzero(codes)
+        if not rows.size:
+            continue
+        c = Check("assembly", f"triad {first_joint}", j.size)
+        differs = f"the book's assembly of the triad {first_joint} differs from the reference's"
+        if row_of is None:
+            c.assembly.append(f"the current position ({j.record.position.sheet}): {differs} "
+                              "after a restart from the sketch")
+        else:
+            for run in np.split(rows, np.flatnonzero(np.diff(rows) > 1) + 1):
+                a, b = row_of(int(run[0])), row_of(int(run[-1]))
+                how = (f"after a restart at row {a}" if codes[run[0]] == RESTARTED
+                       else f"from row {a} (its Newton from the row above)")
+                c.assembly.append(f"{j.record.sweep.sheet} rows {a}–{b}: {differs} {how}")
+        j.checks.append(c)
 
 
 def _check_constants(j: Judging) -> None:

@@ -45,17 +45,28 @@ class Report:
         return sorted(undetermined(self.checks))
 
     @property
+    def other_assembly(self) -> list[str]:
+        """Where the book's method and the reference's continuation reach different
+        assemblies (judge.note_other_assembly), one line a stretch of rows: named, not
+        passed (the data do not say which assembly is meant)."""
+        return [line for c in self.checks for line in c.assembly] + [
+            f"input set {s.number}: {line}" for s in self.input_sets for c in s.checks
+            for line in c.assembly]
+
+    @property
     def ok(self) -> bool:
         return self.status == 0
 
     @property
     def status(self) -> int:
         """The exit status: 0 every formula cell agrees, 1 a cell disagrees, 2 some formula
-        cells cannot be judged (the record does not say what they hold, or they are too near a
-        singular position) and none disagrees, or the book cannot be verified at all."""
+        cells cannot be judged (the record does not say what they hold, they are too near a
+        singular position, or the book's assembly differs from the reference's) and none
+        disagrees, or the book cannot be verified at all."""
         if self.error is not None:
             return 2
-        return 1 if self.disagrees else 2 if self.unjudged or self.not_judged else 0
+        return 1 if self.disagrees else 2 if (self.unjudged or self.not_judged
+                                              or self.other_assembly) else 0
 
     @property
     def cells(self) -> int:

@@ -118,7 +118,7 @@ class Positions:
             self.env[f"{self.input_key}_deg"] = values
         else:
             self.env[self.input_key] = values
-        self.reserved = {self.input_key, "assembled", "points"}
+        self.reserved = {self.input_key, "assembled", "points", "other_assembly"}
         self.assembled = np.ones(n, dtype=bool)
 
     def run(self) -> dict:

@@ -180,7 +180,7 @@ class _Writer:
                                  f"iteration {k + 1}: θ")
         conv = self.add(f"conv_{n}", f"|Δ|_{n}", RAD,
                         f"IF(ABS({dphi})>ABS({dth}),ABS({dphi}),ABS({dth}))",
-                        "the last correction: converged where at most " + TOLERANCE)
+                        f"last correction (done if ≤ {TOLERANCE})")
         done = f"{conv}<={TOLERANCE}"
         self.add_sym(cols[f"theta_{n}"], f"IF({done},{phi}-{dphi},NA())")
         self.add_sym(cols[f"theta_{p[0]}{p[1]}"], f"IF({done},{theta}-{dth},NA())")

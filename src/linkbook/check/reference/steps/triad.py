@@ -17,8 +17,10 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..expressions import scalar
-from .triad_iterations import DEFAULT_ITERATIONS, converged, ternary_frame
-from ..group import Bar, Turn, solve_group
+from .triad_iterations import (DEFAULT_ITERATIONS, book_method, converged, other_assembly,
+                               ternary_frame)
+from ..group import Bar, Turn, residuals, solve_group
+from ..newton import newton
 from ..positions import Positions
 from ..rates import Rates
 from ..step_type import StepType, Topology
@@ -83,7 +85,8 @@ def place(solver: Positions, step: Mapping) -> None:
     names, pivots, lengths, sides, sketch = read(solver, step)
     if min(lengths + sides) <= 0.0:
         raise ValueError(f"{solver.where}: lengths and sides must be positive")
-    joints = solve_group(solver.n, 3, bars(solver, pivots, lengths, sides), sketch,
+    distances = bars(solver, pivots, lengths, sides)
+    joints = solve_group(solver.n, 3, distances, sketch,
                          [Turn(0, 1, 2, sense(sketch))], solver.size, solver.tol_f)
     moving = solver.moves(*pivots)
     turning = sense(sketch)
@@ -91,6 +94,8 @@ def place(solver: Positions, step: Mapping) -> None:
     solver.put(f"gamma_{names[0]}", turning * abs(math.atan2(frame[1], frame[0])), True)
     count = step.get("iterations", DEFAULT_ITERATIONS)
     at = [solver.points[p] for p in pivots]
+    joints = _as_the_book_reaches(solver, names[0], count, joints, distances, at, frame,
+                                  sketch)
     iterations, joints = converged(names[0], count, joints, at, lengths, sides, frame, sketch,
                                    solver.turns)
     for key, value in iterations.items():
@@ -116,6 +121,31 @@ def place(solver: Positions, step: Mapping) -> None:
         a, b = names[k], names[(k + 1) % 3]
         (ax, ay), (bx, by) = joints[k], joints[(k + 1) % 3]
         solver.add_link(a, b, np.arctan2(by - ay, bx - ax), ternary if k == 0 else None, side)
+
+
+def _as_the_book_reaches(solver: Positions, n: str, count: int, joints, distances, at, frame,
+                         sketch) -> list:
+    """The joints, on the rows where the book's method (triad_iterations.book_method: Newton in
+    two angles from the row above or the sketch) reaches another assembly than the
+    continuation, in the book's assembly, made the reference's own by Newton on the six
+    distances from there; those rows are noted under `other_assembly` (verify names them: the
+    book and the reference chose different assemblies, neither is judged the right one)."""
+    lengths, sides = [b.length for b in distances[:3]], [b.length for b in distances[3:]]
+    phi, theta = book_method(count, solver.n, at, lengths, sides, frame, sketch)
+    other = other_assembly(phi, theta, joints, at)
+    solver.out.setdefault("other_assembly", {})[n] = other
+    if not other.any():
+        return joints
+    z = np.array([c for x, y in joints for c in (x, y)], dtype=float).T     # rows × 6
+    for row in np.flatnonzero(other):
+        d = (at[0][0][row] + lengths[0] * math.cos(phi[row]),
+             at[0][1][row] + lengths[0] * math.sin(phi[row]))
+        c, s = math.cos(theta[row]), math.sin(theta[row])
+        guess = [d[0], d[1], d[0] + sides[0] * c, d[1] + sides[0] * s,
+                 d[0] + frame[0] * c - frame[1] * s, d[1] + frame[0] * s + frame[1] * c]
+        root = newton(residuals(distances, row, 3), guess, [solver.size] * 6, solver.tol_f)
+        z[row] = root if root is not None else math.nan
+    return [(z[:, 2 * k], z[:, 2 * k + 1]) for k in range(3)]
 
 
 def rates(motion: Rates, step: Mapping) -> None:

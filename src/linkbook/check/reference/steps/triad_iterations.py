@@ -125,3 +125,56 @@ def converged(n: str, count: int, solved, pivots, lengths, sides, frame, sketch,
         if (still == closed).all():
             return columns, kept
         closed = still
+
+
+SAME = 1e-6         # rad: two solutions of the group this close in (φ, θ) are one assembly
+
+
+def book_method(count: int, n_rows: int, pivots, lengths, sides, frame, sketch
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """The book's own method in the reference's arithmetic, independent of the book's cells:
+    row by row, `count` corrections from the row above's converged solution (the sketch's
+    angles on the first row and after a row that did not converge); per row the solution's
+    (φ, θ), NaN where the last correction is above TOLERANCE. From the sketch it may reach
+    another assembly than the six-coordinate continuation (`other_assembly`)."""
+    first = [(np.broadcast_to(np.asarray(x, dtype=float), (n_rows,)),
+              np.broadcast_to(np.asarray(y, dtype=float), (n_rows,))) for x, y in pivots]
+    phi0, theta0 = start([(np.full(n_rows, math.nan),) * 2] * 2, first, sketch)
+    phis, thetas = np.full(n_rows, math.nan), np.full(n_rows, math.nan)
+    above = None
+    for row in range(n_rows):
+        at = [(x[row:row + 1], y[row:row + 1]) for x, y in first]
+        phi, theta = (np.array([phi0[row]]), np.array([theta0[row]])) if above is None \
+            else above
+        step = {"dphi": np.array([math.nan]), "dth": np.array([math.nan])}
+        for _ in range(count):
+            step = iteration(phi, theta, at, lengths, sides, frame)
+            phi, theta = phi - step["dphi"], theta - step["dth"]
+        done = max(abs(step["dphi"][0]), abs(step["dth"][0])) <= TOLERANCE
+        above = (phi, theta) if done else None
+        if done:
+            phis[row], thetas[row] = phi[0], theta[0]
+    return phis, thetas
+
+
+RESTARTED, CONTINUED = 2, 1     # other_assembly's codes of a row in another assembly
+
+
+def _turn_apart(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """|a − b| of two angles, whole turns left out (at most π)."""
+    return np.abs((a - b + math.pi) % (2 * math.pi) - math.pi)
+
+
+def other_assembly(phi: np.ndarray, theta: np.ndarray, solved, pivots) -> np.ndarray:
+    """Per row: 0 where the book's method (book_method's φ, θ) reaches the continuation's
+    solution `solved` (the joints) or none; where it reaches one the continuation has not,
+    RESTARTED if that row started from the sketch, else CONTINUED (from the row above)."""
+    (dx, dy), (ex, ey) = solved[0], solved[1]
+    ax, ay = pivots[0]
+    with np.errstate(invalid="ignore"):
+        apart = np.maximum(_turn_apart(np.arctan2(dy - ay, dx - ax), phi),
+                           _turn_apart(np.arctan2(ey - dy, ex - dx), theta))
+        other = np.isfinite(phi) & ~(apart <= SAME)
+    restarted = ~np.isfinite(np.roll(phi, 1))
+    restarted[0] = True
+    return np.where(other, np.where(restarted, RESTARTED, CONTINUED), 0)
