@@ -1,5 +1,5 @@
 """The triad book's rates are the derivatives of its own positions (issue 41: "rates agree with
-finite differences of the positions"): the example template (tests/data/triad-sixbar.toml)
+finite differences of the positions"): the bundled template (templates/triad-sixbar.toml)
 built on five rows h apart at three stretches of the turn; every velocity and angular velocity
 on its Motion sheet against central differences of the Sweep sheet's positions, every
 acceleration against the second differences (and the first, for the crank's α).
@@ -20,7 +20,7 @@ from conftest import ROOT
 from linkbook.book import builder
 from linkbook.language import templates
 
-TEMPLATE = ROOT / "tests" / "data" / "triad-sixbar.toml"
+TEMPLATE = ROOT / "templates" / "triad-sixbar.toml"
 STEP = 0.05                     # degrees between the rows
 OMEGA, ALPHA = 1.3, 0.7         # the crank's ω (rad/s) and α (rad/s²)
 ULPS = 64 * np.finfo(float).eps

@@ -33,7 +33,7 @@ from linkbook.engine import evaluator as engine
 from linkbook.engine.rerun import rerun
 from linkbook.language import templates
 
-EXAMPLE = ROOT / "tests" / "data" / "triad-sixbar.toml"
+EXAMPLE = ROOT / "templates" / "triad-sixbar.toml"
 FORCES = ROOT / "tests" / "data" / "forces" / "triad-sixbar.toml"
 SHEET = "Forces"
 STEP = 30.0                     # the random draws' sweep
@@ -54,7 +54,7 @@ def example():
 
 
 def test_the_forces_template_is_the_example_with_masses():
-    """Its geometry, sketch and steps are the example's (tests/data/triad-sixbar.toml), word
+    """Its geometry, sketch and steps are the bundled example's (templates/triad-sixbar.toml), word
     for word: what is verified here is the example book with masses on it."""
     example, ours = tomllib.loads(EXAMPLE.read_text(encoding="utf-8")), _data()
     assert ours["mechanism"]["steps"] == example["mechanism"]["steps"]
