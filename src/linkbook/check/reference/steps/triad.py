@@ -131,7 +131,7 @@ def _as_the_book_reaches(solver: Positions, n: str, count: int, joints, distance
     distances from there; those rows are noted under `other_assembly` (verify names them: the
     book and the reference chose different assemblies, neither is judged the right one)."""
     lengths, sides = [b.length for b in distances[:3]], [b.length for b in distances[3:]]
-    phi, theta = book_method(count, solver.n, at, lengths, sides, frame, sketch)
+    phi, theta = book_method(count, solver.n, at, lengths, sides, frame, sketch, joints)
     other = other_assembly(phi, theta, joints, at)
     solver.out.setdefault("other_assembly", {})[n] = other
     if not other.any():

@@ -130,15 +130,18 @@ def converged(n: str, count: int, solved, pivots, lengths, sides, frame, sketch,
 SAME = 1e-6         # rad: two solutions of the group this close in (φ, θ) are one assembly
 
 
-def book_method(count: int, n_rows: int, pivots, lengths, sides, frame, sketch
+def book_method(count: int, n_rows: int, pivots, lengths, sides, frame, sketch, solved
                 ) -> tuple[np.ndarray, np.ndarray]:
     """The book's own method in the reference's arithmetic, independent of the book's cells:
     row by row, `count` corrections from the row above's converged solution (the sketch's
     angles on the first row and after a row that did not converge); per row the solution's
     (φ, θ), NaN where the last correction is above TOLERANCE. From the sketch it may reach
-    another assembly than the six-coordinate continuation (`other_assembly`)."""
+    another assembly than the six-coordinate continuation `solved` (`other_assembly`)."""
     first = [(np.broadcast_to(np.asarray(x, dtype=float), (n_rows,)),
               np.broadcast_to(np.asarray(y, dtype=float), (n_rows,))) for x, y in pivots]
+    alike = _where_the_continuation_leads(count, first, lengths, sides, frame, sketch, solved)
+    if alike is not None:
+        return alike
     phi0, theta0 = start([(np.full(n_rows, math.nan),) * 2] * 2, first, sketch)
     phis, thetas = np.full(n_rows, math.nan), np.full(n_rows, math.nan)
     above = None
@@ -155,6 +158,28 @@ def book_method(count: int, n_rows: int, pivots, lengths, sides, frame, sketch
         if done:
             phis[row], thetas[row] = phi[0], theta[0]
     return phis, thetas
+
+
+def _where_the_continuation_leads(count: int, pivots, lengths, sides, frame, sketch, solved):
+    """book_method's answer in one pass over all rows, when the book's method keeps to the
+    continuation `solved`: every row's corrections started, as the book starts them, from the
+    row above's solution where it closed and from the sketch where it did not, with the
+    continuation's solution standing for the book's own above. If each row then converges
+    exactly where the continuation closed, to its assembly, that is what the book's method
+    does row by row (the two starts differ by the convergence's last digits); else None, and
+    the rows are followed one by one."""
+    phi, theta = start(solved, pivots, sketch)
+    step = {"dphi": phi * math.nan, "dth": theta * math.nan}
+    for _ in range(count):
+        step = iteration(phi, theta, pivots, lengths, sides, frame)
+        phi, theta = phi - step["dphi"], theta - step["dth"]
+    with np.errstate(invalid="ignore"):
+        done = np.maximum(np.abs(step["dphi"]), np.abs(step["dth"])) <= TOLERANCE
+    closed = np.isfinite(solved[0][0]) & np.isfinite(solved[1][0]) & np.isfinite(solved[2][0])
+    if (done != closed).any() or other_assembly(np.where(done, phi, math.nan), theta, solved,
+                                                 pivots).any():
+        return None
+    return np.where(done, phi, math.nan), np.where(done, theta, math.nan)
 
 
 RESTARTED, CONTINUED = 2, 1     # other_assembly's codes of a row in another assembly
