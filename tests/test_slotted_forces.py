@@ -81,23 +81,6 @@ def draws(t: templates.Template):
                                   **{k: v for k, v in PLACES.items() if k in offsets}})
 
 
-def judge_draw(t, built, evaluation, rules, drawn: dict) -> int:
-    """The book's formulas evaluated at the drawn inputs, judged as verify judges a book at its
-    other input sets (no cell may differ from the reference, the Forces sheet judged); the
-    number of rows whose driving torque balances the power."""
-    wb, record = built.workbook, built.record
-    held = write_inputs(wb, record, drawn)
-    try:
-        with rerun(evaluation, {input_cell(record, k): v for k, v in drawn.items()}) as got:
-            checks = judge_book(wb, record, got, rules, own_inputs=False)
-            bad = [(c.block, c.name, m) for c in checks for m in c.mismatches]
-            assert not bad, bad[:4]
-            assert any(c.block == SHEET for c in checks)
-            return assert_power_balance(with_values(t, **drawn), built, got)
-    finally:
-        write_inputs(wb, record, held)
-
-
 @pytest.mark.parametrize("name", FAMILIES)
 def test_random_masses_and_loads_agree_with_the_reference(books, name):
     """For random masses, inertias, loads, gravity, input rates and the slotted link's centre
@@ -105,6 +88,7 @@ def test_random_masses_and_loads_agree_with_the_reference(books, name):
     agree with the force reference everywhere, as verify judges a book at its other input
     sets, and its driving torque balances the power on every row it has one."""
     t, built, evaluation, _ = books[name]
+    wb, record = built.workbook, built.record
     rules = Rules(engine.is_error, engine.error_code)
     balanced = []
 
@@ -112,7 +96,16 @@ def test_random_masses_and_loads_agree_with_the_reference(books, name):
               suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
     @given(draws(t))
     def check(drawn):
-        balanced.append(judge_draw(t, built, evaluation, rules, drawn))
+        held = write_inputs(wb, record, drawn)
+        try:
+            with rerun(evaluation, {input_cell(record, k): v for k, v in drawn.items()}) as got:
+                checks = judge_book(wb, record, got, rules, own_inputs=False)
+                bad = [(c.block, c.name, m) for c in checks for m in c.mismatches]
+                assert not bad, bad[:4]
+                assert any(c.block == SHEET for c in checks)
+                balanced.append(assert_power_balance(with_values(t, **drawn), built, got))
+        finally:
+            write_inputs(wb, record, held)
 
     check()
     assert min(balanced) > 0, balanced          # every draw has rows with a driving torque
