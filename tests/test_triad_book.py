@@ -58,7 +58,7 @@ def _mismatches(b, values) -> list:
     return [(c.block, c.name, m) for c in checks_of(b, values) for m in c.mismatches[:2]]
 
 
-def _assembly(crank, b0, c0, joints, sketch) -> dict:
+def triad_assembly(crank, b0, c0, joints, sketch) -> dict:
     """Parameters of the bundled template for the triad of this assembly at θ = 0."""
     ends = [(crank, 0.0), b0, c0]
     lengths = [math.dist(p, j) for p, j in zip(ends, joints)]
@@ -102,7 +102,7 @@ def _random_triad(rng) -> tuple[dict, float]:
     sketch = [(j[0] + 0.02 * shortest * off[2 * k], j[1] + 0.02 * shortest * off[2 * k + 1])
               for k, j in enumerate(joints)]
     sense = np.sign((e[0] - d[0]) * (f[1] - d[1]) - (e[1] - d[1]) * (f[0] - d[0]))
-    return _assembly(crank, b0, c0, joints, sketch), float(sense)
+    return triad_assembly(crank, b0, c0, joints, sketch), float(sense)
 
 
 def test_a_hundred_random_triads_agree_with_the_reference_cell_by_cell(one_book):
@@ -162,7 +162,7 @@ def test_a_triad_that_closes_on_stretches_of_the_turn_is_na_exactly_between():
     sketch at 320° they reach two different ones, and verify names that stretch, and only
     that one, as such (not passed), where every cell agrees with the book's assembly."""
     joints = [(35.0, 25.0), (60.0, 30.0), (45.0, 45.0)]
-    params = _assembly(20.0, (80.0, 0.0), (10.0, 70.0), joints, joints)
+    params = triad_assembly(20.0, (80.0, 0.0), (10.0, 70.0), joints, joints)
     b, values = _book(_data(8, **params), step=5)
     angles = np.arange(0.0, 360.1, 5.0)
     ref = solve(_data(8, **params)["mechanism"], params, angles)
@@ -185,7 +185,7 @@ def test_verify_names_the_stretch_in_another_assembly_in_one_line(tmp_path, caps
     the stretch named in one line of the verdict."""
     from linkbook.apps.cli import main
     joints = [(35.0, 25.0), (60.0, 30.0), (45.0, 45.0)]
-    data = _data(8, **_assembly(20.0, (80.0, 0.0), (10.0, 70.0), joints, joints))
+    data = _data(8, **triad_assembly(20.0, (80.0, 0.0), (10.0, 70.0), joints, joints))
     data["sweep"]["step"] = 5
     path = tmp_path / "stretches.xlsx"
     builder.build_file(templates.from_data("triad", data), path)

@@ -21,6 +21,7 @@ from conftest import ROOT, examples
 from test_forces_book import assert_power_balance, assert_verified, with_values
 from test_slotted_forces import DRAWS, RATES, rows_of
 from test_properties import in_load_domain
+from test_triad_book import triad_assembly
 from test_triad_reference import conditioning
 from linkbook.base.errors import InputError
 from linkbook.book import builder
@@ -93,17 +94,6 @@ def test_a_binary_link_without_mass_or_load_pushes_along_itself(example):
         t, sweep=dataclasses.replace(t.sweep, step=STEP))))
 
 
-def _assembly(crank, b0, c0, joints, sketch) -> dict:
-    """The template's geometry for the triad of this assembly at θ = 0, sketched there."""
-    ends = [(crank, 0.0), b0, c0]
-    lengths = [math.dist(p, j) for p, j in zip(ends, joints)]
-    sides = [math.dist(joints[k], joints[(k + 1) % 3]) for k in range(3)]
-    return dict(a2=crank, xB=b0[0], yB=b0[1], xC=c0[0], yC=c0[1], a3=lengths[0],
-                a4=lengths[1], a5=lengths[2], d=sides[0], e=sides[1], f=sides[2],
-                sxD=sketch[0][0], syD=sketch[0][1], sxE=sketch[1][0], syE=sketch[1][1],
-                sxF=sketch[2][0], syF=sketch[2][1])
-
-
 @st.composite
 def triads(draw) -> dict:
     """A triad six-bar that closes on every row of the sweep at STEP, 2 % or more away from a
@@ -120,7 +110,7 @@ def triads(draw) -> dict:
     off = draw(st.lists(st.floats(-1.0, 1.0), min_size=6, max_size=6))
     sketch = [(j[0] + 0.01 * shortest * off[2 * k], j[1] + 0.01 * shortest * off[2 * k + 1])
               for k, j in enumerate(joints)]
-    values = _assembly(crank, b0, c0, joints, sketch)
+    values = triad_assembly(crank, b0, c0, joints, sketch)
     data = _data()
     params = {**{k: v["value"] for k, v in data["parameters"].items()}, **values}
     angles = np.arange(0.0, 360.0 + STEP / 2, STEP)

@@ -110,12 +110,17 @@ def iteration_columns(n: str, count: int, solved, pivots, lengths, sides, frame,
     return out
 
 
+def _closed(solved) -> np.ndarray:
+    """Per row: whether the three joints `solved` are placed (the group closed there)."""
+    return np.isfinite(solved[0][0]) & np.isfinite(solved[1][0]) & np.isfinite(solved[2][0])
+
+
 def converged(n: str, count: int, solved, pivots, lengths, sides, frame, sketch,
               shown: Mapping[str, np.ndarray]) -> tuple[dict[str, np.ndarray], list]:
     """The iteration columns, and the solved joints kept only on the rows where the written
     iterations converge. A row dropped makes the next row start from the sketch, which may
     change whether that one converges: repeated until no row changes."""
-    closed = np.isfinite(solved[0][0]) & np.isfinite(solved[1][0]) & np.isfinite(solved[2][0])
+    closed = _closed(solved)
     while True:
         kept = [(np.where(closed, x, math.nan), np.where(closed, y, math.nan))
                 for x, y in solved]
@@ -175,7 +180,7 @@ def _where_the_continuation_leads(count: int, pivots, lengths, sides, frame, ske
         phi, theta = phi - step["dphi"], theta - step["dth"]
     with np.errstate(invalid="ignore"):
         done = np.maximum(np.abs(step["dphi"]), np.abs(step["dth"])) <= TOLERANCE
-    closed = np.isfinite(solved[0][0]) & np.isfinite(solved[1][0]) & np.isfinite(solved[2][0])
+    closed = _closed(solved)
     if (done != closed).any() or other_assembly(np.where(done, phi, math.nan), theta, solved,
                                                  pivots).any():
         return None
