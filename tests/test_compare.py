@@ -57,3 +57,17 @@ def test_an_application_is_judged_to_15_digits_of_the_value():
     c = judged(["G5", "G6", "G7"], [1e6 + 5e-4, 1e6 + 2e-3, 1.0 + 5e-10],
                [1e6, 1e6, 1.0], "length", relative)
     assert [m.cell for m in c.mismatches] == ["G6"]    # 1e-9·1e6 = 1e-3; 1e-9 at 1.0
+
+
+NUM = Error.errors["#NUM!"]
+
+
+def test_a_value_beyond_the_float_range_is_the_overflow_error_or_the_infinity_itself():
+    """Where the exact value overflows (a flywheel's ΔE/(Cs·ω²) at ω = 3.6e-154 rad/s, which a
+    random draw reached), the engines answer #NUM! and Gnumeric the infinity: both agree; the
+    largest float, another error or the other infinity differ."""
+    big = np.finfo(float).max
+    c = judged(["H5", "H6", "H7", "H8", "H9"], [NUM, math.inf, big, NA, -math.inf],
+               [math.inf] * 5, "length")
+    assert [m.cell for m in c.mismatches] == ["H7", "H8", "H9"]
+    assert c.cells == 5 and c.judged == {("Sweep", f"H{r}") for r in range(5, 10)}

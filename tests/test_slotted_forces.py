@@ -59,6 +59,17 @@ def test_the_bundled_machines_verify_and_balance_power_on_every_row(name):
     assert assert_power_balance(t, built, values) == rows_of(built)
 
 
+def test_a_flywheel_beyond_the_float_range_is_the_overflow_error():
+    """At ω = 3.6e-154 rad/s (a random draw reached it) Cs·ω² is a subnormal number and ΔE over
+    it is beyond the largest float: the book's flywheel cell shows #NUM!, the reference's
+    quotient is inf, and verify takes the one for the other; every other cell still agrees."""
+    t = with_values(templates.load("quick-return"), omega_in=3.6e-154)
+    built, values = builder.make(coarse(t, {}))
+    cell = built.meta["forces"]["summary"]["flywheel"]["cell"]
+    assert engine.error_code(values[(SHEET, cell)]) == "#NUM!"
+    assert_verified(built, values)
+
+
 @pytest.fixture(scope="module")
 def books():
     """Each family's book on a coarse sweep, built once, with the engine that evaluated it (to

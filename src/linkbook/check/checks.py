@@ -212,6 +212,14 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
             else:
                 check.mismatches.append(Mismatch(sheet, cell, "#N/A", show(value, error_code)))
             continue
+        if math.isinf(exp):
+            # the exact value is beyond the largest float (a quotient of a tiny ω², say): the
+            # application's answer is its overflow error, #NUM! (Excel, LibreOffice, formulas)
+            # or the infinity itself (Gnumeric); any finite number is wrong
+            if error_code(value) != "#NUM!" and not (isinstance(value, float) and value == exp):
+                check.mismatches.append(Mismatch(sheet, cell, "#NUM! (beyond the float range)",
+                                                 show(value, error_code)))
+            continue
         if is_error(value) or not isinstance(value, (int, float)) or isinstance(value, bool):
             check.mismatches.append(Mismatch(sheet, cell, exp, show(value, error_code)))
             continue
