@@ -37,7 +37,10 @@ DRAWS = {"mass": st.floats(0.0, 10.0), "inertia": st.floats(0.0, 0.1),
          "force": st.floats(-1e3, 1e3), "torque": st.floats(-100.0, 100.0),
          "acceleration": st.one_of(st.just(0.0), st.floats(0.0, 20.0)),
          "angle": st.floats(-180.0, 180.0)}
-RATES = {"omega_in": st.floats(-30.0, 30.0), "alpha_in": st.floats(-100.0, 100.0)}
+# the input's rates in the loads' domain: at a subnormal ω (2.2e-313, which a draw reached) the
+# power balance's products keep no digits to compare
+RATES = {"omega_in": st.floats(-30.0, 30.0).filter(in_load_domain),
+         "alpha_in": st.floats(-100.0, 100.0).filter(in_load_domain)}
 # the slotted link's centre in its frame (mm), and the slide's offset: 0 as written, or not
 PLACES = {"u3": st.floats(-300.0, 300.0), "v3": st.floats(-60.0, 60.0),
           "e": st.sampled_from([0.0, 0.0, 12.0, -12.0])}
@@ -92,6 +95,24 @@ def draws(t: templates.Template):
                                   **{k: v for k, v in PLACES.items() if k in offsets}})
 
 
+def judge_draw(t: templates.Template, built, evaluation, drawn: dict) -> int:
+    """The book's formulas evaluated again at the `drawn` inputs (as verify does at its other
+    input sets): every cell agrees with the force reference, the Forces sheet among them, and
+    the driving torque balances the power; the rows it balances on. The inputs restored after."""
+    wb, record = built.workbook, built.record
+    rules = Rules(engine.is_error, engine.error_code)
+    held = write_inputs(wb, record, drawn)
+    try:
+        with rerun(evaluation, {input_cell(record, k): v for k, v in drawn.items()}) as got:
+            checks = judge_book(wb, record, got, rules, own_inputs=False)
+            bad = [(c.block, c.name, m) for c in checks for m in c.mismatches]
+            assert not bad, bad[:4]
+            assert any(c.block == SHEET for c in checks)
+            return assert_power_balance(with_values(t, **drawn), built, got)
+    finally:
+        write_inputs(wb, record, held)
+
+
 @pytest.mark.parametrize("name", FAMILIES)
 def test_random_masses_and_loads_agree_with_the_reference(books, name):
     """For random masses, inertias, loads, gravity, input rates and the slotted link's centre
@@ -99,24 +120,13 @@ def test_random_masses_and_loads_agree_with_the_reference(books, name):
     agree with the force reference everywhere, as verify judges a book at its other input
     sets, and its driving torque balances the power on every row it has one."""
     t, built, evaluation, _ = books[name]
-    wb, record = built.workbook, built.record
-    rules = Rules(engine.is_error, engine.error_code)
     balanced = []
 
     @settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
               suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
     @given(draws(t))
     def check(drawn):
-        held = write_inputs(wb, record, drawn)
-        try:
-            with rerun(evaluation, {input_cell(record, k): v for k, v in drawn.items()}) as got:
-                checks = judge_book(wb, record, got, rules, own_inputs=False)
-                bad = [(c.block, c.name, m) for c in checks for m in c.mismatches]
-                assert not bad, bad[:4]
-                assert any(c.block == SHEET for c in checks)
-                balanced.append(assert_power_balance(with_values(t, **drawn), built, got))
-        finally:
-            write_inputs(wb, record, held)
+        balanced.append(judge_draw(t, built, evaluation, drawn))
 
     check()
     assert min(balanced) > 0, balanced          # every draw has rows with a driving torque
