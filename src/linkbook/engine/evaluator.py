@@ -210,8 +210,8 @@ class Engine:
         self.order, self.self_reading = untangled_components(
             self.groups, self.owner, self.member, self.stats,
             keep=lambda c: self.scan and row_order(c, self.groups, self.owner) is not None)
-        self.scans = (scans_of(self.order, self.self_reading, self.groups, self.owner)
-                      if self.scan else {})
+        self.scans = (scans_of(self.order, self.self_reading, self.groups, self.owner,
+                               self.refs) if self.scan else {})
 
     # ---- storage
     def _allocate(self):
