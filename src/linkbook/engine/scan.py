@@ -196,8 +196,10 @@ def _form_key(g: Group, refs: References):
 
 class _Form(NamedTuple):
     """make(sheet index, row, column, ...) -> the cell function, three arguments for each
-    reference in `slots` (indices into a group's descriptors), or None where there is no fast
-    form; `shared`: the form of every group of its key (_form_key)."""
+    reference in `slots` (indices into a group's descriptors: the first of each key), or None
+    where there is no fast form; `shared`: the form of every group of its key (_form_key).
+    References one key reads are equal descriptors in every group of the key, so the form
+    reads them right in each."""
     make: object
     slots: tuple[int, ...]
     shared: bool
@@ -214,16 +216,15 @@ def _written_form(g: Group) -> _Form:
         if d.is_range:
             return none
         if g.descs[slots.setdefault(key, j)] != d:
-            return none._replace(shared=False)   # one key, two references (=B5+$B$5 in B5)
+            # one key, two references (=B5+$B5 in B5): this member's reading, not its key's
+            return none._replace(shared=False)
     try:
         source = _Writer(parsed.nodes, slots, g.descs).source()
     except _Unwritten:
         return none
     namespace = dict(_NAMESPACE)
     exec(compile(source, "<scan>", "exec"), namespace)
-    # two keys that are one reference (a name and its target) are read apart: right for this
-    # group, but not the form of its key, whose groups may read two cells there
-    return _Form(namespace["form"], tuple(slots.values()), len(slots) == len(set(g.descs)))
+    return _Form(namespace["form"], tuple(slots.values()), True)
 
 
 class _Unwritten(Exception):
