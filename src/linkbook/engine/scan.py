@@ -18,7 +18,9 @@ an input that is not a number, an error (NA(), a division by zero, a result that
 finite), a complex power — the fast form gives up (Off) and that one cell goes to the cell
 path, which decides. IF evaluates only the branch it picks: formulas evaluates both, but the
 branch it does not pick cannot change its result. A group whose formula calls anything else
-has no fast form: its cells go to the cell path, in the scan's order.
+has no fast form: its cells go to the cell path, in the scan's order. A fast form is written
+once for all groups of one skeleton and pattern of references (fast_form): the iteration blocks
+of a Newton recurrence are one formula a block, shifted, and share it.
 """
 from __future__ import annotations
 
