@@ -64,7 +64,8 @@ def by_hand() -> dict[str, list]:
 
 def grid_values(e: engine.Engine, sheet: str) -> dict[tuple[int, int], object]:
     grid = e.grid[sheet]
-    return {(g.sheet, m.row, m.col): grid[m.row, m.col] for g in e.groups for m in g.members}
+    return {(g.sheet, m.row, m.col): grid[m.row, m.col] for g in e.groups for m in g.members
+            if g.sheet == sheet}
 
 
 def assert_same_cells(got: dict, want: dict) -> None:
@@ -227,3 +228,73 @@ def test_a_rerun_scans_again_with_the_other_inputs(scanned):
     want = engine.Engine(changed, scan=False).run()
     assert_same_cells(got, {key: want[key] for key in got})
     assert got[("Roots", "E3")] != before[("Roots", "E3")]
+
+
+# ---------------------------------------------------------------- one form for shifted copies
+
+def shifted_copies_book() -> openpyxl.Workbook:
+    """newton_book's root columns B-E twice more: shifted to I-L (radicands in H), and onto a
+    second sheet four rows down in C-F (radicands in B). Each copy has a column carrying root ×
+    a factor down past the rows without a root, the factor read with an absolute row ($P$1,
+    $Q$1, and from the second sheet Roots!$R$1, where More!R1 is a decoy), and the second
+    sheet has one more by a relative one (G6, G7, ...): one skeleton, two forms."""
+    wb = newton_book()
+    roots = wb["Roots"]
+    more = wb.create_sheet("More")
+    roots["P1"], roots["Q1"], roots["R1"], more["R1"] = 3.0, -0.5, 2.0, 7.0
+    for r, a in enumerate(RADICANDS, start=2):
+        roots[f"H{r}"] = a
+        more[f"B{r + 4}"], more[f"G{r + 4}"] = a, 0.5 + 0.25 * r
+    copies = ((roots, 0, "ABCDE", {"N": "$P$1"}), (roots, 0, "HIJKL", {"O": "$Q$1"}),
+              (more, 4, "BCDEF", {"H": "Roots!$R$1", "I": "G{r}"}))
+    for ws, down, (a, b, c, d, e), factors in copies:
+        for k in range(len(RADICANDS)):
+            r = k + 2 + down
+            if b != "B":                # B-E are newton_book's own
+                ws[f"{b}{r}"] = f"=IF(ISNUMBER({e}{r - 1}),{e}{r - 1},1)"
+                ws[f"{c}{r}"] = f"={b}{r}-({b}{r}^2-{a}{r})/(2*{b}{r})"
+                ws[f"{d}{r}"] = f"={c}{r}-({c}{r}^2-{a}{r})/(2*{c}{r})"
+                ws[f"{e}{r}"] = (f"=IF(ABS({d}{r}-{c}{r})<={TOLERANCE}*ABS({d}{r}),"
+                                 f"{d}{r},NA())")
+            for carried, factor in factors.items():
+                ws[f"{carried}{r}"] = (f"=IF(ISNUMBER({e}{r}),{e}{r}*{factor.format(r=r)},"
+                                       f"{carried}{r - 1})")
+    return wb
+
+
+def test_shifted_copies_of_a_recurrence_share_forms_and_read_their_own_cells():
+    """A form is written once for every copy of a formula (scan.py: the iteration blocks of a
+    triad); each copy reads its own columns, rows and sheet: the roots by hand in every copy,
+    every cell what the cell path gives, bit for bit."""
+    from linkbook.engine import scan
+    scan._FORMS.clear()
+    wb = shifted_copies_book()
+    fast = engine.Engine(wb)
+    values = fast.run()
+    # newton_book's 3 scans and 5 forms (B; C and D, one skeleton; E; F; G), 6 more scans
+    # and 2 more forms: the carried columns' by an absolute and by a relative factor
+    assert fast.stats["scans"] == 9 and len(scan._FORMS) == 7
+    # the fast forms gave most values (a form reading a wrong row meets blanks: the cell path)
+    assert fast.stats["scan_cell_path"] < fast.stats["scan_cells"] / 3
+    slow = engine.Engine(wb, scan=False)
+    slow.run()
+    for sheet in ("Roots", "More"):
+        assert_same_cells(grid_values(fast, sheet), grid_values(slow, sheet))
+    want = by_hand()
+    for sheet, down, columns in (("Roots", 0, "BCDE"), ("Roots", 0, "IJKL"),
+                                 ("More", 4, "CDEF")):
+        for col, mine in zip(columns, "BCDE"):
+            for r, w in enumerate(want[mine], start=2 + down):
+                g = values[(sheet, f"{col}{r}")]
+                assert (engine.error_code(g) == w if isinstance(w, str) else g == w), \
+                    (sheet, col, r, g, w)
+    for sheet, down, col, column, factor in (("Roots", 0, "N", "E", 3.0),
+                                             ("Roots", 0, "O", "L", -0.5),
+                                             ("More", 4, "H", "F", 2.0)):
+        last = None                                     # root × factor, carried down
+        for r in range(2 + down, 2 + down + len(RADICANDS)):
+            root = values[(sheet, f"{column}{r}")]
+            if not engine.is_error(root):
+                last = root * factor
+            g = values[(sheet, f"{col}{r}")]
+            assert (g == last if last is not None else engine.is_error(g)), (col, r, g, last)

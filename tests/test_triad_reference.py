@@ -170,3 +170,43 @@ def test_the_rates_agree_with_finite_differences_of_the_positions():
             a = (x[2] - 2 * x[1] + x[0]) / (dt * dt)
             assert rows[f"v{c}_{n}"][2] == pytest.approx(v, rel=1e-6, abs=1e-6)
             assert rows[f"a{c}_{n}"][2] == pytest.approx(a, rel=1e-4, abs=1e-3)
+
+
+def test_the_book_methods_jacobian_is_the_closed_forms():
+    """One iteration of the book's method (triad_iterations.iteration: its two Jacobian
+    columns, ∂/∂φ and ∂/∂θ, seeded in one pass of Taylor arithmetic) against the closed forms
+    written out by hand here: with D = A + a(cos φ, sin φ), E = D + s(cos θ, sin θ) and F = D +
+    u(cos θ, sin θ) + v(−sin θ, cos θ), J11 = (D − A)×(E − B)/b, J12 = (E − D)×(E − B)/b,
+    J21 = (D − A)×(F − C)/c, J22 = (F − D)×(F − C)/c; the residuals (|E − B|² − b²)/2b and
+    (|F − C|² − c²)/2c; the correction J⁻¹r."""
+    from linkbook.check.reference.steps.triad_iterations import iteration
+    rng = np.random.default_rng(7)
+    n = 40
+    phi, theta = rng.uniform(-math.pi, math.pi, (2, n))
+    pivots = [tuple(rng.uniform(-50, 50, (2, n))) for _ in range(3)]
+    lengths, sides = list(rng.uniform(10, 60, 3)), list(rng.uniform(10, 60, 3))
+    frame = (float(rng.uniform(-20, 40)), float(rng.uniform(5, 40)))
+    got = iteration(phi, theta, pivots, lengths, sides, frame)
+
+    (ax, ay), (bx, by), (cx, cy) = pivots
+    a, b, c, s = lengths[0], lengths[1], lengths[2], sides[0]
+    (u, v), cos, sin = frame, np.cos(theta), np.sin(theta)
+    dx, dy = ax + a * np.cos(phi), ay + a * np.sin(phi)
+    ex, ey = dx + s * cos, dy + s * sin
+    fx, fy = dx + u * cos - v * sin, dy + u * sin + v * cos
+
+    def cross(px, py, qx, qy):
+        return px * qy - py * qx
+    want = {"r1": ((ex - bx) ** 2 + (ey - by) ** 2 - b * b) / (2 * b),
+            "r2": ((fx - cx) ** 2 + (fy - cy) ** 2 - c * c) / (2 * c),
+            "J11": cross(dx - ax, dy - ay, ex - bx, ey - by) / b,
+            "J12": cross(ex - dx, ey - dy, ex - bx, ey - by) / b,
+            "J21": cross(dx - ax, dy - ay, fx - cx, fy - cy) / c,
+            "J22": cross(fx - dx, fy - dy, fx - cx, fy - cy) / c}
+    scale = 100.0
+    for key, value in want.items():
+        assert np.allclose(got[key], value, rtol=1e-12, atol=1e-12 * scale), key
+    det = want["J11"] * want["J22"] - want["J12"] * want["J21"]
+    dphi = (want["J22"] * want["r1"] - want["J12"] * want["r2"]) / det
+    dth = (want["J11"] * want["r2"] - want["J21"] * want["r1"]) / det
+    assert np.allclose(got["dphi"], dphi, rtol=1e-9) and np.allclose(got["dth"], dth, rtol=1e-9)

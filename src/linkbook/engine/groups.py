@@ -196,7 +196,7 @@ class Grouper:
         rows = np.array([m.row for m in g.members])
         cols = np.array([m.col for m in g.members])
         found = set()
-        for d in g.descs:
+        for d in dict.fromkeys(g.descs):     # a reference written twice is read once
             grid = owner.get(d.sheet)
             if grid is None:
                 continue

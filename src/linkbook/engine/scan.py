@@ -18,18 +18,22 @@ an input that is not a number, an error (NA(), a division by zero, a result that
 finite), a complex power — the fast form gives up (Off) and that one cell goes to the cell
 path, which decides. IF evaluates only the branch it picks: formulas evaluates both, but the
 branch it does not pick cannot change its result. A group whose formula calls anything else
-has no fast form: its cells go to the cell path, in the scan's order.
+has no fast form: its cells go to the cell path, in the scan's order. A fast form is written
+once for all groups of one skeleton and pattern of references (fast_form): the iteration blocks
+of a Newton recurrence are one formula a block, shifted, and share it.
 """
 from __future__ import annotations
 
 import graphlib
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from . import grammar
 from .adapter import plain_functions
 from .groups import Group
+from .references import References, lex_spans, skeleton_of
 
 
 class Off(Exception):
@@ -50,8 +54,8 @@ _NUMBERS = frozenset({float, int, np.float64})
 _NAMESPACE = {"Off": Off, "NUMBERS": _NUMBERS, "atan2": np.arctan2, "mod": np.mod,
               "np_true": np.True_, "np_false": np.False_,
               **{f"u_{name}": fn for name, fn in _UFUNCS.items()}}
-_FUNCTIONS: dict[str, object] = {}      # fast forms by source text
-_FUNCTIONS_MAX = 4096
+_FORMS: dict[tuple, "_Form"] = {}       # by _form_key
+_FORMS_MAX = 4096
 
 
 # ------------------------------------------------------------------------------ the order
@@ -98,7 +102,7 @@ def _owners_read(g: Group, d, owner) -> set[int]:
 # ------------------------------------------------------------------------------ the scan
 
 def scans_of(order: list[list[int]], self_reading: set[int], groups: list[Group],
-             owner) -> dict[int, "Scan"]:
+             owner, refs: References) -> dict[int, "Scan"]:
     """The scan of each row recurrence among the components of `order` (the cycles of groups
     and the groups that read themselves), by the component's first group."""
     scans = {}
@@ -106,17 +110,18 @@ def scans_of(order: list[list[int]], self_reading: set[int], groups: list[Group]
         if len(component) > 1 or component[0] in self_reading:
             rows = row_order(component, groups, owner)
             if rows is not None:
-                scans[component[0]] = Scan(component, rows, groups)
+                scans[component[0]] = Scan(component, rows, groups, refs)
     return scans
 
 
 class Scan:
     """A row recurrence: its cells in evaluation order, each with its group's fast form."""
 
-    def __init__(self, gids: list[int], order: list[int], groups: list[Group]):
+    def __init__(self, gids: list[int], order: list[int], groups: list[Group],
+                 refs: References):
         rank = {gid: k for k, gid in enumerate(order)}
         self.sheets: list[str] = []
-        fast = {gid: fast_form(groups[gid], self.sheets) for gid in gids}
+        fast = {gid: fast_form(groups[gid], self.sheets, refs) for gid in gids}
         cells = [(m.row, rank[gid], groups[gid], i, m.col, fast[gid])
                  for gid in gids for i, m in enumerate(groups[gid].members)]
         cells.sort(key=lambda c: c[:2])
@@ -145,31 +150,83 @@ class Scan:
 
 # ------------------------------------------------------------------------------ fast forms
 
-def fast_form(g: Group, sheets: list[str]):
+def fast_form(g: Group, sheets: list[str], refs: References):
     """g's formula as a function (row, sheet grids) -> value on floats, or None where it calls
     what the fast form does not write; `sheets` collects the sheets it reads (their order is
-    the grids' order)."""
+    the grids' order).
+
+    The function is made by a *form*, written once for all formulas of one skeleton (the text
+    around their references, as Planner.compiled shares compiled functions) and one pattern of
+    references: the sheet, row and column each reference reads are the form's arguments. The
+    iteration blocks of a Newton recurrence, and the same iteration written down a column of
+    another sheet, are one form."""
+    key = _form_key(g, refs)
+    form = _FORMS.get(key) if key is not None else None
+    if form is None:
+        form = _written_form(g)
+        if key is not None and form.shared:
+            if len(_FORMS) >= _FORMS_MAX:
+                _FORMS.pop(next(iter(_FORMS)))
+            _FORMS[key] = form
+    if form.make is None:
+        return None
+    col = g.members[0].col
+    arguments = []
+    for j in form.slots:
+        d = g.descs[j]
+        if d.sheet not in sheets:
+            sheets.append(d.sheet)
+        arguments += [sheets.index(d.sheet), d.r1, d.c1 if d.ac1 else col + d.c1]
+    return form.make(*arguments)
+
+
+def _form_key(g: Group, refs: References):
+    """What a form is written from: the skeleton, and for each reference the first one equal
+    to it, whether its row is absolute and whether it is a range; None where the lexer's
+    reading is not the group's own (the tokenizer decided its shape)."""
     rep = g.members[0]
-    parsed = grammar.parse(rep.formula, plain_functions())
+    if g.shape.startswith("\0"):
+        return None
+    spans = lex_spans(rep.formula, refs)
+    if len(spans) != len(g.descs):
+        return None
+    first = {}
+    return (skeleton_of(rep.formula, spans),
+            tuple((first.setdefault(d, j), d.ar1, d.is_range)
+                  for j, d in enumerate(g.descs)))
+
+
+class _Form(NamedTuple):
+    """make(sheet index, row, column, ...) -> the cell function, three arguments for each
+    reference in `slots` (indices into a group's descriptors: the first of each key), or None
+    where there is no fast form; `shared`: the form of every group of its key (_form_key).
+    References one key reads are equal descriptors in every group of the key, so the form
+    reads them right in each."""
+    make: object
+    slots: tuple[int, ...]
+    shared: bool
+
+
+def _written_form(g: Group) -> _Form:
+    """The form of g's formula: the grammar's graph written as Python."""
+    none = _Form(None, (), True)
+    parsed = grammar.parse(g.members[0].formula, plain_functions())
     if parsed is None or len(parsed.keys) != len(g.descs) or parsed.nodes[-1][0] != "call":
-        return None
-    descs = {}
-    for key, d in zip(parsed.keys, g.descs):
-        if descs.setdefault(key, d) != d or d.is_range:
-            return None     # one key, two references (=B5+$B$5 in row 5), or a range
+        return none
+    slots: dict[str, int] = {}
+    for j, (key, d) in enumerate(zip(parsed.keys, g.descs)):
+        if d.is_range:
+            return none
+        if g.descs[slots.setdefault(key, j)] != d:
+            # one key, two references (=B5+$B5 in B5): this member's reading, not its key's
+            return none._replace(shared=False)
     try:
-        source = _Writer(parsed.nodes, descs, rep.col, sheets).source()
+        source = _Writer(parsed.nodes, slots, g.descs).source()
     except _Unwritten:
-        return None
-    fn = _FUNCTIONS.get(source)
-    if fn is None:
-        namespace = dict(_NAMESPACE)
-        exec(compile(source, "<scan>", "exec"), namespace)
-        fn = namespace["cell"]
-        if len(_FUNCTIONS) >= _FUNCTIONS_MAX:
-            _FUNCTIONS.pop(next(iter(_FUNCTIONS)))
-        _FUNCTIONS[source] = fn
-    return fn
+        return none
+    namespace = dict(_NAMESPACE)
+    exec(compile(source, "<scan>", "exec"), namespace)
+    return _Form(namespace["form"], tuple(slots.values()), True)
 
 
 class _Unwritten(Exception):
@@ -180,15 +237,17 @@ class _Writer:
     """The source of a fast form. Each node is computed where it is first needed (inside the
     branch of an IF that needs it), as v<i>; its float, where arithmetic reads it, as f<i>."""
 
-    def __init__(self, nodes, descs: dict, col: int, sheets: list[str]):
-        self.nodes, self.descs, self.col, self.sheets = nodes, descs, col, sheets
+    def __init__(self, nodes, slots: dict[str, int], descs: list):
+        self.nodes, self.slots, self.descs = nodes, slots, descs
         self.kinds: dict[int, frozenset[str]] = {}
-        self.lines = ["def cell(r, S):"]
+        arguments = ", ".join(f"s{j}, r{j}, c{j}" for j in slots.values())
+        self.lines = [f"def form({arguments}):", "    def cell(r, S):"]
 
     def source(self) -> str:
-        top = _Scope(set(), 1)
+        top = _Scope(set(), 2)
         last = len(self.nodes) - 1
         self.line(top, f"return {self.value(last, top)}")
+        self.lines.append("    return cell")
         return "\n".join(self.lines) + "\n"
 
     def line(self, scope: "_Scope", text: str) -> None:
@@ -245,13 +304,10 @@ class _Writer:
 
     # ---- nodes
     def _input(self, i: int, scope: "_Scope") -> None:
-        d = self.descs[self.nodes[i][1]]
-        if d.sheet not in self.sheets:
-            self.sheets.append(d.sheet)
-        row = f"r + {d.r1}" if not d.ar1 else str(d.r1)
-        col = d.c1 if d.ac1 else self.col + d.c1
+        j = self.slots[self.nodes[i][1]]
+        row = f"r{j}" if self.descs[j].ar1 else f"r + r{j}"
         v = f"v{i}"
-        self.line(scope, f"{v} = S[{self.sheets.index(d.sheet)}][{row}, {col}]")
+        self.line(scope, f"{v} = S[s{j}][{row}, c{j}]")
         # a number, finite: anything else (text, a blank, an error, a boolean) the cell path
         self.line(scope, f"if type({v}) not in NUMBERS or {v} - {v}: raise Off")
 

@@ -41,29 +41,38 @@ class Turn(NamedTuple):
     sign: float
 
 
-def _coordinates(end: End, z: Sequence[float], row: int) -> tuple[float, float]:
-    if isinstance(end, int):
-        return z[2 * end], z[2 * end + 1]
-    return float(end[0][row]), float(end[1][row])
-
-
 def residuals(bars: Sequence[Bar], row: int, count: int) -> Fun:
     """Row `row`'s residuals and their Jacobian in the 2·count unknowns (x0, y0, x1, y1, ...)."""
+    ends = [_end(bar.p, row) + _end(bar.q, row) + (bar.length, bar.length * bar.length,
+                                                    2.0 * bar.length) for bar in bars]
+    width = 2 * count
+
     def fun(z):
         f, jac = [], []
-        for bar in bars:
-            px, py = _coordinates(bar.p, z, row)
-            qx, qy = _coordinates(bar.q, z, row)
+        for p, px, py, q, qx, qy, length, square, twice in ends:
+            if p >= 0:
+                px, py = z[p], z[p + 1]
+            if q >= 0:
+                qx, qy = z[q], z[q + 1]
             dx, dy = px - qx, py - qy
-            f.append((dx * dx + dy * dy - bar.length * bar.length) / (2.0 * bar.length))
-            line = [0.0] * (2 * count)
-            for end, sign in ((bar.p, 1.0), (bar.q, -1.0)):
-                if isinstance(end, int):
-                    line[2 * end] += sign * dx / bar.length
-                    line[2 * end + 1] += sign * dy / bar.length
+            f.append((dx * dx + dy * dy - square) / twice)
+            line = [0.0] * width
+            if p >= 0:      # the derivatives in p's x and y, (±dx, ±dy)/length, added to 0
+                line[p] += dx / length
+                line[p + 1] += dy / length
+            if q >= 0:
+                line[q] += -dx / length
+                line[q + 1] += -dy / length
             jac.append(tuple(line))
         return tuple(f), tuple(jac)
     return fun
+
+
+def _end(end: End, row: int) -> tuple[int, float, float]:
+    """(the index of its x among the unknowns, or -1; its x and y where it is known)."""
+    if isinstance(end, int):
+        return 2 * end, math.nan, math.nan
+    return -1, float(end[0][row]), float(end[1][row])
 
 
 def turning(turn: Turn, z: Sequence[float]) -> float:

@@ -16,7 +16,12 @@ import numpy as np
 
 
 class Taylor:
-    """a + b·t + c·t²/2, element-wise (numpy arrays or floats)."""
+    """a + b·t + c·t²/2, element-wise (numpy arrays or floats).
+
+    c None: first order only (a value and its derivative, what a Jacobian needs), which is what
+    an operation gives where either operand carries no c. b may hold several derivatives along a
+    leading axis (a Jacobian's columns at once): each is, bit for bit, the one the same
+    operations give seeded alone, as every operation on b is element-wise."""
     __slots__ = ("a", "b", "c")
 
     def __init__(self, a, b=0.0, c=0.0):
@@ -24,12 +29,13 @@ class Taylor:
 
     def __add__(self, o):
         o = lift(o)
-        return Taylor(self.a + o.a, self.b + o.b, self.c + o.c)
+        c = None if self.c is None or o.c is None else self.c + o.c
+        return Taylor(self.a + o.a, self.b + o.b, c)
 
     __radd__ = __add__
 
     def __neg__(self):
-        return Taylor(-self.a, -self.b, -self.c)
+        return Taylor(-self.a, -self.b, None if self.c is None else -self.c)
 
     def __sub__(self, o):
         return self + (-lift(o))
@@ -39,8 +45,9 @@ class Taylor:
 
     def __mul__(self, o):
         o = lift(o)
-        return Taylor(self.a * o.a, self.a * o.b + self.b * o.a,
-                      self.a * o.c + 2.0 * self.b * o.b + self.c * o.a)
+        c = None if self.c is None or o.c is None else \
+            self.a * o.c + 2.0 * self.b * o.b + self.c * o.a
+        return Taylor(self.a * o.a, self.a * o.b + self.b * o.a, c)
 
     __rmul__ = __mul__
 
@@ -48,7 +55,9 @@ class Taylor:
         o = lift(o)
         q0 = self.a / o.a
         q1 = (self.b - q0 * o.b) / o.a
-        return Taylor(q0, q1, (self.c - 2.0 * q1 * o.b - q0 * o.c) / o.a)
+        c = None if self.c is None or o.c is None else \
+            (self.c - 2.0 * q1 * o.b - q0 * o.c) / o.a
+        return Taylor(q0, q1, c)
 
 
 def lift(x) -> Taylor:
@@ -58,24 +67,25 @@ def lift(x) -> Taylor:
 
 def t_sin(x: Taylor) -> Taylor:
     s, c = np.sin(x.a), np.cos(x.a)
-    return Taylor(s, c * x.b, c * x.c - s * x.b * x.b)
+    return Taylor(s, c * x.b, None if x.c is None else c * x.c - s * x.b * x.b)
 
 
 def t_cos(x: Taylor) -> Taylor:
     s, c = np.sin(x.a), np.cos(x.a)
-    return Taylor(c, -s * x.b, -s * x.c - c * x.b * x.b)
+    return Taylor(c, -s * x.b, None if x.c is None else -s * x.c - c * x.b * x.b)
 
 
 def t_sqrt(x: Taylor) -> Taylor:
     r = np.sqrt(x.a)
     d1 = x.b / (2.0 * r)
-    return Taylor(r, d1, (x.c - 2.0 * d1 * d1) / (2.0 * r))
+    return Taylor(r, d1, None if x.c is None else (x.c - 2.0 * d1 * d1) / (2.0 * r))
 
 
 def t_atan2(y: Taylor, x: Taylor) -> Taylor:
     r2 = x.a * x.a + y.a * y.a
     d1 = (x.a * y.b - y.a * x.b) / r2
-    d2 = (x.a * y.c - y.a * x.c) / r2 - 2.0 * d1 * (x.a * x.b + y.a * y.b) / r2
+    d2 = None if x.c is None or y.c is None else \
+        (x.a * y.c - y.a * x.c) / r2 - 2.0 * d1 * (x.a * x.b + y.a * y.b) / r2
     return Taylor(np.arctan2(y.a, x.a), d1, d2)
 
 
@@ -136,11 +146,14 @@ def implicit(residuals, z0: list[np.ndarray], knowns: dict, still: dict
     gradients, a larger one's Hadamard ratio; 1 for one unknown, whose step measures its
     own)."""
     k = len(z0)
+    shape = np.shape(z0[0])
+    # every unknown seeded at once, to first order: b's first axis is the Jacobian's column
+    seeds = np.eye(k).reshape((k, k) + (1,) * len(shape))
     jac = [[None] * k for _ in range(k)]
-    for j in range(k):
-        seeded = [Taylor(z0[i], 1.0 if i == j else 0.0) for i in range(k)]
-        for i, r in enumerate(residuals(seeded, still)):
-            jac[i][j] = np.broadcast_to(np.asarray(r.b, dtype=float), z0[0].shape)
+    for i, r in enumerate(residuals([Taylor(z0[j], seeds[j], None) for j in range(k)], still)):
+        columns = np.broadcast_to(np.asarray(r.b, dtype=float), (k,) + shape)
+        for j in range(k):
+            jac[i][j] = columns[j]
     first = residuals([Taylor(z) for z in z0], knowns)
     z1, dead = t_solve(jac, [-np.asarray(r.b, dtype=float) for r in first])
     second = residuals([Taylor(z, d) for z, d in zip(z0, z1)], knowns)

@@ -28,6 +28,8 @@ import numpy as np
 from ..constraints import triangle_apex
 from ..taylor import Taylor, t_cos, t_sin
 
+# ∂/∂φ and ∂/∂θ seeded together (Taylor's b along a leading axis, against the rows)
+_SEEDS = (np.array([[1.0], [0.0]]), np.array([[0.0], [1.0]]))
 DEFAULT_ITERATIONS = 6      # the language's default (docs/coupled-loops.md)
 TOLERANCE = 1e-9            # rad: a row converged where its last correction is at most this
 
@@ -61,12 +63,12 @@ def residuals(phi, theta, pivots, lengths, sides, frame):
 
 
 def iteration(phi: np.ndarray, theta: np.ndarray, pivots, lengths, sides, frame) -> dict:
-    """Residuals, Jacobian and correction at the iterate, per row."""
-    by_phi = residuals(Taylor(phi, 1.0), Taylor(theta), pivots, lengths, sides, frame)
-    by_theta = residuals(Taylor(phi), Taylor(theta, 1.0), pivots, lengths, sides, frame)
-    r = [np.asarray(x.a, dtype=float) for x in by_phi]
-    jac = np.stack([np.stack(np.broadcast_arrays(by_phi[i].b, by_theta[i].b), axis=-1)
-                    for i in (0, 1)], axis=-2)
+    """Residuals, Jacobian and correction at the iterate, per row. The Jacobian's two columns
+    are one pass of first-order Taylor arithmetic, seeded in φ and in θ along b's first axis."""
+    both = residuals(Taylor(phi, _SEEDS[0], None), Taylor(theta, _SEEDS[1], None),
+                     pivots, lengths, sides, frame)
+    r = [np.asarray(x.a, dtype=float) for x in both]
+    jac = np.stack([np.broadcast_to(x.b, (2,) + r[0].shape).T for x in both], axis=-2)
     det = np.linalg.det(jac)
     ok = np.isfinite(det) & (det != 0.0)
     safe = np.where(ok[:, None, None], jac, np.eye(2))
