@@ -212,10 +212,7 @@ def compile_formula(graph, batch: Batch | None = None, host: Ranges | None = Non
     every node is wrapped for vector calls."""
     extra = {_cell_token(): host} if host is not None else {}
     if isinstance(graph, grammar.Parsed):
-        pipe = Pipe.of_parsed(graph, batch, extra)
-        if pipe is not None:
-            return pipe
-        graph = _parser().ast(graph.formula)[1]
+        return Pipe.of_parsed(graph, batch, extra)
     _wrap_nodes(graph, batch)
     return Pipe.of(graph, extra) or graph.compile(**extra)
 
@@ -265,7 +262,7 @@ class Pipe:
     def of(cls, builder, extra: dict) -> "Pipe | None":
         """The pipe of builder's graph, or None where it takes more than a plain order: a node
         with several outputs or options, a function that behaves otherwise while compiling, an
-        operator on references."""
+        operator on references.  A lone reference, name or constant is a pipe of no steps."""
         dsp = builder.dsp
         output = builder.get_node_id(builder[-1])
         functions, producer = {}, {}
@@ -278,7 +275,7 @@ class Pipe:
             producer[node["outputs"][0]] = fid
         defaults = {k: v["value"] for k, v in dsp.default_values.items()} | extra
         defaults[sh.START] = sh.NONE      # the input of a function without arguments, PI()
-        if output not in producer or any(
+        if (functions and output not in producer) or any(
                 d.get("filters") for k, d in dsp.data_nodes.items() if k != output):
             return None
         inputs = _input_templates(k for k in dsp.data_nodes
@@ -292,11 +289,11 @@ class Pipe:
 
     @classmethod
     def of_parsed(cls, parsed: grammar.Parsed, batch: Batch | None,
-                  extra: dict) -> "Pipe | None":
+                  extra: dict) -> "Pipe":
         """The pipe of grammar's graph: its nodes in their order (each after its arguments),
-        with the functions `formulas`' tokens compile to.  None if the result is not a call."""
-        if parsed.nodes[-1][0] != "call":
-            return None         # a lone reference or constant: compile() and its filter
+        with the functions `formulas`' tokens compile to.  A lone reference, name or constant
+        is a pipe of no steps: its result is compile()'s, the value through the output's
+        filter."""
         table, ids, keys, steps = get_functions(), [], [], []
         defaults = dict(extra)
         for i, node in enumerate(parsed.nodes):
@@ -314,7 +311,7 @@ class Pipe:
                 ids.append(i)
         formula = parsed.formula
         return cls(lambda: _formulas_graph(formula, batch, extra), _input_templates(keys),
-                   steps, defaults, len(parsed.nodes) - 1)
+                   steps, defaults, ids[-1])
 
     def __call__(self, *args):
         values = dict(self.defaults)

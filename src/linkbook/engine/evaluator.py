@@ -21,7 +21,8 @@ Method
    member where they do not (row 6) is compiled instead.  "Compiled" means a Pipe: the parsed
    graph's function nodes (formulas' own functions) called in dependency order, without
    schedula's dispatcher; only a graph with operators on references or impure functions goes
-   through ``compile()``.  With ``only`` (cells wanted), the groups those cells do not need,
+   through ``compile()``.  A formula that is one reference, name or constant is a pipe of no
+   steps.  With ``only`` (cells wanted), the groups those cells do not need,
    by the references of the shapes, are dropped before anything is compiled, and a sheet is
    grouped only when a needed group reads it.
 3. *Order.* A group depends on the groups owning the cells it reads.  Groups are evaluated in
@@ -35,7 +36,9 @@ Method
    give the cell path's value.
 4. *Modes.*
    - ``vector``: single-cell inputs only, functions from ELEMENTWISE and ROW_BY_ROW only.  The
-     function is called once with an (n, 1) object array per input.  Each node of the compiled
+     function is called once with an (n, 1) object array per input.  A group of one cell too:
+     its nodes are formulas' functions called on (1, 1) arrays, a per-cell call without a
+     Ranges built for each input.  Each node of the compiled
      graph is wrapped: element-wise functions (arithmetic, COS, ATAN2, IF, IFERROR, ...) run on
      the whole array; other nodes (MAX of two cells, AND, ...), and an element-wise node whose
      output collapsed (``formulas`` turns an exception such as an overflow into one #VALUE! for
