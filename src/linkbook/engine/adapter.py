@@ -232,15 +232,29 @@ def _formulas_graph(formula: str, batch: Batch | None, extra: dict):
 def _input_templates(keys) -> dict:
     """compile()'s inputs for the references and names a formula reads: each key, in sorted
     order, with its range (None for a defined name)."""
-    inputs = {}
-    for k in sorted(keys):
-        try:
-            inputs[k] = Ranges().push(k)
-        except AnchorRangeName:
-            inputs[k] = sh.NONE
-        except InvalidRangeName:
-            inputs[k] = None
-    return inputs
+    return {k: _input_template(k) for k in sorted(keys)}
+
+
+@functools.lru_cache(maxsize=4096)
+def _input_template(key: str):
+    """compile()'s input for one key, made once per key: many formulas read one cell (a
+    position's, a name's), and reading a reference's text is formulas' regex. The Ranges is
+    shared: it is only read (a reference's parts), never given a value."""
+    try:
+        return Ranges().push(key)
+    except AnchorRangeName:
+        return sh.NONE
+    except InvalidRangeName:
+        return None
+
+
+def ranges_of(ref: str, value) -> Ranges:
+    """Ranges().push(ref, value) for a reference the engine wrote (`'S'!B5:B9`), its parts
+    read once per text."""
+    return Ranges().set_value(dict(_range_parts(ref)), value)
+
+
+_range_parts = functools.lru_cache(maxsize=4096)(Ranges.get_range)
 
 
 class Pipe:

@@ -83,7 +83,7 @@ from formulas.ranges import Ranges
 from formulas.tokens.operand import XlError
 
 from .adapter import (call, cell_result, empty_as_zero, evaluate_formulas_model, public_value,
-                      tokenize)
+                      ranges_of, tokenize)
 from .errors import CircularReferenceError, EngineError, UnsupportedFormulaError
 from .groups import Group, Grouper, Member
 from .order import cell_order, closure, downstream, group_deps, untangled_components
@@ -425,7 +425,7 @@ class Engine:
     def _desc_arg(self, d: RefDesc, m: Member) -> Ranges:
         sheet, r1, c1, r2, c2 = d.rect(m.row, m.col)
         ref = f"{sheet_prefix(sheet)}{cell_name(r1, c1)}:{cell_name(r2, c2)}"
-        return Ranges().push(ref, self.grid[sheet][r1:r2 + 1, c1:c2 + 1].copy())
+        return ranges_of(ref, self.grid[sheet][r1:r2 + 1, c1:c2 + 1].copy())
 
     _name_arg = _desc_arg
 
