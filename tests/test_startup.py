@@ -34,3 +34,23 @@ def test_verify_compiles_the_recorded_mechanism_once_per_book(books, monkeypatch
         assert report.ok and report.mechanism == name
         assert [s.skipped for s in report.input_sets] == [None]      # judged at a second set
     assert compiled == list(BOOKS)
+
+
+def test_the_value_grid_reaches_the_furthest_empty_cell_a_copied_formula_reads(tmp_path):
+    """A column's formulas read empty cells beyond the sheet's last one, each row further down
+    and to the right (the grid is sized from the group's last member): their values are those
+    of ExcelModel, an empty cell read as 0."""
+    import openpyxl
+    from linkbook.engine import evaluator as engine
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    for r in range(1, 6):
+        ws[f"A{r}"] = r * 1.5
+        ws[f"B{r}"] = f"=A{r}+D{r + 20}*2+ISBLANK(E{r + 30})"
+        ws[f"C{r}"] = f"=B{r}-$F$3+G{r + 25}"
+    path = tmp_path / "beyond.xlsx"
+    wb.save(path)
+    ours = engine.evaluate_file(path)
+    model = engine.evaluate_formulas_model(path)
+    assert {k: ours[k] for k in model} == model
+    assert [ours[("Sheet", f"B{r}")] for r in range(1, 6)] == [r * 1.5 + 1 for r in range(1, 6)]

@@ -222,16 +222,18 @@ class Engine:
         size = {ws.title: [ws.max_row, ws.max_column] for ws in self.wb.worksheets
                 if ws.title in self.constants}          # the sheets read (all, without `only`)
         for g in self.groups:
-            self._grow(size, g.sheet, int(g.rows.max()), int(g.cols.max()))
+            last_row, last_col = int(g.rows.max()), int(g.cols.max())
+            self._grow(size, g.sheet, last_row, last_col)
             if g.mode == "each":
                 for cell in g.each:
                     for sheet, _, _, r2, c2 in cell.rects:
                         self._grow(size, sheet, r2, c2)
                 continue
             for d in g.inputs:
-                r1, c1, r2, c2 = d.at(g.rows, g.cols)
-                self._grow(size, d.sheet, int(np.max(np.maximum(r1, r2))),
-                           int(np.max(np.maximum(c1, c2))))
+                # a reference's row (column) is the host's plus an offset, or fixed: at the
+                # last member's row and column it reaches its furthest
+                r1, c1, r2, c2 = d.at(last_row, last_col)
+                self._grow(size, d.sheet, max(r1, r2), max(c1, c2))
         for sheet, (rows, cols) in size.items():
             grid = np.empty((rows + 1, cols + 1), object)
             grid.fill(sh.EMPTY)
