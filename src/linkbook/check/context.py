@@ -20,13 +20,7 @@ class Reference:
     given the description the book records, with the book's own input values."""
 
     def __init__(self, record: BuildRecord):
-        from ..language.model import DescriptionError
-        from ..language.bundled import from_record
-        try:
-            self.mechanism = from_record(record)
-        except (DescriptionError, KeyError, TypeError, AttributeError) as exc:
-            raise UnusableFile(f"the mechanism recorded in the book is unusable: {exc}") \
-                from None
+        self.mechanism = _mechanism_of(record)
         self.description = self.mechanism.description
 
     def solve(self, params: dict, angles, turns: dict | None = None) -> dict:
@@ -37,6 +31,26 @@ class Reference:
 
     def limit_angles(self, params: dict, length: float, loop: int = 0) -> list[float]:
         return generic.limit_angles(self.description, params, length, loop)
+
+
+# The record last compiled and its mechanism: verify makes a Reference of one record for the
+# book's own inputs, again for the other input sets and for each set's judging, and compiling
+# the description is the same work each time (a Mechanism is frozen: shared safely).
+_COMPILED: list = [None, None]
+
+
+def _mechanism_of(record: BuildRecord):
+    """The mechanism `record` describes, compiled once for that record object."""
+    if _COMPILED[0] is record:
+        return _COMPILED[1]
+    from ..language.model import DescriptionError
+    from ..language.bundled import from_record
+    try:
+        mechanism = from_record(record)
+    except (DescriptionError, KeyError, TypeError, AttributeError) as exc:
+        raise UnusableFile(f"the mechanism recorded in the book is unusable: {exc}") from None
+    _COMPILED[:] = record, mechanism
+    return mechanism
 
 
 def slope_of(solver: Reference, params: dict, angles: np.ndarray, key: str, unit: str,

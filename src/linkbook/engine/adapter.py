@@ -212,10 +212,7 @@ def compile_formula(graph, batch: Batch | None = None, host: Ranges | None = Non
     every node is wrapped for vector calls."""
     extra = {_cell_token(): host} if host is not None else {}
     if isinstance(graph, grammar.Parsed):
-        pipe = Pipe.of_parsed(graph, batch, extra)
-        if pipe is not None:
-            return pipe
-        graph = _parser().ast(graph.formula)[1]
+        return Pipe.of_parsed(graph, batch, extra)
     _wrap_nodes(graph, batch)
     return Pipe.of(graph, extra) or graph.compile(**extra)
 
@@ -235,15 +232,29 @@ def _formulas_graph(formula: str, batch: Batch | None, extra: dict):
 def _input_templates(keys) -> dict:
     """compile()'s inputs for the references and names a formula reads: each key, in sorted
     order, with its range (None for a defined name)."""
-    inputs = {}
-    for k in sorted(keys):
-        try:
-            inputs[k] = Ranges().push(k)
-        except AnchorRangeName:
-            inputs[k] = sh.NONE
-        except InvalidRangeName:
-            inputs[k] = None
-    return inputs
+    return {k: _input_template(k) for k in sorted(keys)}
+
+
+@functools.lru_cache(maxsize=4096)
+def _input_template(key: str):
+    """compile()'s input for one key, made once per key: many formulas read one cell (a
+    position's, a name's), and reading a reference's text is formulas' regex. The Ranges is
+    shared: it is only read (a reference's parts), never given a value."""
+    try:
+        return Ranges().push(key)
+    except AnchorRangeName:
+        return sh.NONE
+    except InvalidRangeName:
+        return None
+
+
+def ranges_of(ref: str, value) -> Ranges:
+    """Ranges().push(ref, value) for a reference the engine wrote (`'S'!B5:B9`), its parts
+    read once per text."""
+    return Ranges().set_value(dict(_range_parts(ref)), value)
+
+
+_range_parts = functools.lru_cache(maxsize=4096)(Ranges.get_range)
 
 
 class Pipe:
@@ -265,7 +276,7 @@ class Pipe:
     def of(cls, builder, extra: dict) -> "Pipe | None":
         """The pipe of builder's graph, or None where it takes more than a plain order: a node
         with several outputs or options, a function that behaves otherwise while compiling, an
-        operator on references."""
+        operator on references.  A lone reference, name or constant is a pipe of no steps."""
         dsp = builder.dsp
         output = builder.get_node_id(builder[-1])
         functions, producer = {}, {}
@@ -278,7 +289,7 @@ class Pipe:
             producer[node["outputs"][0]] = fid
         defaults = {k: v["value"] for k, v in dsp.default_values.items()} | extra
         defaults[sh.START] = sh.NONE      # the input of a function without arguments, PI()
-        if output not in producer or any(
+        if (functions and output not in producer) or any(
                 d.get("filters") for k, d in dsp.data_nodes.items() if k != output):
             return None
         inputs = _input_templates(k for k in dsp.data_nodes
@@ -292,11 +303,11 @@ class Pipe:
 
     @classmethod
     def of_parsed(cls, parsed: grammar.Parsed, batch: Batch | None,
-                  extra: dict) -> "Pipe | None":
+                  extra: dict) -> "Pipe":
         """The pipe of grammar's graph: its nodes in their order (each after its arguments),
-        with the functions `formulas`' tokens compile to.  None if the result is not a call."""
-        if parsed.nodes[-1][0] != "call":
-            return None         # a lone reference or constant: compile() and its filter
+        with the functions `formulas`' tokens compile to.  A lone reference, name or constant
+        is a pipe of no steps: its result is compile()'s, the value through the output's
+        filter."""
         table, ids, keys, steps = get_functions(), [], [], []
         defaults = dict(extra)
         for i, node in enumerate(parsed.nodes):
@@ -314,7 +325,7 @@ class Pipe:
                 ids.append(i)
         formula = parsed.formula
         return cls(lambda: _formulas_graph(formula, batch, extra), _input_templates(keys),
-                   steps, defaults, len(parsed.nodes) - 1)
+                   steps, defaults, ids[-1])
 
     def __call__(self, *args):
         values = dict(self.defaults)

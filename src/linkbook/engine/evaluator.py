@@ -21,7 +21,8 @@ Method
    member where they do not (row 6) is compiled instead.  "Compiled" means a Pipe: the parsed
    graph's function nodes (formulas' own functions) called in dependency order, without
    schedula's dispatcher; only a graph with operators on references or impure functions goes
-   through ``compile()``.  With ``only`` (cells wanted), the groups those cells do not need,
+   through ``compile()``.  A formula that is one reference, name or constant is a pipe of no
+   steps.  With ``only`` (cells wanted), the groups those cells do not need,
    by the references of the shapes, are dropped before anything is compiled, and a sheet is
    grouped only when a needed group reads it.
 3. *Order.* A group depends on the groups owning the cells it reads.  Groups are evaluated in
@@ -35,7 +36,9 @@ Method
    give the cell path's value.
 4. *Modes.*
    - ``vector``: single-cell inputs only, functions from ELEMENTWISE and ROW_BY_ROW only.  The
-     function is called once with an (n, 1) object array per input.  Each node of the compiled
+     function is called once with an (n, 1) object array per input.  A group of one cell too:
+     its nodes are formulas' functions called on (1, 1) arrays, a per-cell call without a
+     Ranges built for each input.  Each node of the compiled
      graph is wrapped: element-wise functions (arithmetic, COS, ATAN2, IF, IFERROR, ...) run on
      the whole array; other nodes (MAX of two cells, AND, ...), and an element-wise node whose
      output collapsed (``formulas`` turns an exception such as an overflow into one #VALUE! for
@@ -80,7 +83,7 @@ from formulas.ranges import Ranges
 from formulas.tokens.operand import XlError
 
 from .adapter import (call, cell_result, empty_as_zero, evaluate_formulas_model, public_value,
-                      tokenize)
+                      ranges_of, tokenize)
 from .errors import CircularReferenceError, EngineError, UnsupportedFormulaError
 from .groups import Group, Grouper, Member
 from .order import cell_order, closure, downstream, group_deps, untangled_components
@@ -226,7 +229,9 @@ class Engine:
                     for sheet, _, _, r2, c2 in cell.rects:
                         self._grow(size, sheet, r2, c2)
                 continue
-            for d in g.inputs:      # offsets grow with the host: the last member reads last
+            for d in g.inputs:
+                # a reference's row (column) is the host's plus an offset, or fixed: at the
+                # last member's row and column it reaches its furthest
                 r1, c1, r2, c2 = d.at(last_row, last_col)
                 self._grow(size, d.sheet, max(r1, r2), max(c1, c2))
         for sheet, (rows, cols) in size.items():
@@ -422,7 +427,7 @@ class Engine:
     def _desc_arg(self, d: RefDesc, m: Member) -> Ranges:
         sheet, r1, c1, r2, c2 = d.rect(m.row, m.col)
         ref = f"{sheet_prefix(sheet)}{cell_name(r1, c1)}:{cell_name(r2, c2)}"
-        return Ranges().push(ref, self.grid[sheet][r1:r2 + 1, c1:c2 + 1].copy())
+        return ranges_of(ref, self.grid[sheet][r1:r2 + 1, c1:c2 + 1].copy())
 
     _name_arg = _desc_arg
 

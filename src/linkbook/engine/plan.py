@@ -41,7 +41,7 @@ class Planner:
         rep = self.representative(g)
         if rep is None:
             return self.plan_each(g)
-        vector = (self.vectorize and len(g.members) > 1 and functions <= VECTOR_SAFE
+        vector = (self.vectorize and functions <= VECTOR_SAFE
                   and not any(d.is_range for d in g.descs))
         g.mode = "vector" if vector else "cell"
         compiled = self.compiled(g, *rep)

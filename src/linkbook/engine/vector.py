@@ -5,7 +5,9 @@ Element-wise nodes (ELEMENTWISE) run on the whole arrays; arithmetic, comparison
 math functions first as float-array operations on the rows of finite numbers (NUMERIC_FORMS),
 with formulas' own bits; IF on arrays where its condition is a boolean or a number; MIN, MAX and
 COUNT on arrays (AGGREGATES), per row here and over whole ranges outside vector calls; any other node, and an element-wise node whose output collapsed,
-runs row by row on (1, 1) slices, which is exactly what a per-cell call does.
+runs row by row on (1, 1) slices, which is exactly what a per-cell call does. A group of one
+cell is a call of one row: its numeric forms on its numbers, formulas' own functions on the
+rest.
 """
 from __future__ import annotations
 
@@ -155,6 +157,25 @@ def _numeric_call(form, func, args, n: int):
             return None
         out[rest] = sub.reshape(-1)
     return out.reshape(n, 1).view(Array)
+
+
+def _one_number_call(form, args):
+    """`form` on the one row of a group of one cell, where every argument is a number and the
+    result is finite: the (1, 1) array _numeric_call gives that row, without its machinery for
+    many rows; None otherwise (formulas' own call decides)."""
+    xs = []
+    for a in args:
+        v = a.reshape(-1)[0] if isinstance(a, np.ndarray) and a.size == 1 else a
+        if type(v) not in _NUMBER_TYPES:
+            return None
+        xs.append(np.array([v], dtype=float))
+    with np.errstate(all="ignore"):
+        result, kind = form(*xs)
+    if not np.isfinite(result[0]):
+        return None
+    out = np.empty((1, 1), object)
+    out[0, 0] = result.tolist()[0] if kind in (float, bool) else result[0]
+    return out.view(Array)
 
 
 # MIN, MAX and COUNT computed on arrays: in vector calls one result per row over that row's
@@ -329,6 +350,11 @@ def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=
     slices, exactly as in a per-cell call."""
     def node(*args, **kw):
         n = batch.n
+        if n == 1 and numeric is not None and not kw:
+            out = _one_number_call(numeric, args)
+            if out is not None:
+                batch.numeric += 1
+                return out
         if n == 1 or not any(_size(a) == n for a in args):
             return func(*args, **kw)
         if numeric is not None and not kw:

@@ -1,0 +1,56 @@
+"""What a verify does once that it used to do more than once (issue 42, start-up)."""
+from __future__ import annotations
+
+import pytest
+
+from linkbook.book import builder
+from linkbook.check import verifier
+from linkbook.language import bundled, templates
+
+BOOKS = ("fourbar", "slider-crank")
+
+
+@pytest.fixture(scope="module")
+def books(tmp_path_factory) -> dict:
+    folder = tmp_path_factory.mktemp("startup")
+    paths = {name: folder / f"{name}.xlsx" for name in BOOKS}
+    for name, path in paths.items():
+        builder.build_file(templates.load(name), path)
+    return paths
+
+
+def test_verify_compiles_the_recorded_mechanism_once_per_book(books, monkeypatch):
+    """The book's own judging, the other input sets' draw and their judging share one compiled
+    mechanism; a second book gets its own."""
+    compiled = []
+    real = bundled.from_record
+
+    def counted(record):
+        compiled.append(record.mechanism)
+        return real(record)
+    monkeypatch.setattr(bundled, "from_record", counted)
+    for name, path in books.items():
+        report = verifier.verify(path)
+        assert report.ok and report.mechanism == name
+        assert [s.skipped for s in report.input_sets] == [None]      # judged at a second set
+    assert compiled == list(BOOKS)
+
+
+def test_the_value_grid_reaches_the_furthest_empty_cell_a_copied_formula_reads(tmp_path):
+    """A column's formulas read empty cells beyond the sheet's last one, each row further down
+    and to the right (the grid is sized from the group's last member): their values are those
+    of ExcelModel, an empty cell read as 0."""
+    import openpyxl
+    from linkbook.engine import evaluator as engine
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    for r in range(1, 6):
+        ws[f"A{r}"] = r * 1.5
+        ws[f"B{r}"] = f"=A{r}+D{r + 20}*2+ISBLANK(E{r + 30})"
+        ws[f"C{r}"] = f"=B{r}-$F$3+G{r + 25}"
+    path = tmp_path / "beyond.xlsx"
+    wb.save(path)
+    ours = engine.evaluate_file(path)
+    model = engine.evaluate_formulas_model(path)
+    assert {k: ours[k] for k in model} == model
+    assert [ours[("Sheet", f"B{r}")] for r in range(1, 6)] == [r * 1.5 + 1 for r in range(1, 6)]
