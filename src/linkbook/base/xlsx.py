@@ -25,6 +25,8 @@ import functools
 import math
 import re
 import zipfile
+from array import array
+from bisect import bisect_left
 from dataclasses import dataclass
 from pathlib import PurePosixPath
 from xml.etree.ElementTree import iterparse
@@ -108,28 +110,128 @@ class Cell:
         return f"{column_letter(self.column)}{self.row}"
 
 
+class Column:
+    """The cells of one column of a sheet, in row order, held as parallel lists (no object per
+    cell: a big book holds hundreds of thousands): each cell's row, value and kind (openpyxl's
+    data_type), and what a formula cell stores with it (its `<v>`: the number, or (kind, text)
+    for any other kind; None where it stores nothing or is no formula)."""
+    __slots__ = ("rows", "values", "kinds", "stored", "ordered")
+
+    def __init__(self):
+        self.rows = array("i")
+        self.values: list = []
+        self.kinds: list[str] = []
+        self.stored: list = []
+        self.ordered = True
+
+    def append(self, row: int, value, kind: str, stored=None) -> None:
+        if self.rows and row <= self.rows[-1]:
+            self.ordered = False
+        self.rows.append(row)
+        self.values.append(value)
+        self.kinds.append(kind)
+        self.stored.append(stored)
+
+    def finish(self) -> None:
+        """Rows in order, one cell each: a cell written again (the same address twice) is the
+        last one written, as a dict keyed by address holds it."""
+        if self.ordered:
+            return
+        last = {row: i for i, row in enumerate(self.rows)}
+        keep = [last[row] for row in sorted(last)]
+        self.rows = array("i", [self.rows[i] for i in keep])
+        self.values = [self.values[i] for i in keep]
+        self.kinds = [self.kinds[i] for i in keep]
+        self.stored = [self.stored[i] for i in keep]
+        self.ordered = True
+
+    def index(self, row: int) -> int | None:
+        i = bisect_left(self.rows, row)
+        return i if i < len(self.rows) and self.rows[i] == row else None
+
+
+class HeldCell:
+    """A cell of a Column, made when asked for: its value and kind are read from (and written
+    to) the column."""
+    __slots__ = ("parent", "row", "column", "_held", "_i")
+
+    def __init__(self, parent, row: int, column: int, held: Column, i: int):
+        self.parent, self.row, self.column, self._held, self._i = parent, row, column, held, i
+
+    @property
+    def value(self):
+        return self._held.values[self._i]
+
+    @value.setter
+    def value(self, value) -> None:
+        self._held.values[self._i] = value
+
+    @property
+    def data_type(self) -> str:
+        return self._held.kinds[self._i]
+
+    @data_type.setter
+    def data_type(self, kind: str) -> None:
+        self._held.kinds[self._i] = kind
+
+    @property
+    def coordinate(self) -> str:
+        return f"{column_letter(self.column)}{self.row}"
+
+
 class Worksheet:
     def __init__(self, title: str):
         self.title = title
-        self._cells: dict[tuple[int, int], Cell] = {}
-        # (row, col) -> (t, text) of the value a formula cell stores with it (its `<v>`), what a
-        # reader that does not calculate shows; formula cells without one are left out
-        self.stored: dict[tuple[int, int], tuple[str, str]] = {}
+        self.held_columns: dict[int, Column] = {}
 
-    def __getitem__(self, coordinate: str) -> Cell:
+    def __getitem__(self, coordinate: str) -> Cell | HeldCell:
         return self.cell(*coordinate_to_tuple(coordinate))
 
-    def cell(self, row: int, column: int) -> Cell:
-        found = self._cells.get((row, column))
-        return found if found is not None else Cell(self, row, column, None, "n")
+    def cell(self, row: int, column: int) -> Cell | HeldCell:
+        held = self.held_columns.get(column)
+        i = None if held is None else held.index(row)
+        return Cell(self, row, column, None, "n") if i is None else \
+            HeldCell(self, row, column, held, i)
+
+    def entries(self):
+        """(row, column, value, kind) of every cell the sheet holds, column by column."""
+        for col, held in self.held_columns.items():
+            for row, value, kind in zip(held.rows, held.values, held.kinds):
+                yield row, col, value, kind
+
+    def stored_items(self):
+        """((row, column), (kind, text)) of every formula cell that stores a value."""
+        for col, held in self.held_columns.items():
+            for row, kind, stored in zip(held.rows, held.kinds, held.stored):
+                if stored is not None:
+                    yield (row, col), (stored if type(stored) is tuple else ("n", stored))
+
+    @property
+    def _cells(self) -> dict[tuple[int, int], HeldCell]:
+        """openpyxl's {(row, column): cell}, made on demand (a cell object each: for tests and
+        small sheets, not for a big book's every cell)."""
+        return {(row, col): HeldCell(self, row, col, held, i)
+                for col, held in self.held_columns.items() for i, row in enumerate(held.rows)}
 
     @property
     def max_row(self) -> int:
-        return max((r for r, _ in self._cells), default=1)
+        return max((held.rows[-1] for held in self.held_columns.values()), default=1)
 
     @property
     def max_column(self) -> int:
-        return max((c for _, c in self._cells), default=1)
+        return max(self.held_columns, default=1)
+
+
+# one text object for each kind a cell can have, not one a cell
+KINDS = {kind: kind for kind in ("n", "s", "b", "e", "d", "str", "inlineStr")}
+
+
+def cell_entries(ws):
+    """(row, column, value, data_type) of every cell a worksheet holds: the view's columns, or
+    an openpyxl worksheet's cells."""
+    if isinstance(ws, Worksheet):
+        return ws.entries()
+    return ((row, col, c.value, c.data_type) for (row, col), c in ws._cells.items())
 
 
 @dataclass(frozen=True)
@@ -294,7 +396,7 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
     `unmodelled` and reading goes on, so that all of the book is checked."""
     c_tag, v_tag, f_tag, is_tag = f"{MAIN}c", f"{MAIN}v", f"{MAIN}f", f"{MAIN}is"
     row_tag = f"{MAIN}row"
-    cells = ws._cells
+    columns = ws.held_columns
     for _, el in iterparse(f):
         tag = el.tag
         if tag == row_tag:
@@ -307,6 +409,9 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
         if m is None:
             raise Unsupported("a cell without its address")
         row, col = int(m[2]), column_index(m[1])
+        held = columns.get(col)
+        if held is None:
+            held = columns[col] = Column()
         kind = el.get("t", "n")
         formula = el.find(f_tag)
         if formula is not None:
@@ -315,13 +420,14 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
                 _check_formula(text, part, ws.title, address)
             if formula.get("t") in ("shared", "array", "dataTable"):
                 unmodelled.append(f"{ws.title}!{address}: a {formula.get('t')} formula")
-            cells[(row, col)] = Cell(ws, row, col, "=" + text, "f")
             stored = el.findtext(v_tag)
             if stored or kind == "str":     # an empty <v> stores nothing, but as empty text
-                ws.stored[(row, col)] = (
-                    kind, _shared(strings, stored, part, ws.title, address) if kind == "s"
-                    else _number(stored, part, ws.title, address) if kind == "n"
-                    else stored or "")
+                stored = (_number(stored, part, ws.title, address) if kind == "n" else
+                          (kind, _shared(strings, stored, part, ws.title, address)
+                           if kind == "s" else stored or ""))
+            else:
+                stored = None
+            held.append(row, "=" + text, "f", stored)
             continue
         if kind == "inlineStr":
             child = el.find(is_tag)
@@ -341,7 +447,9 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
                     kind = "s"
                 elif kind == "d":
                     unmodelled.append(f"{ws.title}!{address}: an ISO 8601 date")
-        cells[(row, col)] = Cell(ws, row, col, value, kind)
+        held.append(row, value, KINDS.get(kind, kind))
+    for held in columns.values():
+        held.finish()
 
 
 def _number(text: str, part: str, title: str, address: str) -> int | float:
