@@ -199,9 +199,10 @@ def places(cells: list[str]) -> tuple[np.ndarray, np.ndarray]:
         letter, digit = (codes >= 65) & (codes <= 90), (codes >= 48) & (codes <= 57)
         letters, digits = letter.sum(axis=1), digit.sum(axis=1)
         at = np.arange(codes.shape[1])
+        # letters first, then digits, then nothing (the padding of shorter addresses)
+        in_digits = (at >= letters[:, None]) & (at < (letters + digits)[:, None])
         if ((letters >= 1) & (letters <= 3) & (digits >= 1)).all() \
-                and (letter == (at < letters[:, None])).all() \
-                and (digit == ((at >= letters[:, None]) & (at < (letters + digits)[:, None]))).all():
+                and (letter == (at < letters[:, None])).all() and (digit == in_digits).all():
             rows, cols = np.zeros(len(text), np.int64), np.zeros(len(text), np.int64)
             for j in range(codes.shape[1]):
                 rows = np.where(digit[:, j], rows * 10 + codes[:, j] - 48, rows)
