@@ -8,7 +8,11 @@ book's verify; verify needs only what this module reads. The view gives what ope
 `ws.cell(row, col)`, `ws._cells`, `ws.max_row`, `ws.max_column`; `cell.value`,
 `cell.data_type`, `cell.row`, `cell.column`, `cell.coordinate`, `cell.parent`), with openpyxl's
 own rules: numbers with a '.', 'e' or 'E' are floats, others ints; a formula cell's value is
-'=' and its text; shared strings lose 'x005F_'. A book with what the view does not model (a
+'=' and its text; shared strings lose 'x005F_'. A sheet holds its cells by column (Column:
+lists of rows, values, kinds and stored values, no object per cell); a cell object is made when
+asked for, and `ws._cells` makes every one (for tests and small sheets). A sheet part is scanned by
+regular expressions where it is written as the writers write it, else read element by element
+(both read it alike: tests/test_sheet_scan.py). A book with what the view does not model (a
 shared, array or data-table formula, a number styled as a date, a chart sheet, a cell without
 its address) raises Unsupported, after the whole book has been read: the caller loads it with
 openpyxl.
@@ -280,8 +284,7 @@ def read(path) -> Workbook:
         worksheets = []
         for title, part in sheets:
             ws = Worksheet(title)
-            with zf.open(part) as f:
-                _read_cells(f, ws, strings, date_styles, part, unmodelled)
+            _read_part(zf, part, ws, strings, date_styles, unmodelled)
             worksheets.append(ws)
     if unmodelled:
         raise Unsupported(unmodelled[0])
@@ -390,13 +393,144 @@ def _date_styles(zf: zipfile.ZipFile) -> frozenset[int]:
                      or (fmt in codes and _DATE_LETTERS.search(_NOT_DATE_PARTS.sub("", codes[fmt]))))
 
 
+def _read_part(zf: zipfile.ZipFile, part: str, ws: Worksheet, strings: list[str],
+               date_styles: frozenset[int], unmodelled: list[str]) -> None:
+    """The cells of one sheet part into `ws`: scanned (_scan_cells) where the part is written
+    as the scan reads it, else read element by element (_read_cells) from the start again."""
+    noted = len(unmodelled)
+    try:
+        with zf.open(part) as f:
+            _scan_cells(f, ws, strings, date_styles, part, unmodelled)
+        return
+    except Refused:     # the part is well-formed up to the cell refused: the elements say so too
+        raise
+    except Exception:   # not as the scan reads it (or damaged): the elements say what it holds
+        ws.held_columns.clear()
+        del unmodelled[noted:]
+    with zf.open(part) as f:
+        _read_cells(f, ws, strings, date_styles, part, unmodelled)
+
+
+# The scan: a sheet part as the writers of .xlsx write it (openpyxl, LibreOffice, Gnumeric,
+# Excel), read by regular expressions over its text instead of an element object per cell; expat
+# checks the text is well-formed XML as it goes (a damaged part is then read by _read_cells,
+# which says what is wrong as before). What the scan does not read exactly as ElementTree would
+# (an inline string, a comment, CDATA, a namespace prefix, an encoding other than UTF-8, a
+# carriage return, an attribute holding an entity or white space other than spaces) stops it:
+# the part is then read element by element.
+SCAN_CHUNK = 1 << 16      # text held at a time: the cells of a few hundred rows
+# a cell as the writers write it: r, s and t in that order, a formula (its attributes, its text)
+# and a stored value; "<f" and "<v" are kept to tell an empty element from none
+_CELL = re.compile(r'<c r="([A-Z]{1,3})([0-9]+)"(?: s="([0-9]+)")?(?: t="([A-Za-z]+)")?'
+                   r'(?:/>|>(?:(<f)([^<>]*?)(?:/>|>([^<]*)</f>))?(?:(<v)(?:/>|>([^<]*)</v>))?'
+                   r'</c>)')
+_ATTRIBUTE = re.compile(r"""([A-Za-z_][\w.\-]*)\s*=\s*(?:"([^"]*)"|'([^']*)')""")
+_ENTITY = re.compile(r"&(#x[0-9A-Fa-f]+|#[0-9]+|amp|lt|gt|quot|apos);")
+_NAMED_ENTITIES = {"amp": "&", "lt": "<", "gt": ">", "quot": '"', "apos": "'"}
+_MAIN_DEFAULT = f'xmlns="{MAIN[1:-1]}"'
+_DECLARATION = re.compile(r"""<\?xml[^?]*?encoding\s*=\s*["']([^"']*)["']""")
+_OTHER_CELLS = re.compile(r"<c[\s/>]|<row[\s/>]")
+
+
+class _NotScanned(Exception):
+    """The part holds what the scan does not read exactly as ElementTree does."""
+
+
+def _unescaped(text: str) -> str:
+    """Character data (holding a '&') with XML's five entities and character references
+    replaced."""
+    def one(m):
+        name = m[1]
+        if name[0] == "#":
+            return chr(int(name[2:], 16) if name[1] in "xX" else int(name[1:]))
+        return _NAMED_ENTITIES[name]
+    return _ENTITY.sub(one, text)
+
+
+def _attributes(text: str) -> dict[str, str]:
+    found = {}
+    for name, double, single in _ATTRIBUTE.findall(text):
+        found[name] = double if double or not single else single
+    return found
+
+
+def _scan_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int], part: str,
+                unmodelled: list[str]) -> None:
+    """The cells of one sheet part into `ws`, scanned (see SCAN_CHUNK); _NotScanned, or expat's
+    error for a part that is not well-formed XML, where the scan does not apply."""
+    import codecs
+    from xml.parsers import expat
+    checker, decoder = expat.ParserCreate(), codecs.getincrementaldecoder("utf-8")()
+    head, body, where = "", "", "head"
+    for chunk in iter(lambda: f.read(SCAN_CHUNK), b""):
+        checker.Parse(chunk, False)
+        text = decoder.decode(chunk)
+        if "\r" in text:
+            raise _NotScanned("a carriage return")
+        if where == "head":
+            head += text
+            start = head.find("<sheetData>")
+            if start < 0:
+                continue
+            _check_head(head[:start])
+            body, where = head[start + len("<sheetData>"):], "body"
+        else:
+            body += text
+        end = body.rfind("</row>")
+        if end >= 0:
+            _scan_rows(body[:end + len("</row>")], ws, strings, date_styles, part, unmodelled)
+            body = body[end + len("</row>"):]
+    checker.Parse(b"", True)
+    if where == "head":
+        raise _NotScanned("no <sheetData> element")
+    end = body.find("</sheetData>")
+    if end < 0:
+        raise _NotScanned("no end of <sheetData>")
+    _scan_rows(body[:end], ws, strings, date_styles, part, unmodelled)
+    if _OTHER_CELLS.search(body, end) or "xmlns" in body[end:]:
+        raise _NotScanned("cells after <sheetData>")
+    for held in ws.held_columns.values():
+        held.finish()
+
+
+def _check_head(head: str) -> None:
+    """The part up to <sheetData>: UTF-8, the main namespace the default one and declared once,
+    no cells and nothing that makes the text read otherwise (a DOCTYPE)."""
+    declared = _DECLARATION.match(head)
+    if head.startswith("\ufeff") or (declared and declared[1].lower().replace("-", "") != "utf8"):
+        raise _NotScanned("an encoding other than UTF-8")
+    if head.count("xmlns=") != 1 or _MAIN_DEFAULT not in head or "<!" in head \
+            or _OTHER_CELLS.search(head) or not re.search(r"<worksheet[\s>]", head):
+        raise _NotScanned("namespaces the scan does not read")
+
+
+def _scan_rows(text: str, ws: Worksheet, strings: list[str], date_styles: frozenset[int],
+               part: str, unmodelled: list[str]) -> None:
+    """The cells in `text` (whole rows of <sheetData>) into `ws`: every element that starts
+    with '<c' a cell as _CELL reads it, and nothing else to read (a comment, CDATA, a namespace
+    declaration)."""
+    cells = _CELL.findall(text)
+    if len(cells) != text.count("<c") or "<!" in text or "<?" in text or "xmlns" in text:
+        raise _NotScanned("a cell as the scan does not read it")
+    for letters, digits, style, kind, f_open, f_attrs, f_text, v_open, v_text in cells:
+        if "&" in f_attrs:
+            raise _NotScanned("an entity in a formula's attributes")
+        formula = None if not f_open else (
+            f_text if "&" not in f_text else _unescaped(f_text),
+            _attributes(f_attrs).get("t") if f_attrs else None)
+        if kind == "inlineStr" and formula is None:
+            raise _NotScanned("an inline string")
+        _put(ws, int(digits), column_index(letters), letters + digits, kind or "n", style or 0,
+             formula, None if not v_open else v_text if "&" not in v_text else
+             _unescaped(v_text), None, strings, date_styles, part, unmodelled)
+
+
 def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int], part: str,
                 unmodelled: list[str]) -> None:
-    """The cells of one sheet part into `ws`; what the view does not model is noted in
-    `unmodelled` and reading goes on, so that all of the book is checked."""
+    """The cells of one sheet part into `ws`, element by element; what the view does not model
+    is noted in `unmodelled` and reading goes on, so that all of the book is checked."""
     c_tag, v_tag, f_tag, is_tag = f"{MAIN}c", f"{MAIN}v", f"{MAIN}f", f"{MAIN}is"
     row_tag = f"{MAIN}row"
-    columns = ws.held_columns
     for _, el in iterparse(f):
         tag = el.tag
         if tag == row_tag:
@@ -408,48 +542,57 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
         m = _COORDINATE.match(address) if address else None
         if m is None:
             raise Unsupported("a cell without its address")
-        row, col = int(m[2]), column_index(m[1])
-        held = columns.get(col)
-        if held is None:
-            held = columns[col] = Column()
-        kind = el.get("t", "n")
-        formula = el.find(f_tag)
-        if formula is not None:
-            text = formula.text or ""
-            if len(text) > FORMULA_LENGTH_LIMIT or text.count("(") > FORMULA_NESTING_LIMIT:
-                _check_formula(text, part, ws.title, address)
-            if formula.get("t") in ("shared", "array", "dataTable"):
-                unmodelled.append(f"{ws.title}!{address}: a {formula.get('t')} formula")
-            stored = el.findtext(v_tag)
-            if stored or kind == "str":     # an empty <v> stores nothing, but as empty text
-                stored = (_number(stored, part, ws.title, address) if kind == "n" else
-                          (kind, _shared(strings, stored, part, ws.title, address)
-                           if kind == "s" else stored or ""))
-            else:
-                stored = None
-            held.append(row, "=" + text, "f", stored)
-            continue
-        if kind == "inlineStr":
-            child = el.find(is_tag)
-            value, kind = (_text(child), "s") if child is not None else (None, "n")
-        else:
-            value = el.findtext(v_tag) or None
-            if value is not None:
-                if kind == "n":
-                    if int(el.get("s", 0)) in date_styles:
-                        unmodelled.append(f"{ws.title}!{address}: a number shown as a date")
-                    value = _number(value, part, ws.title, address)
-                elif kind == "s":
-                    value = _shared(strings, value, part, ws.title, address)
-                elif kind == "b":
-                    value = bool(_index(value, part, ws.title, address))
-                elif kind == "str":
-                    kind = "s"
-                elif kind == "d":
-                    unmodelled.append(f"{ws.title}!{address}: an ISO 8601 date")
-        held.append(row, value, KINDS.get(kind, kind))
-    for held in columns.values():
+        formula, kind = el.find(f_tag), el.get("t", "n")
+        inline = el.find(is_tag) if kind == "inlineStr" and formula is None else None
+        _put(ws, int(m[2]), column_index(m[1]), address, kind, el.get("s", 0),
+             None if formula is None else (formula.text or "", formula.get("t")),
+             el.findtext(v_tag), _text(inline) if inline is not None else None,
+             strings, date_styles, part, unmodelled)
+    for held in ws.held_columns.values():
         held.finish()
+
+
+def _put(ws: Worksheet, row: int, col: int, address: str, kind: str, style,
+         formula: tuple | None, stored: str | None, inline: str | None, strings: list[str],
+         date_styles: frozenset[int], part: str, unmodelled: list[str]) -> None:
+    """One cell into `ws`, from what its element holds: its address (row, column and as
+    written), its attributes t and s, its formula (text and t) or None, the text of its <v>
+    (None without one) and of its inline string."""
+    held = ws.held_columns.get(col)
+    if held is None:
+        held = ws.held_columns[col] = Column()
+    if formula is not None:
+        text, shared = formula
+        if len(text) > FORMULA_LENGTH_LIMIT or text.count("(") > FORMULA_NESTING_LIMIT:
+            _check_formula(text, part, ws.title, address)
+        if shared in ("shared", "array", "dataTable"):
+            unmodelled.append(f"{ws.title}!{address}: a {shared} formula")
+        if stored or kind == "str":     # an empty <v> stores nothing, but as empty text
+            stored = (_number(stored, part, ws.title, address) if kind == "n" else
+                      (kind, _shared(strings, stored, part, ws.title, address)
+                       if kind == "s" else stored or ""))
+        else:
+            stored = None
+        held.append(row, "=" + text, "f", stored)
+        return
+    if kind == "inlineStr":
+        value, kind = (inline, "s") if inline is not None else (None, "n")
+    else:
+        value = stored or None
+        if value is not None:
+            if kind == "n":
+                if int(style) in date_styles:
+                    unmodelled.append(f"{ws.title}!{address}: a number shown as a date")
+                value = _number(value, part, ws.title, address)
+            elif kind == "s":
+                value = _shared(strings, value, part, ws.title, address)
+            elif kind == "b":
+                value = bool(_index(value, part, ws.title, address))
+            elif kind == "str":
+                kind = "s"
+            elif kind == "d":
+                unmodelled.append(f"{ws.title}!{address}: an ISO 8601 date")
+    held.append(row, value, KINDS.get(kind, kind))
 
 
 def _number(text: str, part: str, title: str, address: str) -> int | float:
