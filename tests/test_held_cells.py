@@ -72,3 +72,13 @@ def test_judged_cells_compare_as_the_set_of_their_keys():
     judged.extend("T", ["B2", "B3"])
     assert judged == {("S", "A1"), ("T", "B2"), ("T", "B3")} and len(judged) == 3
     assert judged != {("S", "A1")}
+
+
+def test_a_columns_addresses_are_one_text_each_until_verify_is_done(bundled_books):
+    """Each check and each input set names a column's cells with the same texts (the memory of
+    a big book's verify), let go of when the book is done."""
+    from linkbook.check.verifier import verify
+    first, again = xlsx.column_cells("B", 5, 7), xlsx.column_cells("B", 5, 7)
+    assert first == ["B5", "B6", "B7"] and all(a is b for a, b in zip(first, again))
+    assert verify(bundled_books["fourbar"]).ok
+    assert xlsx._column_cells.cache_info().currsize == 0

@@ -805,6 +805,23 @@ def column_letter(col: int) -> str:
     return found
 
 
+def column_cells(letter: str, first: int, last: int) -> list[str]:
+    """The addresses down column `letter` from row `first` to `last` ('B5', 'B6', …); every
+    list of one column's rows shares its texts (verify names each cell in several checks, and
+    again at each input set: one text a cell, not one a naming)."""
+    return list(_column_cells(letter, first, last))
+
+
+@functools.lru_cache(maxsize=1024)
+def _column_cells(letter: str, first: int, last: int) -> tuple[str, ...]:
+    return tuple(f"{letter}{r}" for r in range(first, last + 1))
+
+
+def forget_column_cells() -> None:
+    """Let go of the addresses column_cells holds (verify, done with a book)."""
+    _column_cells.cache_clear()
+
+
 # Characters no XML 1.0 document can hold, escaped or not: the C0 controls but tab, LF and CR
 # (openpyxl's ILLEGAL_CHARACTERS_RE), surrogates (Python text from undecodable bytes), U+FFFE and
 # U+FFFF. openpyxl refuses them when a cell is set or saved; a cell written here must too.

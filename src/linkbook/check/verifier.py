@@ -15,6 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..base.pause import gc_paused
+from ..base.xlsx import forget_column_cells
 from .checks import ABS_TOL, PER, TOLERANCE_RULE, Check, Mismatch, Rules
 from .context import Reference
 from .input_sets import DEFAULT_SEED, InputSet, input_cell, other_sets, write_inputs
@@ -85,6 +86,8 @@ def verify(path: Path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Repo
                       notes=list(getattr(wb, "notes", ())))
     except RECORD_ERRORS as exc:
         raise UnusableFile(record_mismatch(path, exc)) from None
+    finally:
+        forget_column_cells()
 
 
 def _judge_other_sets(wb, record, evaluation, rules: Rules, params: dict, seed: int
