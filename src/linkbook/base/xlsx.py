@@ -197,11 +197,6 @@ class Worksheet:
         return Cell(self, row, column, None, "n") if i is None else \
             HeldCell(self, row, column, held, i)
 
-    def entries(self):
-        """(row, column, value, kind) of every cell the sheet holds, column by column."""
-        for col, held in self.held_columns.items():
-            for row, value, kind in zip(held.rows, held.values, held.kinds):
-                yield row, col, value, kind
 
     def stored_items(self):
         """((row, column), (kind, text)) of every formula cell that stores a value."""
@@ -230,12 +225,16 @@ class Worksheet:
 KINDS = {kind: kind for kind in ("n", "s", "b", "e", "d", "str", "inlineStr")}
 
 
-def cell_entries(ws):
-    """(row, column, value, data_type) of every cell a worksheet holds: the view's columns, or
-    an openpyxl worksheet's cells."""
+def column_entries(ws):
+    """(column, rows, values, data_types) of each column of a worksheet that holds cells, the
+    rows in order: the view's columns as it holds them, or an openpyxl worksheet's cells."""
     if isinstance(ws, Worksheet):
-        return ws.entries()
-    return ((row, col, c.value, c.data_type) for (row, col), c in ws._cells.items())
+        return ((col, held.rows, held.values, held.kinds)
+                for col, held in ws.held_columns.items())
+    by_column: dict[int, list] = {}
+    for (row, col), c in sorted(ws._cells.items(), key=lambda item: item[0][::-1]):
+        by_column.setdefault(col, []).append((row, c.value, c.data_type))
+    return ((col, *map(list, zip(*cells))) for col, cells in by_column.items())
 
 
 @dataclass(frozen=True)

@@ -131,14 +131,14 @@ class FormulaCells:
     objects each. Iterated in cell order."""
 
     def __init__(self, wb=None, grids: dict[str, np.ndarray] | None = None):
-        from ..base.xlsx import cell_entries
+        from ..base.xlsx import column_entries
         self.grids = {} if grids is None else grids
         for ws in (wb.worksheets if wb is not None else ()):
             rows, cols = [], []
-            for row, col, _, kind in cell_entries(ws):
-                if kind == "f":
-                    rows.append(row)
-                    cols.append(col)
+            for col, held_rows, _, kinds in column_entries(ws):
+                found = [row for row, kind in zip(held_rows, kinds) if kind == "f"]
+                rows += found
+                cols += [col] * len(found)
             if rows:
                 grid = self.grids[ws.title] = np.zeros((max(rows) + 1, max(cols) + 1), bool)
                 grid[rows, cols] = True

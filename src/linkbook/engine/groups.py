@@ -12,7 +12,7 @@ from .errors import UnsupportedFormulaError
 from .references import (RefDesc, References, cell_name, constant_of, formula_of,
                          formula_shape, formula_text, lex_spans, skeleton_of)
 from .vector import Batch
-from ..base.xlsx import cell_entries, coordinate_to_tuple
+from ..base.xlsx import column_entries, coordinate_to_tuple
 
 # Skeletons whose references the `formulas` tokenizer has been seen to read exactly as the
 # lexer does, with the functions they call: a formula of a known skeleton is not re-tokenized.
@@ -88,16 +88,18 @@ class Grouper:
         formulas_by_sheet = {}
         for ws in worksheets:
             consts, forms = {}, []
-            for row, col, value, kind in cell_entries(ws):  # cells that exist (ExcelModel too)
-                if value is None:
-                    continue
-                if kind == "f":
-                    forms.append((row, col, formula_text(ws.cell(row, col)) if type(value)
-                                  is not str else formula_of(value)))
-                else:
-                    value = constant_of(value, kind, self.excel_model_constants)
-                    if value is not None:
-                        consts[(row, col)] = value
+            # only cells that exist (ExcelModel too)
+            for col, rows, values, kinds in column_entries(ws):
+                for row, value, kind in zip(rows, values, kinds):
+                    if value is None:
+                        continue
+                    if kind == "f":
+                        forms.append((row, col, formula_text(ws.cell(row, col)) if type(value)
+                                      is not str else formula_of(value)))
+                    else:
+                        value = constant_of(value, kind, self.excel_model_constants)
+                        if value is not None:
+                            consts[(row, col)] = value
             forms.sort()
             self.constants[ws.title] = consts
             formulas_by_sheet[ws.title] = forms
