@@ -414,15 +414,19 @@ def _read_part(zf: zipfile.ZipFile, part: str, ws: Worksheet, strings: list[str]
 # Excel), read by regular expressions over its text instead of an element object per cell; expat
 # checks the text is well-formed XML as it goes (a damaged part is then read by _read_cells,
 # which says what is wrong as before). What the scan does not read exactly as ElementTree would
-# (an inline string, a comment, CDATA, a namespace prefix, an encoding other than UTF-8, a
-# carriage return, an attribute holding an entity or white space other than spaces) stops it:
-# the part is then read element by element.
+# (an inline string of runs, a comment, CDATA, a namespace prefix, an encoding other than UTF-8,
+# a carriage return, attributes in another order or form) stops it: the part is then read
+# element by element.
 SCAN_CHUNK = 1 << 16      # text held at a time: the cells of a few hundred rows
-# a cell as the writers write it: r, s and t in that order, a formula (its attributes, its text)
-# and a stored value; "<f" and "<v" are kept to tell an empty element from none
+# a cell as the writers write it: r, s and t in that order, a formula (its attributes, its text),
+# a stored value and an inline string of one text, white space between them (as Gnumeric writes
+# them; a cell's own text is no part of its value); "<f", "<v" and "<is>" are kept to tell an
+# empty element from none
 _CELL = re.compile(r'<c r="([A-Z]{1,3})([0-9]+)"(?: s="([0-9]+)")?(?: t="([A-Za-z]+)")?'
-                   r'(?:/>|>(?:(<f)([^<>]*?)(?:/>|>([^<]*)</f>))?(?:(<v)(?:/>|>([^<]*)</v>))?'
-                   r'</c>)')
+                   r'(?:/>|>[ \t\n]*(?:(<f)([^<>]*?)(?:/>|>([^<]*)</f>)[ \t\n]*)?'
+                   r'(?:(<v)(?:/>|>([^<]*)</v>)[ \t\n]*)?'
+                   r'(?:(<is>)[ \t\n]*<t(?: xml:space="preserve")?(?:/>|>([^<]*)</t>)[ \t\n]*'
+                   r'</is>[ \t\n]*)?</c>)')
 _ATTRIBUTE = re.compile(r"""([A-Za-z_][\w.\-]*)\s*=\s*(?:"([^"]*)"|'([^']*)')""")
 _ENTITY = re.compile(r"&(#x[0-9A-Fa-f]+|#[0-9]+|amp|lt|gt|quot|apos);")
 _NAMED_ENTITIES = {"amp": "&", "lt": "<", "gt": ">", "quot": '"', "apos": "'"}
@@ -511,17 +515,17 @@ def _scan_rows(text: str, ws: Worksheet, strings: list[str], date_styles: frozen
     cells = _CELL.findall(text)
     if len(cells) != text.count("<c") or "<!" in text or "<?" in text or "xmlns" in text:
         raise _NotScanned("a cell as the scan does not read it")
-    for letters, digits, style, kind, f_open, f_attrs, f_text, v_open, v_text in cells:
+    for (letters, digits, style, kind, f_open, f_attrs, f_text, v_open, v_text, is_open,
+         is_text) in cells:
         if "&" in f_attrs:
             raise _NotScanned("an entity in a formula's attributes")
         formula = None if not f_open else (
             f_text if "&" not in f_text else _unescaped(f_text),
             _attributes(f_attrs).get("t") if f_attrs else None)
-        if kind == "inlineStr" and formula is None:
-            raise _NotScanned("an inline string")
         _put(ws, int(digits), column_index(letters), letters + digits, kind or "n", style or 0,
              formula, None if not v_open else v_text if "&" not in v_text else
-             _unescaped(v_text), None, strings, date_styles, part, unmodelled)
+             _unescaped(v_text), None if not is_open else is_text if "&" not in is_text else
+             _unescaped(is_text), strings, date_styles, part, unmodelled)
 
 
 def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int], part: str,
