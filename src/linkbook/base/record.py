@@ -204,8 +204,8 @@ class Sweep(Part):
 
     def cells(self, key: str) -> list[str]:
         """The cells of column `key`, top to bottom."""
-        letter = self.columns[key]
-        return [f"{letter}{r}" for r in range(self.rows[0], self.rows[1] + 1)]
+        from .xlsx import column_cells
+        return column_cells(self.columns[key], self.rows[0], self.rows[1])
 
 
 @_frozen

@@ -8,7 +8,11 @@ book's verify; verify needs only what this module reads. The view gives what ope
 `ws.cell(row, col)`, `ws._cells`, `ws.max_row`, `ws.max_column`; `cell.value`,
 `cell.data_type`, `cell.row`, `cell.column`, `cell.coordinate`, `cell.parent`), with openpyxl's
 own rules: numbers with a '.', 'e' or 'E' are floats, others ints; a formula cell's value is
-'=' and its text; shared strings lose 'x005F_'. A book with what the view does not model (a
+'=' and its text; shared strings lose 'x005F_'. A sheet holds its cells by column (Column:
+lists of rows, values, kinds and stored values, no object per cell); a cell object is made when
+asked for, and `ws._cells` makes every one (for tests and small sheets). A sheet part is scanned by
+regular expressions where it is written as the writers write it, else read element by element
+(both read it alike: tests/test_sheet_scan.py). A book with what the view does not model (a
 shared, array or data-table formula, a number styled as a date, a chart sheet, a cell without
 its address) raises Unsupported, after the whole book has been read: the caller loads it with
 openpyxl.
@@ -25,6 +29,8 @@ import functools
 import math
 import re
 import zipfile
+from array import array
+from bisect import bisect_left
 from dataclasses import dataclass
 from pathlib import PurePosixPath
 from xml.etree.ElementTree import iterparse
@@ -108,28 +114,127 @@ class Cell:
         return f"{column_letter(self.column)}{self.row}"
 
 
+class Column:
+    """The cells of one column of a sheet, in row order, held as parallel lists (no object per
+    cell: a big book holds hundreds of thousands): each cell's row, value and kind (openpyxl's
+    data_type), and what a formula cell stores with it (its `<v>`: the number, or (kind, text)
+    for any other kind; None where it stores nothing or is no formula)."""
+    __slots__ = ("rows", "values", "kinds", "stored", "ordered")
+
+    def __init__(self):
+        self.rows = array("i")
+        self.values: list = []
+        self.kinds: list[str] = []
+        self.stored: list = []
+        self.ordered = True
+
+    def append(self, row: int, value, kind: str, stored=None) -> None:
+        if self.rows and row <= self.rows[-1]:
+            self.ordered = False
+        self.rows.append(row)
+        self.values.append(value)
+        self.kinds.append(kind)
+        self.stored.append(stored)
+
+    def finish(self) -> None:
+        """Rows in order, one cell each: a cell written again (the same address twice) is the
+        last one written, as a dict keyed by address holds it."""
+        if self.ordered:
+            return
+        last = {row: i for i, row in enumerate(self.rows)}
+        keep = [last[row] for row in sorted(last)]
+        self.rows = array("i", [self.rows[i] for i in keep])
+        self.values = [self.values[i] for i in keep]
+        self.kinds = [self.kinds[i] for i in keep]
+        self.stored = [self.stored[i] for i in keep]
+        self.ordered = True
+
+    def index(self, row: int) -> int | None:
+        i = bisect_left(self.rows, row)
+        return i if i < len(self.rows) and self.rows[i] == row else None
+
+
+class HeldCell:
+    """A cell of a Column, made when asked for: its value and kind are read from (and written
+    to) the column."""
+    __slots__ = ("parent", "row", "column", "_held", "_i")
+
+    def __init__(self, parent, row: int, column: int, held: Column, i: int):
+        self.parent, self.row, self.column, self._held, self._i = parent, row, column, held, i
+
+    @property
+    def value(self):
+        return self._held.values[self._i]
+
+    @value.setter
+    def value(self, value) -> None:
+        self._held.values[self._i] = value
+
+    @property
+    def data_type(self) -> str:
+        return self._held.kinds[self._i]
+
+    @data_type.setter
+    def data_type(self, kind: str) -> None:
+        self._held.kinds[self._i] = kind
+
+    @property
+    def coordinate(self) -> str:
+        return f"{column_letter(self.column)}{self.row}"
+
+
 class Worksheet:
     def __init__(self, title: str):
         self.title = title
-        self._cells: dict[tuple[int, int], Cell] = {}
-        # (row, col) -> (t, text) of the value a formula cell stores with it (its `<v>`), what a
-        # reader that does not calculate shows; formula cells without one are left out
-        self.stored: dict[tuple[int, int], tuple[str, str]] = {}
+        self.held_columns: dict[int, Column] = {}
 
-    def __getitem__(self, coordinate: str) -> Cell:
+    def __getitem__(self, coordinate: str) -> Cell | HeldCell:
         return self.cell(*coordinate_to_tuple(coordinate))
 
-    def cell(self, row: int, column: int) -> Cell:
-        found = self._cells.get((row, column))
-        return found if found is not None else Cell(self, row, column, None, "n")
+    def cell(self, row: int, column: int) -> Cell | HeldCell:
+        held = self.held_columns.get(column)
+        i = None if held is None else held.index(row)
+        return Cell(self, row, column, None, "n") if i is None else \
+            HeldCell(self, row, column, held, i)
+
+
+    def stored_items(self):
+        """((row, column), (kind, text)) of every formula cell that stores a value."""
+        for col, held in self.held_columns.items():
+            for row, kind, stored in zip(held.rows, held.kinds, held.stored):
+                if stored is not None:
+                    yield (row, col), (stored if type(stored) is tuple else ("n", stored))
+
+    @property
+    def _cells(self) -> dict[tuple[int, int], HeldCell]:
+        """openpyxl's {(row, column): cell}, made on demand (a cell object each: for tests and
+        small sheets, not for a big book's every cell)."""
+        return {(row, col): HeldCell(self, row, col, held, i)
+                for col, held in self.held_columns.items() for i, row in enumerate(held.rows)}
 
     @property
     def max_row(self) -> int:
-        return max((r for r, _ in self._cells), default=1)
+        return max((held.rows[-1] for held in self.held_columns.values()), default=1)
 
     @property
     def max_column(self) -> int:
-        return max((c for _, c in self._cells), default=1)
+        return max(self.held_columns, default=1)
+
+
+# one text object for each kind a cell can have, not one a cell
+KINDS = {kind: kind for kind in ("n", "s", "b", "e", "d", "str", "inlineStr")}
+
+
+def column_entries(ws):
+    """(column, rows, values, data_types) of each column of a worksheet that holds cells, the
+    rows in order: the view's columns as it holds them, or an openpyxl worksheet's cells."""
+    if isinstance(ws, Worksheet):
+        return ((col, held.rows, held.values, held.kinds)
+                for col, held in ws.held_columns.items())
+    by_column: dict[int, list] = {}
+    for (row, col), c in sorted(ws._cells.items(), key=lambda item: item[0][::-1]):
+        by_column.setdefault(col, []).append((row, c.value, c.data_type))
+    return ((col, *map(list, zip(*cells))) for col, cells in by_column.items())
 
 
 @dataclass(frozen=True)
@@ -178,8 +283,7 @@ def read(path) -> Workbook:
         worksheets = []
         for title, part in sheets:
             ws = Worksheet(title)
-            with zf.open(part) as f:
-                _read_cells(f, ws, strings, date_styles, part, unmodelled)
+            _read_part(zf, part, ws, strings, date_styles, unmodelled)
             worksheets.append(ws)
     if unmodelled:
         raise Unsupported(unmodelled[0])
@@ -288,13 +392,148 @@ def _date_styles(zf: zipfile.ZipFile) -> frozenset[int]:
                      or (fmt in codes and _DATE_LETTERS.search(_NOT_DATE_PARTS.sub("", codes[fmt]))))
 
 
+def _read_part(zf: zipfile.ZipFile, part: str, ws: Worksheet, strings: list[str],
+               date_styles: frozenset[int], unmodelled: list[str]) -> None:
+    """The cells of one sheet part into `ws`: scanned (_scan_cells) where the part is written
+    as the scan reads it, else read element by element (_read_cells) from the start again."""
+    noted = len(unmodelled)
+    try:
+        with zf.open(part) as f:
+            _scan_cells(f, ws, strings, date_styles, part, unmodelled)
+        return
+    except Refused:     # the part is well-formed up to the cell refused: the elements say so too
+        raise
+    except Exception:   # not as the scan reads it (or damaged): the elements say what it holds
+        ws.held_columns.clear()
+        del unmodelled[noted:]
+    with zf.open(part) as f:
+        _read_cells(f, ws, strings, date_styles, part, unmodelled)
+
+
+# The scan: a sheet part as the writers of .xlsx write it (openpyxl, LibreOffice, Gnumeric,
+# Excel), read by regular expressions over its text instead of an element object per cell; expat
+# checks the text is well-formed XML as it goes (a damaged part is then read by _read_cells,
+# which says what is wrong as before). What the scan does not read exactly as ElementTree would
+# (an inline string of runs, a comment, CDATA, a namespace prefix, an encoding other than UTF-8,
+# a carriage return, attributes in another order or form) stops it: the part is then read
+# element by element.
+SCAN_CHUNK = 1 << 16      # text held at a time: the cells of a few hundred rows
+# a cell as the writers write it: r, s and t in that order, a formula (its attributes, its text),
+# a stored value and an inline string of one text, white space between them (as Gnumeric writes
+# them; a cell's own text is no part of its value); "<f", "<v" and "<is>" are kept to tell an
+# empty element from none
+_CELL = re.compile(r'<c r="([A-Z]{1,3})([0-9]+)"(?: s="([0-9]+)")?(?: t="([A-Za-z]+)")?'
+                   r'(?:/>|>[ \t\n]*(?:(<f)([^<>]*?)(?:/>|>([^<]*)</f>)[ \t\n]*)?'
+                   r'(?:(<v)(?:/>|>([^<]*)</v>)[ \t\n]*)?'
+                   r'(?:(<is>)[ \t\n]*<t(?: xml:space="preserve")?(?:/>|>([^<]*)</t>)[ \t\n]*'
+                   r'</is>[ \t\n]*)?</c>)')
+_ATTRIBUTE = re.compile(r"""([A-Za-z_][\w.\-]*)\s*=\s*(?:"([^"]*)"|'([^']*)')""")
+_ENTITY = re.compile(r"&(#x[0-9A-Fa-f]+|#[0-9]+|amp|lt|gt|quot|apos);")
+_NAMED_ENTITIES = {"amp": "&", "lt": "<", "gt": ">", "quot": '"', "apos": "'"}
+_MAIN_DEFAULT = f'xmlns="{MAIN[1:-1]}"'
+_DECLARATION = re.compile(r"""<\?xml[^?]*?encoding\s*=\s*["']([^"']*)["']""")
+_OTHER_CELLS = re.compile(r"<c[\s/>]|<row[\s/>]")
+
+
+class _NotScanned(Exception):
+    """The part holds what the scan does not read exactly as ElementTree does."""
+
+
+def _unescaped(text: str) -> str:
+    """Character data (holding a '&') with XML's five entities and character references
+    replaced."""
+    def one(m):
+        name = m[1]
+        if name[0] == "#":
+            return chr(int(name[2:], 16) if name[1] in "xX" else int(name[1:]))
+        return _NAMED_ENTITIES[name]
+    return _ENTITY.sub(one, text)
+
+
+def _attributes(text: str) -> dict[str, str]:
+    found = {}
+    for name, double, single in _ATTRIBUTE.findall(text):
+        found[name] = double if double or not single else single
+    return found
+
+
+def _scan_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int], part: str,
+                unmodelled: list[str]) -> None:
+    """The cells of one sheet part into `ws`, scanned (see SCAN_CHUNK); _NotScanned, or expat's
+    error for a part that is not well-formed XML, where the scan does not apply."""
+    import codecs
+    from xml.parsers import expat
+    checker, decoder = expat.ParserCreate(), codecs.getincrementaldecoder("utf-8")()
+    head, body, where = "", "", "head"
+    for chunk in iter(lambda: f.read(SCAN_CHUNK), b""):
+        checker.Parse(chunk, False)
+        text = decoder.decode(chunk)
+        if "\r" in text:
+            raise _NotScanned("a carriage return")
+        if where == "head":
+            head += text
+            start = head.find("<sheetData>")
+            if start < 0:
+                continue
+            _check_head(head[:start])
+            body, where = head[start + len("<sheetData>"):], "body"
+        else:
+            body += text
+        end = body.rfind("</row>")
+        if end >= 0:
+            _scan_rows(body[:end + len("</row>")], ws, strings, date_styles, part, unmodelled)
+            body = body[end + len("</row>"):]
+    checker.Parse(b"", True)
+    if where == "head":
+        raise _NotScanned("no <sheetData> element")
+    end = body.find("</sheetData>")
+    if end < 0:
+        raise _NotScanned("no end of <sheetData>")
+    _scan_rows(body[:end], ws, strings, date_styles, part, unmodelled)
+    if _OTHER_CELLS.search(body, end) or "xmlns" in body[end:]:
+        raise _NotScanned("cells after <sheetData>")
+    for held in ws.held_columns.values():
+        held.finish()
+
+
+def _check_head(head: str) -> None:
+    """The part up to <sheetData>: UTF-8, the main namespace the default one and declared once,
+    no cells and nothing that makes the text read otherwise (a DOCTYPE)."""
+    declared = _DECLARATION.match(head)
+    if head.startswith("\ufeff") or (declared and declared[1].lower().replace("-", "") != "utf8"):
+        raise _NotScanned("an encoding other than UTF-8")
+    if head.count("xmlns=") != 1 or _MAIN_DEFAULT not in head or "<!" in head \
+            or _OTHER_CELLS.search(head) or not re.search(r"<worksheet[\s>]", head):
+        raise _NotScanned("namespaces the scan does not read")
+
+
+def _scan_rows(text: str, ws: Worksheet, strings: list[str], date_styles: frozenset[int],
+               part: str, unmodelled: list[str]) -> None:
+    """The cells in `text` (whole rows of <sheetData>) into `ws`: every element that starts
+    with '<c' a cell as _CELL reads it, and nothing else to read (a comment, CDATA, a namespace
+    declaration)."""
+    cells = _CELL.findall(text)
+    if len(cells) != text.count("<c") or "<!" in text or "<?" in text or "xmlns" in text:
+        raise _NotScanned("a cell as the scan does not read it")
+    for (letters, digits, style, kind, f_open, f_attrs, f_text, v_open, v_text, is_open,
+         is_text) in cells:
+        if "&" in f_attrs:
+            raise _NotScanned("an entity in a formula's attributes")
+        formula = None if not f_open else (
+            f_text if "&" not in f_text else _unescaped(f_text),
+            _attributes(f_attrs).get("t") if f_attrs else None)
+        _put(ws, int(digits), column_index(letters), letters + digits, kind or "n", style or 0,
+             formula, None if not v_open else v_text if "&" not in v_text else
+             _unescaped(v_text), None if not is_open else is_text if "&" not in is_text else
+             _unescaped(is_text), strings, date_styles, part, unmodelled)
+
+
 def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int], part: str,
                 unmodelled: list[str]) -> None:
-    """The cells of one sheet part into `ws`; what the view does not model is noted in
-    `unmodelled` and reading goes on, so that all of the book is checked."""
+    """The cells of one sheet part into `ws`, element by element; what the view does not model
+    is noted in `unmodelled` and reading goes on, so that all of the book is checked."""
     c_tag, v_tag, f_tag, is_tag = f"{MAIN}c", f"{MAIN}v", f"{MAIN}f", f"{MAIN}is"
     row_tag = f"{MAIN}row"
-    cells = ws._cells
     for _, el in iterparse(f):
         tag = el.tag
         if tag == row_tag:
@@ -306,42 +545,57 @@ def _read_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
         m = _COORDINATE.match(address) if address else None
         if m is None:
             raise Unsupported("a cell without its address")
-        row, col = int(m[2]), column_index(m[1])
-        kind = el.get("t", "n")
-        formula = el.find(f_tag)
-        if formula is not None:
-            text = formula.text or ""
-            if len(text) > FORMULA_LENGTH_LIMIT or text.count("(") > FORMULA_NESTING_LIMIT:
-                _check_formula(text, part, ws.title, address)
-            if formula.get("t") in ("shared", "array", "dataTable"):
-                unmodelled.append(f"{ws.title}!{address}: a {formula.get('t')} formula")
-            cells[(row, col)] = Cell(ws, row, col, "=" + text, "f")
-            stored = el.findtext(v_tag)
-            if stored or kind == "str":     # an empty <v> stores nothing, but as empty text
-                ws.stored[(row, col)] = (
-                    kind, _shared(strings, stored, part, ws.title, address) if kind == "s"
-                    else _number(stored, part, ws.title, address) if kind == "n"
-                    else stored or "")
-            continue
-        if kind == "inlineStr":
-            child = el.find(is_tag)
-            value, kind = (_text(child), "s") if child is not None else (None, "n")
+        formula, kind = el.find(f_tag), el.get("t", "n")
+        inline = el.find(is_tag) if kind == "inlineStr" and formula is None else None
+        _put(ws, int(m[2]), column_index(m[1]), address, kind, el.get("s", 0),
+             None if formula is None else (formula.text or "", formula.get("t")),
+             el.findtext(v_tag), _text(inline) if inline is not None else None,
+             strings, date_styles, part, unmodelled)
+    for held in ws.held_columns.values():
+        held.finish()
+
+
+def _put(ws: Worksheet, row: int, col: int, address: str, kind: str, style,
+         formula: tuple | None, stored: str | None, inline: str | None, strings: list[str],
+         date_styles: frozenset[int], part: str, unmodelled: list[str]) -> None:
+    """One cell into `ws`, from what its element holds: its address (row, column and as
+    written), its attributes t and s, its formula (text and t) or None, the text of its <v>
+    (None without one) and of its inline string."""
+    held = ws.held_columns.get(col)
+    if held is None:
+        held = ws.held_columns[col] = Column()
+    if formula is not None:
+        text, shared = formula
+        if len(text) > FORMULA_LENGTH_LIMIT or text.count("(") > FORMULA_NESTING_LIMIT:
+            _check_formula(text, part, ws.title, address)
+        if shared in ("shared", "array", "dataTable"):
+            unmodelled.append(f"{ws.title}!{address}: a {shared} formula")
+        if stored or kind == "str":     # an empty <v> stores nothing, but as empty text
+            stored = (_number(stored, part, ws.title, address) if kind == "n" else
+                      (kind, _shared(strings, stored, part, ws.title, address)
+                       if kind == "s" else stored or ""))
         else:
-            value = el.findtext(v_tag) or None
-            if value is not None:
-                if kind == "n":
-                    if int(el.get("s", 0)) in date_styles:
-                        unmodelled.append(f"{ws.title}!{address}: a number shown as a date")
-                    value = _number(value, part, ws.title, address)
-                elif kind == "s":
-                    value = _shared(strings, value, part, ws.title, address)
-                elif kind == "b":
-                    value = bool(_index(value, part, ws.title, address))
-                elif kind == "str":
-                    kind = "s"
-                elif kind == "d":
-                    unmodelled.append(f"{ws.title}!{address}: an ISO 8601 date")
-        cells[(row, col)] = Cell(ws, row, col, value, kind)
+            stored = None
+        held.append(row, "=" + text, "f", stored)
+        return
+    if kind == "inlineStr":
+        value, kind = (inline, "s") if inline is not None else (None, "n")
+    else:
+        value = stored or None
+        if value is not None:
+            if kind == "n":
+                if int(style) in date_styles:
+                    unmodelled.append(f"{ws.title}!{address}: a number shown as a date")
+                value = _number(value, part, ws.title, address)
+            elif kind == "s":
+                value = _shared(strings, value, part, ws.title, address)
+            elif kind == "b":
+                value = bool(_index(value, part, ws.title, address))
+            elif kind == "str":
+                kind = "s"
+            elif kind == "d":
+                unmodelled.append(f"{ws.title}!{address}: an ISO 8601 date")
+    held.append(row, value, KINDS.get(kind, kind))
 
 
 def _number(text: str, part: str, title: str, address: str) -> int | float:
@@ -552,6 +806,23 @@ def column_letter(col: int) -> str:
             out = chr(65 + r) + out
         found = _LETTERS[col] = out
     return found
+
+
+def column_cells(letter: str, first: int, last: int) -> list[str]:
+    """The addresses down column `letter` from row `first` to `last` ('B5', 'B6', …); every
+    list of one column's rows shares its texts (verify names each cell in several checks, and
+    again at each input set: one text a cell, not one a naming)."""
+    return list(_column_cells(letter, first, last))
+
+
+@functools.lru_cache(maxsize=1024)
+def _column_cells(letter: str, first: int, last: int) -> tuple[str, ...]:
+    return tuple(f"{letter}{r}" for r in range(first, last + 1))
+
+
+def forget_column_cells() -> None:
+    """Let go of the addresses column_cells holds (verify, done with a book)."""
+    _column_cells.cache_clear()
 
 
 # Characters no XML 1.0 document can hold, escaped or not: the C0 controls but tab, LF and CR

@@ -45,6 +45,40 @@ class Mismatch:
     got: object
 
 
+class JudgedCells:
+    """The (sheet, cell) keys a check judged, held as a list of cells a sheet (a big book's
+    checks judge hundreds of thousands: a set would hold a tuple each). Iterated and compared
+    as the set of its keys."""
+    __slots__ = ("by_sheet",)
+
+    def __init__(self, keys=()):
+        self.by_sheet: dict[str, list[str]] = {}
+        self.update(keys)
+
+    def add(self, key: tuple[str, str]) -> None:
+        self.by_sheet.setdefault(key[0], []).append(key[1])
+
+    def update(self, keys) -> None:
+        for key in keys:
+            self.add(key)
+
+    def extend(self, sheet: str, cells: list[str]) -> None:
+        self.by_sheet.setdefault(sheet, []).extend(cells)
+
+    def __iter__(self):
+        for sheet, cells in self.by_sheet.items():
+            for cell in dict.fromkeys(cells):
+                yield sheet, cell
+
+    def __len__(self) -> int:
+        return sum(len(set(cells)) for cells in self.by_sheet.values())
+
+    def __eq__(self, other) -> bool:
+        return set(self) == set(other)
+
+    __hash__ = None
+
+
 @dataclass
 class Check:
     """One column (or grid, or block) of formula cells compared with the reference."""
@@ -66,7 +100,7 @@ class Check:
     # one line per stretch of rows where the book's method reaches another assembly than the
     # reference's continuation (judge.note_other_assembly): named, not passed
     assembly: list[str] = field(default_factory=list)
-    judged: set[tuple[str, str]] = field(default_factory=set, repr=False)  # (sheet, cell)
+    judged: JudgedCells = field(default_factory=JudgedCells, repr=False)  # (sheet, cell)
 
     @property
     def ok(self) -> bool:
@@ -268,7 +302,7 @@ def _agreeing(check: Check, sheet: str, cells: list[str], got: list, expected: n
     if agree.any():
         check.cells += int(agree.sum())
         check.max_abs = max(check.max_abs, float(diff[agree].max()))
-        check.judged.update((sheet, cells[i]) for i in np.flatnonzero(agree).tolist())
+        check.judged.extend(sheet, [cells[i] for i in np.flatnonzero(agree).tolist()])
     return np.flatnonzero(~agree).tolist()
 
 

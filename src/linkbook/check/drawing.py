@@ -10,6 +10,7 @@ import numpy as np
 from . import reference as generic
 from ..base import sheets as layout
 from ..base.record import Frame, Series
+from ..base.xlsx import column_cells
 from .checks import Check, Mismatch, compare_exact, expected_of
 from .context import Judging
 
@@ -276,7 +277,7 @@ def _check_mapped(j: Judging, sheet: str, series: Series, joint_values: dict, ce
     out = []
     for i, axis in enumerate("xy"):
         letter = series.columns[i]
-        cells = [f"{letter}{r}" for r in range(first, last + 1)]
+        cells = column_cells(letter, first, last)
         slope, dead = None, None
         if series.kind == "links":
             world, dead = np.full(len(cells), np.nan), np.zeros(len(cells), dtype=bool)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..base.sheets import FORCES_SHEET
+from ..base.xlsx import column_cells
 from .checks import Check, unit_scale
 from .reading import UnusableFile
 from .forces import LENGTH_UNITS, SINGULAR, forces
@@ -85,7 +86,7 @@ def check_forces(j) -> None:
     _require_every_column(table, ref, COUPLE_SHOWN * scale * j.size * metres)
     (r0, r1), now = table.rows, table.current_row
     sheet = table.sheet
-    j.run(sheet, mech.input_column, sheet, [f"A{r}" for r in range(r0, r1 + 1)], j.angles,
+    j.run(sheet, mech.input_column, sheet, column_cells("A", r0, r1), j.angles,
           mech.input_unit)
     j.run(sheet, mech.input_column, sheet, [f"A{now}"], np.array([j.angle]), mech.input_unit)
     dead = _singular(ref, j.ref.get("dead_centre"))
@@ -100,7 +101,7 @@ def check_forces(j) -> None:
         else:                           # a centre of mass: a length, an acceleration
             size, rate = unit_scale(unit, j.size), (rate2 if unit != "length" else 1.0)
         for block, cells, expected, sine, singular in (
-                (FORCES_SHEET, [f"{letter}{r}" for r in range(r0, r1 + 1)], ref[key],
+                (FORCES_SHEET, column_cells(letter, r0, r1), ref[key],
                  sines if force else j.ref.get("sine"), dead),
                 ("forces now", [f"{letter}{now}"], one[key],
                  sines_now if force else j.one.get("sine"), dead_now)):
@@ -214,7 +215,7 @@ def _book_rows(j):
 
     def values(key: str) -> np.ndarray:
         letter = table.columns[key]
-        got = j.got(table.sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)])
+        got = j.got(table.sheet, column_cells(letter, r0, r1))
         return np.array([float(v) if isinstance(v, (int, float)) and not isinstance(v, bool)
                          and not j.rules.is_error(v) else np.nan for v in got])
     return values

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import reference as generic
+from ..base.xlsx import column_cells
 from ..language.domain import InputError, check_lengths_together, check_value
 from .checks import Check, Mismatch
 from .context import Judging, slope_of
@@ -56,7 +57,7 @@ def check_grid(j: Judging) -> list[Check]:
         slope = slope_of(solver, j.params, angles, solver.mechanism.grid[1], "length", param,
                          adjust)
         for k, letter in enumerate(block.columns):
-            cells = [f"{letter}{r}" for r in range(block.rows[0], block.rows[1] + 1)]
+            cells = column_cells(letter, block.rows[0], block.rows[1])
             j.compare(c, block.sheet, cells, expected[:, k], "length",
                       lambda i, k=k, slope=slope: slope(i, k))
         checks.append(c)

@@ -15,6 +15,7 @@ import numpy as np
 from . import reference as generic
 from ..base import sheets as layout
 from ..base.record import BuildRecord
+from ..base.xlsx import column_cells
 from .checks import ABS_TOL, Check, Mismatch, Rules, column_unit, expected_of
 from .context import Judging, Reference, motion_rates
 from .reading import input_at, input_column, inputs_of, mechanism_size
@@ -162,7 +163,7 @@ def _check_numbers_only(j: Judging) -> list[Check]:
         first, last = column.rows
         if column.sweep is not None:
             letter, (r0, r1) = sweep.columns[column.sweep], sweep.rows
-            source_sheet, sources = sweep.sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)]
+            source_sheet, sources = sweep.sheet, column_cells(letter, r0, r1)
             name = column.sweep
         else:
             source_sheet = pos.sheet
@@ -170,7 +171,7 @@ def _check_numbers_only(j: Judging) -> list[Check]:
                        for joint in column.joints]
             name = f"joints {'xy'[column.axis]}"
         c = Check(column.sheet, f"{name} numbers only", j.size)
-        cells = [f"{column.column}{r}" for r in range(first, last + 1)][:len(sources)]
+        cells = column_cells(column.column, first, last)[:len(sources)]
         # each column and its sources looked up together, not cell by cell
         wants = iter(j.got(source_sheet, [s for s in sources if s]))
         for cell, got, source in zip(cells, j.got(column.sheet, cells), sources):
@@ -240,7 +241,7 @@ def _check_motion(j: Judging) -> None:
     def slope(inputs, key, unit):
         return j.slope(inputs, key, unit, motion=True)
 
-    j.run(sheet, mech.input_column, sheet, [f"A{r}" for r in range(r0, r1 + 1)], j.angles,
+    j.run(sheet, mech.input_column, sheet, column_cells("A", r0, r1), j.angles,
           mech.input_unit)
     j.run(sheet, mech.input_column, sheet, [f"A{now}"], now_angle, mech.input_unit)
     for key, letter in motion.columns.items():
@@ -248,7 +249,7 @@ def _check_motion(j: Judging) -> None:
         # a determinant is a position measured (an area's scale is S², see unit_scale)
         rate = {ACCEL: rate2, ANG_ACCEL: rate2, AREA: 1.0, LENGTH: 1.0, RATIO: 1.0}.get(unit,
                                                                                     rate1)
-        j.run(sheet, key, sheet, [f"{letter}{r}" for r in range(r0, r1 + 1)],
+        j.run(sheet, key, sheet, column_cells(letter, r0, r1),
               expected_of(j.ref, key), unit, slope(j.angles, key, unit), rate,
               j.ref.get("dead_centre"), j.ref.get("sine"))
         j.run("motion now", key, sheet, [f"{letter}{now}"], expected_of(j.one, key), unit,

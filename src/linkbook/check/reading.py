@@ -121,8 +121,95 @@ def input_at(ws, cell: str, what: str, is_angle: bool) -> float:
 
 
 def formula_cells(wb) -> set[tuple[str, str]]:
-    return {(ws.title, c.coordinate) for ws in wb.worksheets for c in ws._cells.values()
-            if c.data_type == "f"}
+    """(sheet, cell) of every formula cell of the book."""
+    return set(FormulaCells(wb))
+
+
+class FormulaCells:
+    """Formula cells of a book as one boolean grid a sheet (indexed by row and column, from 1):
+    a big book holds hundreds of thousands, which a set of (sheet, cell) keys would hold as two
+    objects each. Iterated in cell order."""
+
+    def __init__(self, wb=None, grids: dict[str, np.ndarray] | None = None):
+        from ..base.xlsx import column_entries
+        self.grids = {} if grids is None else grids
+        for ws in (wb.worksheets if wb is not None else ()):
+            rows, cols = [], []
+            for col, held_rows, _, kinds in column_entries(ws):
+                found = [row for row, kind in zip(held_rows, kinds) if kind == "f"]
+                rows += found
+                cols += [col] * len(found)
+            if rows:
+                grid = self.grids[ws.title] = np.zeros((max(rows) + 1, max(cols) + 1), bool)
+                grid[rows, cols] = True
+
+    def __len__(self) -> int:
+        return sum(int(grid.sum()) for grid in self.grids.values())
+
+    def __iter__(self):
+        from ..base.xlsx import column_letter
+        for sheet in sorted(self.grids):
+            cols, rows = np.nonzero(self.grids[sheet].T)    # column by column, down each
+            for col, row in zip(cols.tolist(), rows.tolist()):
+                yield sheet, f"{column_letter(col)}{row}"
+
+    def holds(self, sheet: str, row: int, col: int) -> bool:
+        grid = self.grids.get(sheet)
+        return grid is not None and row < grid.shape[0] and col < grid.shape[1] \
+            and bool(grid[row, col])
+
+    def __contains__(self, key: tuple[str, str]) -> bool:
+        from ..base.xlsx import coordinate_to_tuple
+        return self.holds(key[0], *coordinate_to_tuple(key[1]))
+
+    def judged(self, checks) -> tuple[set[tuple[str, str]], FormulaCells]:
+        """What `checks` judged, parted: the cells that hold no formula here, and the formula
+        cells."""
+        by_sheet: dict[str, list[str]] = {}
+        for check in checks:
+            for sheet, cells in check.judged.by_sheet.items():
+                by_sheet.setdefault(sheet, []).extend(cells)
+        elsewhere, grids = set(), {}
+        for sheet, cells in by_sheet.items():
+            rows, cols = places(cells)
+            grid = self.grids.get(sheet, np.zeros((0, 0), bool))
+            inside = (rows < grid.shape[0]) & (cols < grid.shape[1])
+            formula = np.zeros(len(cells), bool)
+            formula[inside] = grid[rows[inside], cols[inside]]
+            elsewhere.update((sheet, cells[i]) for i in np.flatnonzero(~formula).tolist())
+            if formula.any():
+                grids[sheet] = np.zeros_like(grid)
+                grids[sheet][rows[formula], cols[formula]] = True
+        return elsewhere, FormulaCells(grids=grids)
+
+    def without(self, other: FormulaCells) -> FormulaCells:
+        """These cells but those of `other`."""
+        return FormulaCells(grids={sheet: grid & ~other.grids[sheet] if sheet in other.grids
+                                   else grid for sheet, grid in self.grids.items()})
+
+
+def places(cells: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """The rows and columns of cell addresses, as coordinate_to_tuple reads each: plain ones
+    ('B7', as the checks name cells) read all at once as arrays of characters, any other
+    spelling by coordinates_to_lists."""
+    from ..base.xlsx import coordinates_to_lists
+    text = np.array(cells if cells else [""])
+    if text.dtype.kind == "U" and 2 <= text.dtype.itemsize // 4 <= 12:
+        codes = text.view(np.uint32).reshape(len(text), -1)
+        letter, digit = (codes >= 65) & (codes <= 90), (codes >= 48) & (codes <= 57)
+        letters, digits = letter.sum(axis=1), digit.sum(axis=1)
+        at = np.arange(codes.shape[1])
+        # letters first, then digits, then nothing (the padding of shorter addresses)
+        in_digits = (at >= letters[:, None]) & (at < (letters + digits)[:, None])
+        if ((letters >= 1) & (letters <= 3) & (digits >= 1)).all() \
+                and (letter == (at < letters[:, None])).all() and (digit == in_digits).all():
+            rows, cols = np.zeros(len(text), np.int64), np.zeros(len(text), np.int64)
+            for j in range(codes.shape[1]):
+                rows = np.where(digit[:, j], rows * 10 + codes[:, j] - 48, rows)
+                cols = np.where(letter[:, j], cols * 26 + codes[:, j] - 64, cols)
+            return rows, cols
+    rows, cols = coordinates_to_lists(cells) if cells else ([], [])
+    return np.asarray(rows, np.int64), np.asarray(cols, np.int64)
 
 
 def cell_order(key: tuple[str, str]) -> tuple:
@@ -131,21 +218,21 @@ def cell_order(key: tuple[str, str]) -> tuple:
     return key[0], col, row
 
 
-def stored_values(wb, path, cells: set[tuple[str, str]]) -> dict[tuple[str, str], object]:
+def stored_values(wb, path, cells: FormulaCells) -> dict[tuple[str, str], object]:
     """(sheet, cell) -> the value each of `cells` (formula cells) stores with its formula (the
     `<v>`): what LibreOffice with default settings, openpyxl's data_only and pandas show. Numbers
     as float, errors as office.CellError, text as str; a cell that stores none is left out."""
     from ..base.xlsx import CellError
     from ..engine.office import read_values
     from ..base.xlsx import column_letter
-    if not all(hasattr(ws, "stored") for ws in wb.worksheets):   # openpyxl read the book
+    if not all(hasattr(ws, "stored_items") for ws in wb.worksheets):   # openpyxl read it
         return {k: v for k, v in read_values(path).items() if k in cells}
     out = {}
     for ws in wb.worksheets:
-        for (row, col), (kind, text) in ws.stored.items():
-            key = (ws.title, f"{column_letter(col)}{row}")
-            if key not in cells:
+        for (row, col), (kind, text) in ws.stored_items():
+            if not cells.holds(ws.title, row, col):
                 continue
+            key = (ws.title, f"{column_letter(col)}{row}")
             if kind == "e":
                 out[key] = CellError(text)
             elif kind == "b":

@@ -10,6 +10,7 @@ import numpy as np
 from . import reference as generic
 from ..base import sheets as layout
 from ..base.sheets import summary_prefix
+from ..base.xlsx import column_cells
 from ..language.model import RAD
 from .checks import EDGE_SLOPE, ROUNDING, Check, compare_exact
 from .context import Judging
@@ -27,7 +28,7 @@ def check_assembly(j: Judging) -> list[Check]:
     for key, expected in (("closes", [1.0 if c else 0.0 for c in closes]),
                           ("gap_from", starts), ("gap_to", ends)):
         c = Check(layout.SWEEP, key, j.size)
-        cells = [f"{cols[key]}{r}" for r in range(r0, r1 + 1)]
+        cells = column_cells(cols[key], r0, r1)
         unit = "" if key == "closes" else solver.mechanism.input_unit
         compare_exact(c, sweep.sheet, cells, j.got(sweep.sheet, cells), expected,
                       units=[unit] * len(cells))

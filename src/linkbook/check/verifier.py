@@ -15,12 +15,13 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..base.pause import gc_paused
+from ..base.xlsx import forget_column_cells
 from .checks import ABS_TOL, PER, TOLERANCE_RULE, Check, Mismatch, Rules
 from .context import Reference
 from .input_sets import DEFAULT_SEED, InputSet, input_cell, other_sets, write_inputs
 from .judge import check_book, judge_book
-from .reading import (RECORD_ERRORS, UnusableFile, cell_order, formula_cells, input_column,
-                      inputs_of, mechanism_size, read_book, record_mismatch, stored_values)
+from .reading import (RECORD_ERRORS, FormulaCells, UnusableFile, input_column, inputs_of,
+                      mechanism_size, read_book, record_mismatch, stored_values)
 from .report import Report, cell_ranges, cell_runs, likely_causes
 from .stored import check_replaced, check_stored, not_formulas
 from .synthesis import task_inputs
@@ -62,19 +63,19 @@ def verify(path: Path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Repo
             rules = Rules(office.is_error, office.error_code, relative=True)
     except engines.EngineError as exc:
         raise UnusableFile(f"{path}: {exc}") from None
-    formulas = formula_cells(wb)
+    formulas = FormulaCells(wb)
     try:
         checks = judge_book(wb, record, values, rules)
-        judged = set().union(*(c.judged for c in checks))
-        replaced, absent = not_formulas(wb, judged - formulas)
+        elsewhere, judged = formulas.judged(checks)
+        replaced, absent = not_formulas(wb, elsewhere)
         if replaced:
             checks.append(check_replaced(wb, replaced))
-        stored = stored_values(wb, path, formulas & judged)
+        stored = stored_values(wb, path, judged)
         if stored:
             checks.append(check_stored(wb, record, values, stored, rules))
-        count, unjudged = len(formulas), sorted(formulas - judged, key=cell_order)
-        # a cell's key each, a big book's largest sets: gone before the other sets are judged
-        del formulas, judged, stored
+        count, unjudged = len(formulas), list(formulas.without(judged))
+        # a cell's key each, a big book's largest dict: gone before the other sets are judged
+        del stored
         sets = [] if evaluation is None else _judge_other_sets(
             wb, record, evaluation, rules, params, seed)
         return Report(str(path), record.mechanism, engine, checks, count, unjudged, params,
@@ -85,6 +86,8 @@ def verify(path: Path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Repo
                       notes=list(getattr(wb, "notes", ())))
     except RECORD_ERRORS as exc:
         raise UnusableFile(record_mismatch(path, exc)) from None
+    finally:
+        forget_column_cells()
 
 
 def _judge_other_sets(wb, record, evaluation, rules: Rules, params: dict, seed: int

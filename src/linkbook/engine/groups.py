@@ -9,10 +9,10 @@ import numpy as np
 
 from .adapter import TokenInfo, tokenize
 from .errors import UnsupportedFormulaError
-from .references import (RefDesc, References, cell_name, constant_value, formula_shape,
-                         formula_text, lex_spans, skeleton_of)
+from .references import (RefDesc, References, cell_name, constant_of, formula_of,
+                         formula_shape, formula_text, lex_spans, skeleton_of)
 from .vector import Batch
-from ..base.xlsx import coordinate_to_tuple
+from ..base.xlsx import column_entries, coordinate_to_tuple
 
 # Skeletons whose references the `formulas` tokenizer has been seen to read exactly as the
 # lexer does, with the functions they call: a formula of a known skeleton is not re-tokenized.
@@ -88,15 +88,18 @@ class Grouper:
         formulas_by_sheet = {}
         for ws in worksheets:
             consts, forms = {}, []
-            for (row, col), cell in ws._cells.items():  # only cells that exist (ExcelModel too)
-                if cell.value is None:
-                    continue
-                if cell.data_type == "f":
-                    forms.append((row, col, formula_text(cell)))
-                else:
-                    value = constant_value(cell, self.excel_model_constants)
-                    if value is not None:
-                        consts[(row, col)] = value
+            # only cells that exist (ExcelModel too)
+            for col, rows, values, kinds in column_entries(ws):
+                for row, value, kind in zip(rows, values, kinds):
+                    if value is None:
+                        continue
+                    if kind == "f":
+                        forms.append((row, col, formula_text(ws.cell(row, col)) if type(value)
+                                      is not str else formula_of(value)))
+                    else:
+                        value = constant_of(value, kind, self.excel_model_constants)
+                        if value is not None:
+                            consts[(row, col)] = value
             forms.sort()
             self.constants[ws.title] = consts
             formulas_by_sheet[ws.title] = forms

@@ -357,14 +357,19 @@ def formula_text(cell) -> str:
             raise UnsupportedFormulaError(
                 f"{cell.parent.title}!{cell.coordinate}: array/data-table formula {value!r}")
         value = text
+    return formula_of(value)
+
+
+def formula_of(value: str) -> str:
+    """A formula cell's text value as the engine reads it."""
     value = value.replace("\n", "")  # as formulas' Parser does
     return value[1:] if value.startswith("==") else value
 
 
-def constant_value(cell, excel_model: bool = False):
-    """A constant as it reads after a save (openpyxl writes numbers as '%.16g'); with
-    `excel_model`, floats rounded to 15 decimals as ExcelModel rounds them."""
-    value, kind = cell.value, cell.data_type
+def constant_of(value, kind: str, excel_model: bool = False):
+    """A cell's constant (its value and data_type) as it reads after a save (openpyxl writes
+    numbers as '%.16g'); with `excel_model`, floats rounded to 15 decimals as ExcelModel rounds
+    them."""
     if kind == "n" and not isinstance(value, bool):
         text = _number_text(value)
         if text == "":
