@@ -108,3 +108,16 @@ def test_reads_rates_looks_at_the_positions_values_alone():
                                                    "local": [1, "v_in * 2"]}]})
     assert reads_rates({**bare, "steps": [*steps, {"type": "expression", "key": "w",
                                                    "formula": "2*Alpha_In"}]})
+
+
+def test_condition_numbers_kept_for_the_rows_whose_matrix_is_the_same():
+    """numpy's own condition numbers, to the bit, whichever rows changed since the last
+    system (one entry scaled, a row made singular)."""
+    from linkbook.check.forces.equations import Conditions
+    first = np.stack([np.eye(3) + 0.1 * k * np.arange(9.0).reshape(3, 3) for k in range(6)])
+    second = first.copy()
+    second[2, 0, 1] *= 3.0
+    second[4] = np.diag([1.0, 1e-9, 0.0])
+    conditions = Conditions()
+    for A in (first, second, second.copy(), first):
+        assert np.linalg.cond(A).tobytes() == conditions(A).tobytes()

@@ -99,7 +99,7 @@ import numpy as np
 
 from ..reference import motion, positions, reads_rates
 from ..reference.positions import Positions
-from .equations import SINGULAR, System, actuator_line, equations, solve_rows
+from .equations import SINGULAR, Conditions, System, actuator_line, equations, solve_rows
 from .loads import Rows, cross, read_loads
 from .topology import GROUND, Topology, body_of, topology
 
@@ -199,7 +199,8 @@ def forces_and_at_rest(description: Mapping, params: Mapping[str, float], angles
     """forces() as given, and again with the input at rest (its speed and acceleration 0):
     the masses' and the loads' own scale (check/force_cells.py). Where no value the positions
     take reads the input's speed or acceleration (reference.reads_rates), the positions are
-    solved once for both: only the rates, the loads and the equations are taken again."""
+    solved once for both: only the rates, the loads and the equations are taken again (and
+    only the condition numbers of rows whose matrix differs)."""
     analysis = _Analysis(description, params, length_unit)
     still = {**params, **dict.fromkeys(analysis.rates, 0.0)}
     solved = analysis.positions(params, angles_deg, turns)
@@ -223,6 +224,7 @@ class _Analysis:
         self.loads = read_loads(description, self.top)
         self.described = self.loads.described()
         self.metres = LENGTH_UNITS[length_unit]
+        self.conditions = Conditions()      # the moving system's, for the same one at rest
 
     def positions(self, params: Mapping[str, float], angles_deg, turns) -> Positions:
         return positions(self.described, params, angles_deg, turns)
@@ -233,7 +235,7 @@ class _Analysis:
                     self.metres)
         with np.errstate(invalid="ignore", divide="ignore"):
             system = equations(self.top, self.loads, rows)
-            x, cond = solve_rows(system.A, system.b, system.errors)
+            x, cond = solve_rows(system.A, system.b, system.errors, self.conditions)
             for r in system.reactions:  # a guide's couple is NaN where its force is (the book's)
                 if r.couple is not None:
                     x[np.isnan(x[:, r.cols[0]]), r.couple] = np.nan
