@@ -25,7 +25,7 @@ from ..base.sheets import FORCES_SHEET
 from ..base.xlsx import column_cells
 from .checks import Check, unit_scale
 from .reading import UnusableFile
-from .forces import LENGTH_UNITS, SINGULAR, forces
+from .forces import LENGTH_UNITS, SINGULAR, forces, forces_and_at_rest
 from .context import motion_rates
 
 GRAVITY_SCALE = 10.0     # m/s²: the weight's share of the scale (gravity or not)
@@ -46,15 +46,13 @@ def _largest(result: dict) -> np.ndarray:
     return np.max(parts, axis=0) if parts else np.zeros(1)
 
 
-def force_scale(j, ref: dict, params: dict, metres: float, rate2: float
+def force_scale(j, ref: dict, static: dict, metres: float, rate2: float
                 ) -> tuple[float, float]:
-    """F and F₀ (see the module's docstring), in N; `rate2`: the input's ω² + |α|
+    """F and F₀ (see the module's docstring), in N, from the reference over the sweep as given
+    (`ref`) and with the input at rest (`static`); `rate2`: the input's ω² + |α|
     (motion_rates)."""
-    from ..language.mechanisms import MOTION_SYMBOLS
     kinds = j.record.kinds()
     mass = sum(abs(v) for s, v in j.params.items() if kinds.get(s) == "mass")
-    at_rest = {**params, **dict.fromkeys(MOTION_SYMBOLS[j.mechanism.input_kind], 0.0)}
-    static = forces(j.solver.description, at_rest, j.angles, j.record.length_unit, j.turns)
     own = max(mass * (j.size * metres * rate2 + GRAVITY_SCALE), float(_largest(static).max()),
               FORCE_FLOOR)
     return max(own, float(_largest(ref).max())), own
@@ -79,10 +77,11 @@ def check_forces(j) -> None:
     metres = LENGTH_UNITS[j.record.length_unit]
     # a load's expression may convert a length with the book's `to_metres`
     params = {**j.params, "to_metres": metres}
-    ref = forces(j.solver.description, params, j.angles, j.record.length_unit, j.turns)
+    ref, static = forces_and_at_rest(j.solver.description, params, j.angles,
+                                     j.record.length_unit, j.turns)
     one = forces(j.solver.description, params, [j.angle], j.record.length_unit, j.turns_now)
     _, rate2 = motion_rates(mech, j.params, j.size)
-    scale, own = force_scale(j, ref, params, metres, rate2)
+    scale, own = force_scale(j, ref, static, metres, rate2)
     _require_every_column(table, ref, COUPLE_SHOWN * scale * j.size * metres)
     (r0, r1), now = table.rows, table.current_row
     sheet = table.sheet

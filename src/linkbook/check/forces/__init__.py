@@ -24,8 +24,10 @@ link holding it, unless the load names its link (``body`` beside ``at``).
 Why it is independent: it reads the topology from the description, assembles the equations from
 the constraints, 3 per moving body (ΣF = m·a_G, ΣM = I_G·α, in d'Alembert's form) with the
 reactions as unknowns, and solves them with numpy row by row. All it takes from linkbook is the
-kinematic reference's public ``solve``: the motion of every point, and the evaluation of the
-expressions (as an `expression` step's, after the rates). No closed form of the workbook's is used.
+kinematic reference's public ``positions`` and ``motion`` (``solve`` in two halves): the motion of
+every point, and the evaluation of the expressions (as an `expression` step's, after the rates).
+No closed form of the workbook's is used. ``forces_and_at_rest`` takes one solution of the
+positions on to the forces at the given speed and at rest, where the positions read no rate.
 
 Three modules do the work: topology.py (the bodies, their pins and sliding pairs), loads.py
 (what acts on them, per row) and equations.py (the system and its solution); this one reports.
@@ -95,12 +97,13 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..reference import solve
-from .equations import SINGULAR, System, actuator_line, equations, solve_rows
+from ..reference import motion, positions, reads_rates
+from ..reference.positions import Positions
+from .equations import SINGULAR, Conditions, System, actuator_line, equations, solve_rows
 from .loads import Rows, cross, read_loads
 from .topology import GROUND, Topology, body_of, topology
 
-__all__ = ["forces", "topology", "LENGTH_UNITS", "SINGULAR"]
+__all__ = ["forces", "forces_and_at_rest", "topology", "LENGTH_UNITS", "SINGULAR"]
 
 LENGTH_UNITS = {"mm": 1e-3, "cm": 1e-2, "m": 1.0, "in": 0.0254, "ft": 0.3048}
 # The data format's names of the input's speed and acceleration (docs/language.md).
@@ -186,21 +189,54 @@ def forces(description: Mapping, params: Mapping[str, float], angles_deg,
 
     Raises ValueError for a description it cannot analyse (a body entry naming no link, links
     that do not make a mechanism of one degree of freedom, ...)."""
-    if length_unit not in LENGTH_UNITS:
-        raise ValueError(f"length_unit must be one of {sorted(LENGTH_UNITS)}")
-    rates = _RATES[(description.get("input") or {}).get("kind", "angle")]
-    if not all(name in params for name in rates):
-        raise ValueError(f"force analysis needs the input's speed and acceleration: the "
-                         f"parameters {rates[0]} and {rates[1]}")
-    top = topology(description)
-    loads = read_loads(description, top)
-    angles = np.atleast_1d(np.asarray(angles_deg, dtype=float))
-    rows = Rows(solve(loads.described(), params, angles, turns, late=loads.values),
-                len(angles), LENGTH_UNITS[length_unit])
-    with np.errstate(invalid="ignore", divide="ignore"):
-        system = equations(top, loads, rows)
-        x, cond = solve_rows(system.A, system.b, system.errors)
-        for r in system.reactions:      # a guide's couple is NaN where its force is (the book's)
-            if r.couple is not None:
-                x[np.isnan(x[:, r.cols[0]]), r.couple] = np.nan
-        return {**_report(top, system, x), "cond": cond}
+    analysis = _Analysis(description, params, length_unit)
+    return analysis.at(analysis.positions(params, angles_deg, turns), params)
+
+
+def forces_and_at_rest(description: Mapping, params: Mapping[str, float], angles_deg,
+                       length_unit: str = "m", turns: Mapping[str, np.ndarray] | None = None
+                       ) -> tuple[dict, dict]:
+    """forces() as given, and again with the input at rest (its speed and acceleration 0):
+    the masses' and the loads' own scale (check/force_cells.py). Where no value the positions
+    take reads the input's speed or acceleration (reference.reads_rates), the positions are
+    solved once for both: only the rates, the loads and the equations are taken again (and
+    only the condition numbers of rows whose matrix differs)."""
+    analysis = _Analysis(description, params, length_unit)
+    still = {**params, **dict.fromkeys(analysis.rates, 0.0)}
+    solved = analysis.positions(params, angles_deg, turns)
+    resting = (analysis.positions(still, angles_deg, turns)
+               if reads_rates(analysis.described) else solved)
+    return analysis.at(solved, params), analysis.at(resting, still)
+
+
+class _Analysis:
+    """One description's bodies and loads, read once, and its kinematic reference's
+    positions taken on to the forces at some speed of the input."""
+
+    def __init__(self, description: Mapping, params: Mapping[str, float], length_unit: str):
+        if length_unit not in LENGTH_UNITS:
+            raise ValueError(f"length_unit must be one of {sorted(LENGTH_UNITS)}")
+        self.rates = _RATES[(description.get("input") or {}).get("kind", "angle")]
+        if not all(name in params for name in self.rates):
+            raise ValueError(f"force analysis needs the input's speed and acceleration: the "
+                             f"parameters {self.rates[0]} and {self.rates[1]}")
+        self.top = topology(description)
+        self.loads = read_loads(description, self.top)
+        self.described = self.loads.described()
+        self.metres = LENGTH_UNITS[length_unit]
+        self.conditions = Conditions()      # the moving system's, for the same one at rest
+
+    def positions(self, params: Mapping[str, float], angles_deg, turns) -> Positions:
+        return positions(self.described, params, angles_deg, turns)
+
+    def at(self, solved: Positions, params: Mapping[str, float]) -> dict:
+        """The forces on the solved positions, the input moving as `params` say."""
+        rows = Rows(motion(solved, self.described, params, self.loads.values), solved.n,
+                    self.metres)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            system = equations(self.top, self.loads, rows)
+            x, cond = solve_rows(system.A, system.b, system.errors, self.conditions)
+            for r in system.reactions:  # a guide's couple is NaN where its force is (the book's)
+                if r.couple is not None:
+                    x[np.isnan(x[:, r.cols[0]]), r.couple] = np.nan
+            return {**_report(self.top, system, x), "cond": cond}

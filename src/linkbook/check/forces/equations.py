@@ -173,13 +173,36 @@ def _load_equations(top: Topology, loads: Loads, rows: Rows, system: System) -> 
         system.note_errors(body.number, rows.array(key), (2,))
 
 
-def solve_rows(A: np.ndarray, b: np.ndarray, errors: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
+class Conditions:
+    """Each row's condition number of the scaled matrices solve_rows met last, kept for the
+    next system solved: the forces at rest (forces_and_at_rest) have the moving ones' matrix
+    on every row (the positions' alone), and its condition number, an SVD per row, is most of
+    solve_rows' work. A row's number is reused only where its matrix is the same to the bit."""
+
+    def __init__(self):
+        self.A: np.ndarray | None = None
+        self.cond = np.zeros(0)
+
+    def __call__(self, A: np.ndarray) -> np.ndarray:
+        if self.A is None or self.A.shape != A.shape:
+            cond = np.linalg.cond(A) if len(A) else np.zeros(0)
+        else:
+            same = (A.view(np.uint64) == self.A.view(np.uint64)).all(axis=(1, 2))
+            cond = self.cond.copy()
+            if not same.all():
+                cond[~same] = np.linalg.cond(A[~same])
+        self.A, self.cond = A, cond
+        return cond
+
+
+def solve_rows(A: np.ndarray, b: np.ndarray, errors: np.ndarray,
+               conditions: Conditions | None = None) -> tuple[np.ndarray, np.ndarray]:
     """x with A·x = b on every row, and each row's condition number. Rows and columns are
     scaled by their largest entries first (forces and moments, metres and ones); a row with a
     NaN or a condition number above SINGULAR is NaN, but for a NaN in b where a value of the
     description is an error (`errors`): that makes NaN only the unknowns it reaches
-    (_reaches)."""
+    (_reaches). `conditions`: the condition numbers of an earlier system, where it had
+    the same matrix."""
     n, k = b.shape
     finite = np.isfinite(A).all(axis=(1, 2)) & (np.isfinite(b) | errors).all(axis=1)
     missing = ~np.isfinite(b) & finite[:, None]
@@ -188,7 +211,7 @@ def solve_rows(A: np.ndarray, b: np.ndarray, errors: np.ndarray
     A, b = A / big[..., None], np.where(finite[:, None] & ~missing, b, 0.0) / big
     col = np.maximum(np.abs(A).max(axis=1, keepdims=True), np.finfo(float).tiny)
     A = A / col
-    cond = np.linalg.cond(A) if n else np.zeros(0)
+    cond = (conditions or Conditions())(A)
     ok = finite & (cond < SINGULAR)
     structure = (A[ok] != 0).any(axis=0)
     A = np.where(ok[:, None, None], A, np.eye(k))

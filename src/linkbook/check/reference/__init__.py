@@ -20,7 +20,8 @@ The package, by concern:
   rates         velocities and accelerations of a solved mechanism (Rates)
   step_type     what the reference needs of one step type (StepType)
   steps/        one module per step type, and STEP_TYPES, the registry keyed by a step's type
-  analysis      solve() and what is measured over a sweep (extremes, a quick-return ratio)
+  analysis      solve() (positions(), then motion()) and what is measured over a sweep
+                (extremes, a quick-return ratio)
   drawing       the drawn guides and blocks of the sliders
   fourbar       four-bar loops: Grashof's class, the input's limit angles
   synthesis     function generation (issue 38): the four-bar through given (θ2, θ4) pairs
@@ -30,8 +31,8 @@ The package, by concern:
 
 from __future__ import annotations
 
-from .analysis import (EXTREME_STEP, REVERSAL_STEP, positions_only, refined_extreme, solve,
-                       time_ratio)
+from .analysis import (EXTREME_STEP, REVERSAL_STEP, motion, positions, positions_only,
+                       reads_rates, refined_extreme, solve, time_ratio)
 from .drawing import BLOCK, guide_movers, slider_drawing, slider_parts
 from .expressions import evaluate
 from .fourbar import fourbar_loops, grashof_class, limit_angles
@@ -39,7 +40,7 @@ from .positions import pivots
 from .step_type import Guide, Sliding, StepType
 from .steps import STEP_TYPES
 
-__all__ = ["solve", "pivots", "fourbar_loops", "grashof_class", "limit_angles", "evaluate",
-           "refined_extreme", "positions_only", "time_ratio", "slider_drawing", "slider_parts",
-           "guide_movers", "EXTREME_STEP", "REVERSAL_STEP", "BLOCK", "STEP_TYPES", "StepType",
-           "Sliding", "Guide"]
+__all__ = ["solve", "positions", "motion", "reads_rates", "pivots", "fourbar_loops",
+           "grashof_class", "limit_angles", "evaluate", "refined_extreme", "positions_only",
+           "time_ratio", "slider_drawing", "slider_parts", "guide_movers", "EXTREME_STEP",
+           "REVERSAL_STEP", "BLOCK", "STEP_TYPES", "StepType", "Sliding", "Guide"]

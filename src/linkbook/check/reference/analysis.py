@@ -5,6 +5,7 @@ what is measured on such solutions (an extreme refined, a quick-return ratio).
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Mapping
 
 import numpy as np
@@ -43,22 +44,69 @@ def solve(description: Mapping, params: Mapping[str, float], angles_deg,
     Raises ValueError for a malformed description (unknown step type, unknown point, unknown
     parameter, a branch not ±1, a key written twice, ...).
     """
+    return motion(positions(description, params, angles_deg, turns), description, params, late)
+
+
+def positions(description: Mapping, params: Mapping[str, float], angles_deg,
+              turns: Mapping[str, np.ndarray] | None = None) -> Positions:
+    """solve()'s first half: the steps placed on every row (a Positions after run()), which
+    motion() takes on."""
     angles = np.atleast_1d(np.asarray(angles_deg, dtype=float))
     if angles.ndim != 1:
         raise ValueError("angles_deg must be one-dimensional")
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         solver = Positions(description, params, angles, STEP_TYPES, turns)
-        out = solver.run()
+        solver.run()
+        return solver
+
+
+def motion(solver: Positions, description: Mapping, params: Mapping[str, float],
+           late: Mapping[str, object] | None = None) -> dict:
+    """solve()'s second half: the columns of `description` solved by positions(), with the
+    rates at the input's speed and acceleration in `params` and the `late` formulas (see
+    solve), as a new dict.
+
+    `params` may differ from the ones the positions were solved with in the input's speed and
+    acceleration alone, and only where no step's value reads them (reads_rates): the same
+    positions then move at another speed (at rest: forces' scale); the late formulas read the
+    speed and acceleration of `params`."""
+    out = dict(solver.out)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         speed, accel = MOTION_PARAMS["angle" if solver.angle_input else "length"]
-        rates = {}
+        rates, moving = {}, {}
         if speed in params and accel in params:
-            rates = Rates(solver, description, float(params[speed]), float(params[accel])).run()
+            moving = {speed: params[speed], accel: params[accel]}
+            rates = Rates(solver, description, float(params[speed]),
+                          float(params[accel])).run()
             out.update(rates)
             if solver.angle_input:
                 out["rpm_in"] = float(params[speed]) * 30.0 / math.pi   # rad/s in rev/min
         if late:
-            out.update(evaluate_late(solver, rates, late))
+            out.update(evaluate_late(solver, rates, late, moving))
         return out
+
+
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def reads_rates(description: Mapping) -> bool:
+    """Whether some value the positions take (a ground point's, a step's) may name the
+    input's speed or acceleration: any text of the ground and the steps holding one of their
+    names as a word, in any case (as an expression looks a name up). Where none does, the
+    positions do not depend on the speed: one solution serves every speed (motion)."""
+    rates = {name.lower() for pair in MOTION_PARAMS.values() for name in pair}
+
+    def texts(value) -> list[str]:
+        if isinstance(value, str):
+            return [value]
+        if isinstance(value, Mapping):
+            value = list(value.values())
+        if isinstance(value, (list, tuple)):
+            return [t for v in value for t in texts(v)]
+        return []
+    return any(word.lower() in rates
+               for text in texts([description.get("ground"), description.get("steps")])
+               for word in _NAME.findall(text))
 
 
 EXTREME_STEP = 1.0    # degrees: the reference's sampling of a turn to find an extreme's basin

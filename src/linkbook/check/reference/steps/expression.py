@@ -39,10 +39,12 @@ def env_of(solver: Positions) -> dict:
                 else _turned(v, solver.turns.get(k))) for k, v in solver.env.items()}
 
 
-def evaluate_late(solver: Positions, rates: Mapping, formulas: Mapping[str, object]) -> dict:
+def evaluate_late(solver: Positions, rates: Mapping, formulas: Mapping[str, object],
+                  motion: Mapping[str, float] | None = None) -> dict:
     """Formulas that may read the rates as well (a load: a damper's −c·ω), evaluated after
-    them: {key: a float, or an array over the rows}."""
-    env = {**env_of(solver), **rates}
+    them: {key: a float, or an array over the rows}; `motion`: the input's speed and
+    acceleration the rates were taken at, where they are not the positions' own parameters."""
+    env = {**env_of(solver), **(motion or {}), **rates}
     return {key: evaluate(formula, env) for key, formula in formulas.items()}
 
 
