@@ -42,8 +42,8 @@ def _same_angle(a: float, b: float) -> bool:
     return abs((a - b + 180.0) % 360.0 - 180.0) <= DEG_TOL
 
 
-def test_fourbar_numbers_are_the_reference_numbers(tmp_path):
-    book, t = _book(tmp_path)
+def test_fourbar_numbers_are_the_reference_numbers(bundled_books):
+    book, t = bundled_books["fourbar"], template("fourbar")
     data = _info(book)
     ref = _reference(t)
     loop = generic.fourbar_loops(t.mechanism.description, t.values())[0]
@@ -88,11 +88,11 @@ def _gaps_of(angles, assembled) -> list[dict]:
     return gaps
 
 
-def test_an_edited_book_reports_its_edited_values(tmp_path):
+def test_an_edited_book_reports_its_edited_values(bundled_books, tmp_path):
     """a2 typed over in the saved book (as in Excel): the loop turns non-Grashof and leaves
     gaps; info reports those, the reference's, not the numbers the book was built with."""
-    book, _ = _book(tmp_path)
-    wb = openpyxl.load_workbook(book)
+    book = tmp_path / "fourbar.xlsx"
+    wb = openpyxl.load_workbook(bundled_books["fourbar"])
     wb["Mechanism"]["C8"] = 60          # a2, the crank
     wb.save(book)
     data = _info(book)
@@ -108,9 +108,8 @@ def test_an_edited_book_reports_its_edited_values(tmp_path):
     assert data["not_closing"] == int((~ref["assembled"]).sum())
 
 
-def test_a_template_is_summarised_in_memory_as_its_book_is(tmp_path):
-    book, _ = _book(tmp_path)
-    from_book = _info(book)
+def test_a_template_is_summarised_in_memory_as_its_book_is(bundled_books, tmp_path):
+    from_book = _info(bundled_books["fourbar"])
     empty = tmp_path / "here"
     empty.mkdir()
     from_template = _info("fourbar", cwd=empty)
