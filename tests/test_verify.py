@@ -140,9 +140,8 @@ def _entities(path: Path, source: Path) -> None:
 
 @pytest.mark.parametrize("kind", ["missing", "not a zip", "truncated", "zip bomb",
                                   "xml entities", "not linkbook"])
-def test_verify_refuses_unusable_files_with_exit_2(tmp_path, capsys, kind):
-    good = tmp_path / "good.xlsx"
-    assert main(["build", "slider-crank", "--step", "30", "-o", str(good)]) == 0
+def test_verify_refuses_unusable_files_with_exit_2(bundled_books, tmp_path, capsys, kind):
+    good = bundled_books["slider-crank"]
     bad = tmp_path / "bad.xlsx"
     if kind == "not a zip":
         bad.write_text("theta12,s14\n0,1\n")
