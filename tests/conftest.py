@@ -90,6 +90,28 @@ def recalculated_by_libreoffice(needs, bundled_books, tmp_path_factory) -> dict[
     return dict(zip(bundled_books, office.recalculate_all(bundled_books.values(), out)))
 
 
+@pytest.fixture(scope="module")
+def _reports_made() -> dict:
+    return {}
+
+
+@pytest.fixture
+def reports_once(_reports_made, monkeypatch):
+    """verify's report of a book made once per test module (by path, engine and seed), for the
+    tests of how reports are printed, which verify the same unchanged books again and again
+    (`pytestmark = pytest.mark.usefixtures("reports_once")`). Not for a test that changes a
+    book, or what reads it, between two verifications."""
+    from linkbook.check import verifier
+    make = verifier.report_of
+
+    def made_once(path, engine: str = "vector", seed: int | None = None):
+        key = (str(path), engine, seed)
+        if key not in _reports_made:
+            _reports_made[key] = make(path, engine, seed)
+        return _reports_made[key]
+    monkeypatch.setattr(verifier, "report_of", made_once)
+
+
 def formula_cells(wb) -> set[tuple[str, str]]:
     return {(ws.title, c.coordinate) for ws in wb.worksheets for row in ws.iter_rows()
             for c in row if isinstance(c.value, str) and c.value.startswith("=")}

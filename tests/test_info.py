@@ -4,6 +4,7 @@ the Forces sheet's summary, each number its cell's."""
 from __future__ import annotations
 
 import json
+import shutil
 
 import numpy as np
 import openpyxl
@@ -42,8 +43,8 @@ def _same_angle(a: float, b: float) -> bool:
     return abs((a - b + 180.0) % 360.0 - 180.0) <= DEG_TOL
 
 
-def test_fourbar_numbers_are_the_reference_numbers(tmp_path):
-    book, t = _book(tmp_path)
+def test_fourbar_numbers_are_the_reference_numbers(bundled_books):
+    book, t = bundled_books["fourbar"], template("fourbar")
     data = _info(book)
     ref = _reference(t)
     loop = generic.fourbar_loops(t.mechanism.description, t.values())[0]
@@ -88,11 +89,11 @@ def _gaps_of(angles, assembled) -> list[dict]:
     return gaps
 
 
-def test_an_edited_book_reports_its_edited_values(tmp_path):
+def test_an_edited_book_reports_its_edited_values(bundled_books, tmp_path):
     """a2 typed over in the saved book (as in Excel): the loop turns non-Grashof and leaves
     gaps; info reports those, the reference's, not the numbers the book was built with."""
-    book, _ = _book(tmp_path)
-    wb = openpyxl.load_workbook(book)
+    book = tmp_path / "fourbar.xlsx"
+    wb = openpyxl.load_workbook(bundled_books["fourbar"])
     wb["Mechanism"]["C8"] = 60          # a2, the crank
     wb.save(book)
     data = _info(book)
@@ -108,9 +109,8 @@ def test_an_edited_book_reports_its_edited_values(tmp_path):
     assert data["not_closing"] == int((~ref["assembled"]).sum())
 
 
-def test_a_template_is_summarised_in_memory_as_its_book_is(tmp_path):
-    book, _ = _book(tmp_path)
-    from_book = _info(book)
+def test_a_template_is_summarised_in_memory_as_its_book_is(bundled_books, tmp_path):
+    from_book = _info(bundled_books["fourbar"])
     empty = tmp_path / "here"
     empty.mkdir()
     from_template = _info("fourbar", cwd=empty)
@@ -168,13 +168,13 @@ def _force_cells(book) -> dict:
 
 @pytest.mark.parametrize("name, pins", [("fourbar", ["F12", "F23", "F34", "F14"]),
                                         ("slider-crank", ["F12", "F23", "F34", "F14"])])
-def test_the_force_summary_is_the_forces_sheets(tmp_path, name, pins):
+def test_the_force_summary_is_the_forces_sheets(bundled_books, name, pins):
     """Every number of the Forces summary (mean effort, RMS, extremes and where, each pin's
     peak, energy fluctuation, Cs, flywheel inertia), as the engine computes its cell, with its
     unit, in --json and in the text."""
-    book = tmp_path / f"{name}.xlsx"
-    assert run("build", name, "-o", str(book)).returncode == 0
-    shown = {r["key"]: r for r in _info(book)["force_summary"]}
+    book = bundled_books[name]
+    summary = _info(book)["force_summary"]
+    shown = {r["key"]: r for r in summary}
     cells = _force_cells(book)
     expected_units = {**FORCE_SUMMARY, **{f"peak_{pin}": "N" for pin in pins}}
     assert set(shown) == set(cells) == set(expected_units)
@@ -185,15 +185,15 @@ def test_the_force_summary_is_the_forces_sheets(tmp_path, name, pins):
     text = run("info", str(book)).stdout.splitlines()
     block = text[text.index("Forces: summary over the θ12 sweep") + 1:]
     assert len(block) == len(cells)
-    for line, r in zip(block, _info(book)["force_summary"]):
+    for line, r in zip(block, summary):
         assert line.split()[-2:] == [f"{r['value']:.6g}", r["unit"]], line
         assert line.strip().startswith(r["what"])
 
 
-def test_the_force_summary_follows_an_edited_cs(tmp_path):
+def test_the_force_summary_follows_an_edited_cs(bundled_books, tmp_path):
     """Cs typed over in the book (an input of the Forces sheet): twice Cs, half the flywheel."""
     book = tmp_path / "slider-crank.xlsx"
-    assert run("build", "slider-crank", "-o", str(book)).returncode == 0
+    shutil.copy(bundled_books["slider-crank"], book)
     before = {r["key"]: r["value"] for r in _info(book)["force_summary"]}
     cell = _info_cell(book, "speed_fluctuation")
     wb = openpyxl.load_workbook(book)

@@ -398,6 +398,7 @@ def test_a_long_description_fits_the_build_record(tmp_path):
     from linkbook.check.verifier import verify
     data = fourbar_data()
     data["mechanism"].pop("columns")
+    data["sweep"]["step"] = 30              # the record's length is the point, not the rows
     for i in range(40):
         data["mechanism"]["steps"].append(
             {"type": "point", "point": f"K{i}", "frame": ["A", "B"], "local": [i, -i],

@@ -4,6 +4,7 @@ cover random dimensions and speeds; test_office covers LibreOffice)."""
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 import pytest
@@ -68,9 +69,11 @@ def test_reference_motion_is_the_derivative_of_its_positions(name):
     inputs = [t.sweep.start + span * f for f in (0.13, 0.31, 0.52, 0.71, 0.89)]
     compared = 0
     for x in inputs:
-        def positions(u, p=params):
-            out = generic.solve(mech.description, p, np.array([u * unit]))
-            return out
+        @lru_cache(maxsize=None)
+        def positions(u):
+            """The reference at input u (in units of rate): each key's differences ask it at
+            the same inputs, solved once."""
+            return generic.solve(mech.description, params, np.array([u * unit]))
         base = positions(x / unit)
         if not base["assembled"][0]:
             continue

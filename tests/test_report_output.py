@@ -15,6 +15,9 @@ from linkbook.book import builder
 from linkbook.apps import cli
 from linkbook.base import sheets as layout
 
+# these tests print the reports of three books that no test changes: each is verified once
+pytestmark = pytest.mark.usefixtures("reports_once")
+
 
 @pytest.fixture(scope="module")
 def books(tmp_path_factory) -> dict:

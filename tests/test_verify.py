@@ -76,18 +76,16 @@ def _verify(*args, capsys):
     return code, out.out, out.err
 
 
-def test_verify_passes_a_fresh_book(tmp_path, capsys):
-    path = tmp_path / "fb.xlsx"
-    assert main(["build", "fourbar", "-o", str(path)]) == 0
+def test_verify_passes_a_fresh_book(bundled_books, capsys):
+    path = bundled_books["fourbar"]
     code, out, _ = _verify(path, "-v", capsys=capsys)
     assert code == 0, out
     assert "all agree" in out and "theta13" in out
 
 
-def test_verify_finds_a_tampered_formula_and_names_the_cell(tmp_path, capsys):
+def test_verify_finds_a_tampered_formula_and_names_the_cell(bundled_books, tmp_path, capsys):
     path = tmp_path / "fb.xlsx"
-    assert main(["build", "fourbar", "-o", str(path)]) == 0
-    wb = openpyxl.load_workbook(path)
+    wb = openpyxl.load_workbook(bundled_books["fourbar"])
     ws = wb["Sweep"]
     cell = ws["H20"]                       # one formula cell in the middle of the table
     assert cell.value.startswith("=")
@@ -103,10 +101,9 @@ def test_verify_finds_a_tampered_formula_and_names_the_cell(tmp_path, capsys):
     assert {(m["sheet"], m["cell"]) for m in bad} >= {("Sweep", "H20")}
 
 
-def test_verify_uses_inputs_edited_like_a_user_would(tmp_path, capsys):
+def test_verify_uses_inputs_edited_like_a_user_would(bundled_books, tmp_path, capsys):
     path = tmp_path / "fb.xlsx"
-    assert main(["build", "fourbar", "-o", str(path)]) == 0
-    wb = openpyxl.load_workbook(path)
+    wb = openpyxl.load_workbook(bundled_books["fourbar"])
     where = wb.defined_names["a_2"].attr_text.split("!")[1].replace("$", "")
     wb["Mechanism"][where].value = 41.5
     branch = wb.defined_names["Branch"].attr_text.split("!")[1].replace("$", "")
@@ -143,9 +140,8 @@ def _entities(path: Path, source: Path) -> None:
 
 @pytest.mark.parametrize("kind", ["missing", "not a zip", "truncated", "zip bomb",
                                   "xml entities", "not linkbook"])
-def test_verify_refuses_unusable_files_with_exit_2(tmp_path, capsys, kind):
-    good = tmp_path / "good.xlsx"
-    assert main(["build", "slider-crank", "--step", "30", "-o", str(good)]) == 0
+def test_verify_refuses_unusable_files_with_exit_2(bundled_books, tmp_path, capsys, kind):
+    good = bundled_books["slider-crank"]
     bad = tmp_path / "bad.xlsx"
     if kind == "not a zip":
         bad.write_text("theta12,s14\n0,1\n")
@@ -291,11 +287,10 @@ def test_a_slide_draws_its_guide_through_the_block_on_the_moving_link(tmp_path, 
     ("toggle-press", "C block 2", "O", "+0.4*", "-0.4*"),      # a sign in the block's formula
     ("slider-crank", "B guide 1", "N", "MIN(", "MAX("),   # the guide's reach
     ("inverted-slider-crank", "A block 3", "N", "-0.2*", "+0.2*")])
-def test_verify_finds_a_broken_guide_or_block_formula(name, point, column, old, new, tmp_path,
-                                                      capsys):
+def test_verify_finds_a_broken_guide_or_block_formula(name, point, column, old, new,
+                                                      bundled_books, tmp_path, capsys):
     path = tmp_path / f"{name}.xlsx"
-    assert main(["build", name, "-o", str(path)]) == 0
-    wb = openpyxl.load_workbook(path)
+    wb = openpyxl.load_workbook(bundled_books[name])
     ws = wb["Mechanism"]
     row = next(r for r in range(1, ws.max_row + 1) if ws[f"M{r}"].value == point)
     cell = ws[f"{column}{row}"]
