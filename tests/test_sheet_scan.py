@@ -224,3 +224,43 @@ def test_a_damaged_part_is_read_as_the_elements_read_it(tmp_path, damage):
     path = book(tmp_path / "book.xlsx", f'<row r="1">{damage}</row>')
     assert outcome(path, True) == outcome(path, False) \
         == ("damaged", "ParseError")
+
+
+CONTROLS = ('<mc:AlternateContent xmlns:mc="http://schemas.openxmlformats.org/markup-compatibility'
+            '/2006"><mc:Choice Requires="x14"><control shapeId="1025" r:id="rId3" '
+            'name="Spinner 1" xmlns:r="http://schemas.openxmlformats.org/officeDocument/2006/'
+            'relationships"><anchor><from xmlns:xdr="http://schemas.openxmlformats.org/'
+            'drawingml/2006/spreadsheetDrawing"><xdr:col>7</xdr:col><xdr:row>3</xdr:row></from>'
+            '</anchor></control></mc:Choice></mc:AlternateContent>')
+PREFIXED_CELL = ('<x:row xmlns:x="http://schemas.openxmlformats.org/spreadsheetml/2006/main" '
+                 'r="7"><x:c r="D7"><x:v>4</x:v></x:c></x:row>')
+
+
+@pytest.mark.parametrize("after, scanned", [(CONTROLS, True), (PREFIXED_CELL, False)])
+def test_what_follows_the_sheet_data_is_read_as_the_elements_read_it(tmp_path, after, scanned):
+    """A form control's markup after <sheetData> (its own namespaces, no cell: every bundled
+    book with a spin button) is scanned; a cell there under a prefix bound to the main namespace
+    (which the elements read) sends the part to the elements."""
+    path = book(tmp_path / "book.xlsx", rows_xml(PLAIN),
+                tail=TAIL.replace("<pageMargins", after + "<pageMargins"))
+    calls = []
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(xlsx, "_read_cells", lambda *a, _r=xlsx._read_cells: calls.append(1) or _r(*a))
+        got = outcome(path, True)
+    assert got == outcome(path, False)
+    assert len(got[0]) == len(PLAIN) + (0 if scanned else 1)
+    assert calls == ([] if scanned else [1])
+
+
+def test_a_prefix_bound_to_the_main_namespace_on_the_sheet_sends_it_to_the_elements(tmp_path):
+    """<worksheet> binding x to the main namespace as well: a cell written <x:c> is a cell, read
+    by the elements, so the part is read by them."""
+    head = HEAD.replace("<worksheet xmlns=\"http://schemas.openxmlformats.org/spreadsheetml/2006/"
+                        "main\"", "<worksheet xmlns=\"http://schemas.openxmlformats.org/"
+                        "spreadsheetml/2006/main\" xmlns:x=\"http://schemas.openxmlformats.org/"
+                        "spreadsheetml/2006/main\"")
+    assert head != HEAD
+    rows = rows_xml(PLAIN).replace("</row>", '<x:c r="H1"><x:v>8</x:v></x:c></row>', 1)
+    path = book(tmp_path / "book.xlsx", rows, head)
+    got = outcome(path, True)
+    assert got == outcome(path, False) and len(got[0]) == len(PLAIN) + 1

@@ -433,6 +433,16 @@ _NAMED_ENTITIES = {"amp": "&", "lt": "<", "gt": ">", "quot": '"', "apos": "'"}
 _MAIN_DEFAULT = f'xmlns="{MAIN[1:-1]}"'
 _DECLARATION = re.compile(r"""<\?xml[^?]*?encoding\s*=\s*["']([^"']*)["']""")
 _OTHER_CELLS = re.compile(r"<c[\s/>]|<row[\s/>]")
+# a prefix's declaration: one bound to the main namespace makes <x:c> a cell the elements read
+# (the form controls' markup openpyxl writes after <sheetData> binds others, with <xdr:row>s)
+_PREFIX_DECLARATION = re.compile(r"""xmlns:[A-Za-z_][\w.\-]*\s*=\s*(?:"([^"]*)"|'([^']*)')""")
+
+
+def _binds_main(text: str, start: int = 0) -> bool:
+    """Whether `text` from `start` binds a prefix to the main namespace (or to a value spelled
+    with a reference, which the scan does not read)."""
+    return any(uri == MAIN[1:-1] or "&" in uri for double, single in
+               _PREFIX_DECLARATION.findall(text, start) for uri in (double or single,))
 
 
 class _NotScanned(Exception):
@@ -490,7 +500,7 @@ def _scan_cells(f, ws: Worksheet, strings: list[str], date_styles: frozenset[int
     if end < 0:
         raise _NotScanned("no end of <sheetData>")
     _scan_rows(body[:end], ws, strings, date_styles, part, unmodelled)
-    if _OTHER_CELLS.search(body, end) or "xmlns" in body[end:]:
+    if _OTHER_CELLS.search(body, end) or _binds_main(body, end):
         raise _NotScanned("cells after <sheetData>")
     for held in ws.held_columns.values():
         held.finish()
@@ -503,6 +513,7 @@ def _check_head(head: str) -> None:
     if head.startswith("\ufeff") or (declared and declared[1].lower().replace("-", "") != "utf8"):
         raise _NotScanned("an encoding other than UTF-8")
     if head.count("xmlns=") != 1 or _MAIN_DEFAULT not in head or "<!" in head \
+            or _binds_main(head) \
             or _OTHER_CELLS.search(head) or not re.search(r"<worksheet[\s>]", head):
         raise _NotScanned("namespaces the scan does not read")
 
