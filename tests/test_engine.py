@@ -174,11 +174,18 @@ def edge_book(sheet: str = "Data sheet") -> openpyxl.Workbook:
     return wb
 
 
-def test_constants_names_and_empty_cells_match_excel_model(tmp_path):
-    path = tmp_path / "edge.xlsx"
-    edge_book().save(path)
+def as_excel_model_gives(wb, path) -> dict:
+    """The book saved at `path`, evaluated by the engine (constants rounded as ExcelModel
+    rounds them) and checked cell by cell against formulas' ExcelModel; the engine's values."""
+    wb.save(path)
     ours = engine.evaluate_file(path, excel_model_constants=True)
     compare(ours, engine.evaluate_formulas_model(path))
+    return ours
+
+
+def test_constants_names_and_empty_cells_match_excel_model(tmp_path):
+    path = tmp_path / "edge.xlsx"
+    ours = as_excel_model_gives(edge_book(), path)
     compare(engine.evaluate(edge_book(), excel_model_constants=True), ours)
     assert ours[("Other 2", "B1")] == "5x"          # 5.0 is saved as 5
     assert ours[("Data sheet", "A8")] == 0.0          # 1e-17 rounded to 15 decimals, as ExcelModel
@@ -369,6 +376,16 @@ assert set(ONE_ARG + TWO_ARG) <= vectorized.VECTOR_SAFE
 OPERATORS = ["+", "-", "*", "/", "^", "&", "=", "<>", "<", ">", "<=", ">="]
 
 
+def put_pair(ws, r: int, a, b) -> None:
+    """Panel values a and b in A and B of row r (an error as the formula that makes it, None
+    as an empty cell)."""
+    for col, v in ((1, a), (2, b)):
+        if isinstance(v, str) and v.startswith("#"):
+            ws.cell(row=r, column=col, value=f"={v}")
+        elif v is not None:
+            ws.cell(row=r, column=col, value=v)
+
+
 def panel_book() -> openpyxl.Workbook:
     """Every element-wise function over every pair of panel values, one column each."""
     wb = openpyxl.Workbook()
@@ -376,11 +393,7 @@ def panel_book() -> openpyxl.Workbook:
     pairs = [(a, b) for a in PANEL for b in SECOND]
     for i, (a, b) in enumerate(pairs):
         r = 2 + i
-        for col, v in ((1, a), (2, b)):
-            if isinstance(v, str) and v.startswith("#"):
-                ws.cell(row=r, column=col, value=f"={v}")
-            elif v is not None:
-                ws.cell(row=r, column=col, value=v)
+        put_pair(ws, r, a, b)
         formulas = ([f"={f}(A{r})" for f in ONE_ARG] + [f"={f}(A{r},B{r})" for f in TWO_ARG]
                     + [f"=A{r}{op}B{r}" for op in OPERATORS]
                     + [f"=-A{r}", f"=A{r}%", f"=+A{r}", f"=PI()*A{r}+NA()*0",

@@ -14,7 +14,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 from linkbook.engine import adapter  # noqa: E402
 from linkbook.engine import evaluator as engine  # noqa: E402
 from test_engine import (ONE_ARG, OPERATORS, PANEL, SECOND, TWO_ARG,  # noqa: E402
-                         assert_as_per_cell, compare)
+                         as_excel_model_gives, assert_as_per_cell, put_pair)
 
 # Functions a vector call must not take (ranges-aware, array makers): their lone cells stay
 # cell by cell, as in a group of many.
@@ -29,11 +29,7 @@ def lone_cells_book() -> openpyxl.Workbook:
     ws = wb.active
     for i, a in enumerate(PANEL):
         r, b = 2 + i, SECOND[i % len(SECOND)]
-        for col, v in ((1, a), (2, b)):
-            if isinstance(v, str) and v.startswith("#"):
-                ws.cell(row=r, column=col, value=f"={v}")
-            elif v is not None:
-                ws.cell(row=r, column=col, value=v)
+        put_pair(ws, r, a, b)
         formulas = ([f"={f}($A${r})" for f in ONE_ARG] + [f"={f}($A${r},$B${r})" for f in TWO_ARG]
                     + [f"=$A${r}{op}$B${r}" for op in OPERATORS]
                     + [f"=IF($A${r}>0,$B${r},NA())", f"=$A${r}", f"=$B${r}"]
@@ -80,9 +76,7 @@ def lone_references_book() -> openpyxl.Workbook:
 
 def test_a_lone_reference_name_or_constant_gives_what_excel_model_gives(tmp_path):
     path = tmp_path / "lone.xlsx"
-    lone_references_book().save(path)
-    ours = engine.evaluate_file(path, excel_model_constants=True)
-    compare(ours, engine.evaluate_formulas_model(path))
+    ours = as_excel_model_gives(lone_references_book(), path)
     assert_as_per_cell(ours, engine.Engine(openpyxl.load_workbook(path), vectorize=False,
                                            excel_model_constants=True).run())
     assert ours[("Other sheet", "B1")] == 2.5 and ours[("Other sheet", "B3")] is True
