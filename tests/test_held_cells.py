@@ -1,5 +1,5 @@
 """What verify holds a cell by, without an object a cell: the addresses the checks name read
-as arrays (reading.places, against openpyxl's own reading of each address), and the formula
+as arrays (xlsx.coordinates_to_arrays, against openpyxl's reading of each address), the formula
 cells of a book as a grid a sheet (reading.FormulaCells), parted by what the checks judged as
 the sets of (sheet, cell) keys they stand for would be."""
 from __future__ import annotations
@@ -12,7 +12,7 @@ from openpyxl.utils.cell import (column_index_from_string, coordinate_from_strin
 from conftest import examples
 from linkbook.base import xlsx
 from linkbook.check.checks import Check, JudgedCells
-from linkbook.check.reading import FormulaCells, places
+from linkbook.check.reading import FormulaCells
 
 PLAIN = st.builds(lambda c, r: f"{get_column_letter(c)}{r}",
                   st.integers(1, 16384), st.integers(1, 1048576))
@@ -20,9 +20,10 @@ SPELLED = st.one_of(PLAIN, PLAIN.map(str.lower), PLAIN.map(lambda a: "$" + a))
 
 
 @settings(max_examples=examples(200))
-@given(cells=st.one_of(st.lists(PLAIN, max_size=30), st.lists(SPELLED, max_size=10)))
+@given(cells=st.one_of(st.lists(PLAIN, min_size=1, max_size=30),
+                       st.lists(SPELLED, min_size=1, max_size=10)))
 def test_addresses_read_as_openpyxl_reads_each(cells):
-    rows, cols = places(cells)
+    rows, cols = xlsx.coordinates_to_arrays(cells)
     expected = [(row, column_index_from_string(col))
                 for col, row in map(coordinate_from_string, cells)]
     assert list(zip(rows.tolist(), cols.tolist())) == expected

@@ -507,10 +507,11 @@ _ADDRESS = st.one_of(
 @given(st.lists(_ADDRESS, max_size=30))
 @example(["B7", "A1 B2"]).via("a space inside an address: two addresses' worth of runs")
 @example(["B7", "$B$8", "XFD1048576"]).via("a spelling the one-pass reading leaves alone")
+@example(["B7", "C8\x00"]).via("a NUL the array of texts drops")
 def test_a_list_of_addresses_reads_as_each_address_alone(cells):
-    """coordinates_to_lists (the engine's column lookups, read in a few passes) against
-    coordinate_to_tuple of each address alone: the same rows and columns, or the same kind of
-    error; a plain address's reading is openpyxl's too."""
+    """coordinates_to_arrays (the engine's column lookups, the judged cells: read at once)
+    against coordinate_to_tuple of each address alone: the same rows and columns, or the same
+    kind of error; a plain address's reading is openpyxl's too."""
     from openpyxl.utils.cell import coordinate_to_tuple as openpyxls
     try:
         want = [xlsx.coordinate_to_tuple(c) for c in cells]
@@ -518,9 +519,9 @@ def test_a_list_of_addresses_reads_as_each_address_alone(cells):
         want = None
     if want is None or not cells:
         with pytest.raises(ValueError):
-            xlsx.coordinates_to_lists(cells)
+            xlsx.coordinates_to_arrays(cells)
         return
-    rows, columns = xlsx.coordinates_to_lists(cells)
-    assert list(zip(rows, columns)) == want
+    rows, columns = xlsx.coordinates_to_arrays(cells)
+    assert list(zip(rows.tolist(), columns.tolist())) == want
     plain = [(c, w) for c, w in zip(cells, want) if re.fullmatch(r"[A-Z]+[0-9]+", c)]
     assert [openpyxls(c) for c, _ in plain] == [w for _, w in plain]

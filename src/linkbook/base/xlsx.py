@@ -10,12 +10,12 @@ book's verify; verify needs only what this module reads. The view gives what ope
 own rules: numbers with a '.', 'e' or 'E' are floats, others ints; a formula cell's value is
 '=' and its text; shared strings lose 'x005F_'. A sheet holds its cells by column (Column:
 lists of rows, values, kinds and stored values, no object per cell); a cell object is made when
-asked for, and `ws._cells` makes every one (for tests and small sheets). A sheet part is scanned by
-regular expressions where it is written as the writers write it, else read element by element
-(both read it alike: tests/test_sheet_scan.py). A book with what the view does not model (a
-shared, array or data-table formula, a number styled as a date, a chart sheet, a cell without
-its address) raises Unsupported, after the whole book has been read: the caller loads it with
-openpyxl.
+asked for, and `ws._cells` makes every one (for tests and small sheets). A sheet part is
+scanned by regular expressions where it is written as the writers write it, else read element
+by element (both read it alike: tests/test_sheet_scan.py). A book with what the view does not
+model (a shared, array or data-table formula, a number styled as a date, a chart sheet, a cell
+without its address) raises Unsupported, after the whole book has been read: the caller loads
+it with openpyxl.
 
 What the spreadsheet application would read otherwise than this view (and openpyxl) raises
 Refused: a number not in XML Schema's lexical form (Python's int() reads '3_5' and full-width
@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import PurePosixPath
 from xml.etree.ElementTree import iterparse
 
-__all__ = ["Unsupported", "Refused", "read", "coordinate_to_tuple", "coordinates_to_lists",
+__all__ = ["Unsupported", "Refused", "read", "coordinate_to_tuple", "coordinates_to_arrays",
            "column_index", "column_letter", "xml_text", "xml_attribute", "NOT_IN_XML"]
 
 MAIN = "{http://schemas.openxmlformats.org/spreadsheetml/2006/main}"
@@ -197,11 +197,10 @@ class Worksheet:
         return Cell(self, row, column, None, "n") if i is None else \
             HeldCell(self, row, column, held, i)
 
-
     def stored_items(self):
         """((row, column), (kind, text)) of every formula cell that stores a value."""
         for col, held in self.held_columns.items():
-            for row, kind, stored in zip(held.rows, held.kinds, held.stored):
+            for row, stored in zip(held.rows, held.stored):
                 if stored is not None:
                     yield (row, col), (stored if type(stored) is tuple else ("n", stored))
 
@@ -510,7 +509,8 @@ def _check_head(head: str) -> None:
     """The part up to <sheetData>: UTF-8, the main namespace the default one and declared once,
     no cells and nothing that makes the text read otherwise (a DOCTYPE)."""
     declared = _DECLARATION.match(head)
-    if head.startswith("\ufeff") or (declared and declared[1].lower().replace("-", "") != "utf8"):
+    if head.startswith("\ufeff") \
+            or (declared and declared[1].lower().replace("-", "") != "utf8"):
         raise _NotScanned("an encoding other than UTF-8")
     if head.count("xmlns=") != 1 or _MAIN_DEFAULT not in head or "<!" in head \
             or _binds_main(head) \
@@ -771,29 +771,33 @@ def coordinate_to_tuple(coordinate: str) -> tuple[int, int]:
     return int(m[2]), column_index(m[1])
 
 
-# addresses as a table's columns spell them, each followed by a space: 'B7 B8 B9 '
-_PLAIN_ADDRESSES = re.compile(r"(?:[A-Z]{1,3}[0-9]+ )*")
-_LETTERS_RUN = re.compile(r"[A-Z]+")
-_DIGITS_RUN = re.compile(r"[0-9]+")
-
-
-def coordinates_to_lists(coordinates: list[str]) -> tuple[list[int], list[int]]:
-    """The rows and the columns of `coordinates`, as coordinate_to_tuple gives each: a list of
-    plain addresses ('B7', 'B8', …: a column of a table) read in a few passes of the regular
-    expression engine, not one call per cell; any other spelling ('$B$7', 'b7') cell by cell.
-    ValueError for an empty list or one that is no cell address, TypeError for one that is no
-    text, as coordinate_to_tuple would raise."""
-    try:
-        text = " ".join(coordinates) + " "
-    except TypeError:                           # one is no text: coordinate_to_tuple says so
-        text = ""
-    if coordinates and _PLAIN_ADDRESSES.fullmatch(text):
-        letters, digits = _LETTERS_RUN.findall(text), _DIGITS_RUN.findall(text)
-        if len(digits) == len(coordinates):     # one address each, no space inside any
-            index = {run: column_index(run) for run in set(letters)}
-            return list(map(int, digits)), list(map(index.__getitem__, letters))
-    rows, columns = zip(*map(coordinate_to_tuple, coordinates))
-    return list(rows), list(columns)
+def coordinates_to_arrays(coordinates: list[str]):
+    """The rows and the columns of `coordinates` as two int64 arrays, as coordinate_to_tuple
+    gives each: plain addresses ('B7', 'AB12': a column of a table, the cells a check names)
+    read all at once from their characters' codes; any other spelling ('$B$7', 'b7') cell by
+    cell. ValueError for an empty list or one that is no cell address, TypeError for one that
+    is no text, as coordinate_to_tuple would raise."""
+    import numpy as np
+    text = np.array(coordinates)
+    if text.dtype.kind == "U" and 2 <= text.dtype.itemsize // 4 <= 12:
+        codes = text.view(np.uint32).reshape(len(text), -1)
+        letter, digit = (codes >= 65) & (codes <= 90), (codes >= 48) & (codes <= 57)
+        letters, digits = letter.sum(axis=1), digit.sum(axis=1)
+        at = np.arange(codes.shape[1])
+        # letters first, then digits, then nothing (the padding of shorter addresses; a text
+        # that ends in NULs, which the array drops, is longer than what it holds)
+        in_digits = (at >= letters[:, None]) & (at < (letters + digits)[:, None])
+        if ((letters >= 1) & (letters <= 3) & (digits >= 1)).all() \
+                and (letter == (at < letters[:, None])).all() and (digit == in_digits).all() \
+                and (letters + digits == np.fromiter(map(len, coordinates), np.int64,
+                                                     len(coordinates))).all():
+            rows, cols = np.zeros(len(text), np.int64), np.zeros(len(text), np.int64)
+            for j in range(codes.shape[1]):
+                rows = np.where(digit[:, j], rows * 10 + codes[:, j] - 48, rows)
+                cols = np.where(letter[:, j], cols * 26 + codes[:, j] - 64, cols)
+            return rows, cols
+    rows, cols = zip(*map(coordinate_to_tuple, coordinates))
+    return np.array(rows, np.int64), np.array(cols, np.int64)
 
 
 @functools.lru_cache(maxsize=None)     # a book has few distinct column letters

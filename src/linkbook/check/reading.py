@@ -165,13 +165,14 @@ class FormulaCells:
     def judged(self, checks) -> tuple[set[tuple[str, str]], FormulaCells]:
         """What `checks` judged, parted: the cells that hold no formula here, and the formula
         cells."""
+        from ..base.xlsx import coordinates_to_arrays
         by_sheet: dict[str, list[str]] = {}
         for check in checks:
             for sheet, cells in check.judged.by_sheet.items():
                 by_sheet.setdefault(sheet, []).extend(cells)
         elsewhere, grids = set(), {}
-        for sheet, cells in by_sheet.items():
-            rows, cols = places(cells)
+        for sheet, cells in ((s, c) for s, c in by_sheet.items() if c):
+            rows, cols = coordinates_to_arrays(cells)
             grid = self.grids.get(sheet, np.zeros((0, 0), bool))
             inside = (rows < grid.shape[0]) & (cols < grid.shape[1])
             formula = np.zeros(len(cells), bool)
@@ -186,30 +187,6 @@ class FormulaCells:
         """These cells but those of `other`."""
         return FormulaCells(grids={sheet: grid & ~other.grids[sheet] if sheet in other.grids
                                    else grid for sheet, grid in self.grids.items()})
-
-
-def places(cells: list[str]) -> tuple[np.ndarray, np.ndarray]:
-    """The rows and columns of cell addresses, as coordinate_to_tuple reads each: plain ones
-    ('B7', as the checks name cells) read all at once as arrays of characters, any other
-    spelling by coordinates_to_lists."""
-    from ..base.xlsx import coordinates_to_lists
-    text = np.array(cells if cells else [""])
-    if text.dtype.kind == "U" and 2 <= text.dtype.itemsize // 4 <= 12:
-        codes = text.view(np.uint32).reshape(len(text), -1)
-        letter, digit = (codes >= 65) & (codes <= 90), (codes >= 48) & (codes <= 57)
-        letters, digits = letter.sum(axis=1), digit.sum(axis=1)
-        at = np.arange(codes.shape[1])
-        # letters first, then digits, then nothing (the padding of shorter addresses)
-        in_digits = (at >= letters[:, None]) & (at < (letters + digits)[:, None])
-        if ((letters >= 1) & (letters <= 3) & (digits >= 1)).all() \
-                and (letter == (at < letters[:, None])).all() and (digit == in_digits).all():
-            rows, cols = np.zeros(len(text), np.int64), np.zeros(len(text), np.int64)
-            for j in range(codes.shape[1]):
-                rows = np.where(digit[:, j], rows * 10 + codes[:, j] - 48, rows)
-                cols = np.where(letter[:, j], cols * 26 + codes[:, j] - 64, cols)
-            return rows, cols
-    rows, cols = coordinates_to_lists(cells) if cells else ([], [])
-    return np.asarray(rows, np.int64), np.asarray(cols, np.int64)
 
 
 def cell_order(key: tuple[str, str]) -> tuple:

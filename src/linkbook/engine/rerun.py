@@ -20,7 +20,7 @@ from .adapter import public_value
 from .errors import EngineError
 from .order import closure, downstream, group_deps
 from .references import cell_name
-from ..base.xlsx import coordinate_to_tuple, coordinates_to_lists
+from ..base.xlsx import coordinate_to_tuple, coordinates_to_arrays
 
 
 @contextmanager
@@ -90,7 +90,7 @@ class Values(Mapping):
         table: one lookup of the groups that own them)."""
         grid = self.engine.grid.get(sheet)
         try:
-            rows, cols = (np.array(x, dtype=np.int64) for x in coordinates_to_lists(cells))
+            rows, cols = coordinates_to_arrays(cells)
         except (TypeError, ValueError):             # no cells, or one that is no address
             grid = None
         if grid is None:
