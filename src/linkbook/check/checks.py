@@ -79,6 +79,18 @@ class JudgedCells:
     __hash__ = None
 
 
+def judged_count(checks, excluded) -> int:
+    """How many cells `checks` judged between them, each counted once, but for the (sheet,
+    cell) keys `excluded`: counted a sheet at a time, with no key made for each cell."""
+    by_sheet: dict[str, set[str]] = {}
+    for check in checks:
+        for sheet, cells in check.judged.by_sheet.items():
+            by_sheet.setdefault(sheet, set()).update(cells)
+    for sheet, cell in set(excluded):
+        by_sheet.get(sheet, set()).discard(cell)
+    return sum(map(len, by_sheet.values()))
+
+
 @dataclass
 class Check:
     """One column (or grid, or block) of formula cells compared with the reference."""

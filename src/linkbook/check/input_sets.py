@@ -30,7 +30,7 @@ from ..language.domain import LENGTH_UNITS, InputError, check_lengths_together, 
 from ..language.synthesis import task_of
 from ..language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
                                    OFFSET_KIND, RATE_KIND)
-from .checks import Check, differing, undetermined
+from .checks import Check, differing, judged_count, undetermined
 from .reading import mechanism_size, written_in
 from .synthesis import task_table, why_no_design, with_design
 
@@ -75,7 +75,7 @@ class InputSet:
     @property
     def cells(self) -> int:
         """Formula cells compared with the reference at this set (those not judged left out)."""
-        return len(set().union(*(c.judged for c in self.checks)) - self.not_judged())
+        return judged_count(self.checks, self.not_judged())
 
     @property
     def max_abs(self) -> float:

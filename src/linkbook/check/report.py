@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .checks import STORED, Check, differing, undetermined
+from .checks import STORED, Check, differing, judged_count, undetermined
 
 
 @dataclass
@@ -73,8 +73,7 @@ class Report:
         """Formula cells judged against the reference (each counted once; a constant where the
         record has a formula is judged, and differs, but is not a formula cell; a cell too near
         a singular position is not judged)."""
-        return len(set().union(*(c.judged for c in self.checks)) - set(self.replaced)
-                   - set(self.absent) - set(self.not_judged))
+        return judged_count(self.checks, [*self.replaced, *self.absent, *self.not_judged])
 
     @property
     def stored_differ(self) -> int:

@@ -3,6 +3,7 @@ column of a sweep table is one group), each a Group of Members; and the grouping
 (Grouper), of every sheet or only of what some cells need."""
 from __future__ import annotations
 
+from array import array
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,12 +20,37 @@ from ..base.xlsx import column_entries, coordinate_to_tuple
 READ_SKELETONS: dict[str, set[str]] = {}
 
 
-@dataclass(slots=True)     # one a formula cell: hundreds of thousands in a big book
+@dataclass(slots=True)
 class Member:
-    """A formula cell of a group."""
+    """A formula cell of a group, made when asked for (Members holds them as arrays)."""
     row: int
     col: int
     formula: str
+
+
+class Members:
+    """The formula cells of a group, in order: their rows and columns as arrays and their
+    formula texts (the sheet's own text objects), with no object per cell: a big book holds
+    hundreds of thousands. A Member is made when one is asked for."""
+    __slots__ = ("rows", "cols", "formulas")
+
+    def __init__(self, rows, cols, formulas: list[str]):
+        self.rows = np.asarray(rows, dtype=np.int64)
+        self.cols = np.asarray(cols, dtype=np.int64)
+        self.formulas = formulas
+
+    def __len__(self) -> int:
+        return len(self.formulas)
+
+    def __getitem__(self, i: int) -> Member:
+        return Member(int(self.rows[i]), int(self.cols[i]), self.formulas[i])
+
+    def __iter__(self):
+        return map(Member, self.rows.tolist(), self.cols.tolist(), self.formulas)
+
+    def take(self, index: list[int]) -> Members:
+        """The members at `index`, in its order."""
+        return Members(self.rows[index], self.cols[index], [self.formulas[i] for i in index])
 
 
 @dataclass
@@ -42,7 +68,7 @@ class Group:
     gid: int
     sheet: str
     shape: str
-    members: list[Member]
+    members: Members
     info: TokenInfo            # of members[0]
     descs: list[RefDesc]       # per reference of the shape: the same for every member
     mode: str = "vector"
@@ -50,8 +76,16 @@ class Group:
     inputs: list[RefDesc] = field(default_factory=list)   # per compiled input, in order
     batch: Batch = field(default_factory=Batch)
     each: list[EachCell] = field(default_factory=list)
-    rows: np.ndarray = None
-    cols: np.ndarray = None
+
+    @property
+    def rows(self) -> np.ndarray:
+        """The members' rows."""
+        return self.members.rows
+
+    @property
+    def cols(self) -> np.ndarray:
+        """The members' columns."""
+        return self.members.cols
 
     def reads(self, i: int) -> list[tuple[str, int, int, int, int]]:
         """Rectangles (sheet, top, left, bottom, right) read by member i."""
@@ -82,36 +116,41 @@ class Grouper:
         self.constants: dict[str, dict[tuple[int, int], object]] = {}
         self.groups: list[Group] = []
 
-    def read_cells(self, worksheets) -> dict[str, list[tuple[int, int, str]]]:
-        """The formulas of `worksheets` by sheet, sorted by row and column; their constants go
-        to self.constants."""
+    def read_cells(self, worksheets) -> dict[str, tuple[list[int], list[int], list[str]]]:
+        """The formulas of `worksheets` by sheet, as (rows, columns, texts) sorted by row and
+        column; their constants go to self.constants."""
         formulas_by_sheet = {}
         for ws in worksheets:
-            consts, forms = {}, []
+            consts, texts = {}, []
+            rows, cols = array("q"), array("q")     # no int object a cell while reading
             # only cells that exist (ExcelModel too)
-            for col, rows, values, kinds in column_entries(ws):
-                for row, value, kind in zip(rows, values, kinds):
+            for col, held_rows, values, kinds in column_entries(ws):
+                for row, value, kind in zip(held_rows, values, kinds):
                     if value is None:
                         continue
                     if kind == "f":
-                        forms.append((row, col, formula_text(ws.cell(row, col)) if type(value)
-                                      is not str else formula_of(value)))
+                        rows.append(row)
+                        cols.append(col)
+                        texts.append(formula_text(ws.cell(row, col)) if type(value)
+                                     is not str else formula_of(value))
                     else:
                         value = constant_of(value, kind, self.excel_model_constants)
                         if value is not None:
                             consts[(row, col)] = value
-            forms.sort()
+            order = np.lexsort((np.frombuffer(cols, np.int64), np.frombuffer(rows, np.int64)))
             self.constants[ws.title] = consts
-            formulas_by_sheet[ws.title] = forms
-            self.stats["formula_cells"] += len(forms)
+            formulas_by_sheet[ws.title] = (np.frombuffer(rows, np.int64)[order].tolist(),
+                                           np.frombuffer(cols, np.int64)[order].tolist(),
+                                           [texts[i] for i in order.tolist()])
+            self.stats["formula_cells"] += len(texts)
         return formulas_by_sheet
 
     def group(self, formulas_by_sheet) -> None:
         """Join the formulas of each sheet into groups of one shape (self.groups)."""
-        candidates: dict[tuple[str, str], list[Member]] = {}
+        candidates: dict[tuple[str, str], tuple[list, list, list]] = {}
         for sheet, forms in formulas_by_sheet.items():
             above, left = {}, {}   # last (row, col, shape, template) per column / per row
-            for row, col, formula in forms:
+            for row, col, formula in zip(*forms):
                 copied = self.copied_shape(formula, row, col, above, left)
                 if copied is not None:
                     above[col] = left[row] = copied
@@ -122,9 +161,13 @@ class Grouper:
                         above[col] = left[row] = (row, col, shape, template)
                     except UnsupportedFormulaError:
                         shape = "\0" + formula   # the tokenizer decides below
-                candidates.setdefault((sheet, shape), []).append(Member(row, col, formula))
-        exact: dict[tuple[str, str], tuple[list[Member], TokenInfo, list[RefDesc]]] = {}
-        for (sheet, shape), members in candidates.items():
+                rows, cols, texts = candidates.setdefault((sheet, shape), ([], [], []))
+                rows.append(row)
+                cols.append(col)
+                texts.append(formula)
+        exact: dict[tuple[str, str], tuple[list, TokenInfo, list[RefDesc]]] = {}
+        for (sheet, shape), held in candidates.items():
+            members = Members(*held)
             rep = members[0]
             lexed = None if shape.startswith("\0") else lex_spans(rep.formula, self.refs)
             skeleton = None if lexed is None else skeleton_of(rep.formula, lexed)
@@ -135,16 +178,19 @@ class Grouper:
                 exact_shape, descs = self._exact_shape(rep, sheet, info)
                 if exact_shape == shape:
                     READ_SKELETONS[skeleton] = info.functions
-                    exact[(sheet, shape)] = (members, info, descs)
+                    exact[(sheet, shape)] = ([members], info, descs)
                     continue
             if info.builder is None:
                 info = tokenize_member(rep, sheet, self.stats)
-            for m in members:  # the lexer misread this shape: re-read every member exactly
-                m_info = info if m is rep else tokenize_member(m, sheet, self.stats)
+            for i, m in enumerate(members):  # the lexer misread this shape: re-read each
+                m_info = info if i == 0 else tokenize_member(m, sheet, self.stats)
                 exact_shape, descs = self._exact_shape(m, sheet, m_info)
                 entry = exact.setdefault((sheet, "\0" + exact_shape), ([], m_info, descs))
-                entry[0].append(m)
-        for (sheet, shape), (members, info, descs) in exact.items():
+                entry[0].append(members.take([i]))
+        for (sheet, shape), (parts, info, descs) in exact.items():
+            members = parts[0] if len(parts) == 1 else Members(
+                np.concatenate([p.rows for p in parts]), np.concatenate([p.cols for p in parts]),
+                [text for p in parts for text in p.formulas])
             self.groups.append(Group(len(self.groups), sheet, shape, members, info, descs))
         self.stats["shapes"] = len(self.groups)
 
@@ -171,12 +217,11 @@ class Grouper:
         owner = {}
         for g in self.groups:
             rows, cols = owner.get(g.sheet, (0, 0))
-            owner[g.sheet] = (max(rows, max(m.row for m in g.members)),
-                              max(cols, max(m.col for m in g.members)))
+            owner[g.sheet] = (max(rows, int(g.rows.max())), max(cols, int(g.cols.max())))
         owner = {sheet: np.full((r + 1, c + 1), -1, dtype=np.int64)
                  for sheet, (r, c) in owner.items()}
         for g in self.groups:
-            owner[g.sheet][[m.row for m in g.members], [m.col for m in g.members]] = g.gid
+            owner[g.sheet][g.rows, g.cols] = g.gid
         todo = set()
         for sheet, a1 in cells:
             row, col = coordinate_to_tuple(a1)
@@ -196,8 +241,7 @@ class Grouper:
     def owners_read(g: Group, owner: dict[str, np.ndarray]) -> set[int]:
         """The groups (in `owner`, one grid per sheet) owning a cell that group g's references
         name, for any member."""
-        rows = np.array([m.row for m in g.members])
-        cols = np.array([m.col for m in g.members])
+        rows, cols = g.rows, g.cols
         found = set()
         for d in dict.fromkeys(g.descs):     # a reference written twice is read once
             grid = owner.get(d.sheet)

@@ -125,16 +125,15 @@ def split(g: Group, key, groups: list[Group], owner, member) -> None:
         parts.setdefault(key(m), []).append(i)
     index = list(parts.values())
     for idx in index[1:]:
-        part = Group(len(groups), g.sheet, g.shape, [g.members[i] for i in idx],
+        part = Group(len(groups), g.sheet, g.shape, g.members.take(idx),
                      g.info, g.descs, g.mode, g.func, g.inputs, g.batch,
-                     [g.each[i] for i in idx] if g.each else [], g.rows[idx], g.cols[idx])
+                     [g.each[i] for i in idx] if g.each else [])
         groups.append(part)
         owner[g.sheet][part.rows, part.cols] = part.gid
         member[g.sheet][part.rows, part.cols] = np.arange(len(idx))
     first = index[0]
-    g.members = [g.members[i] for i in first]
+    g.members = g.members.take(first)
     g.each = [g.each[i] for i in first] if g.each else []
-    g.rows, g.cols = g.rows[first], g.cols[first]
 
 
 def cell_order(groups: list[Group], gids: set[int], owner, member,

@@ -33,8 +33,6 @@ class Planner:
 
     def plan(self, g: Group) -> None:
         """Choose g's mode (vector, cell, each) and compile it."""
-        g.rows = np.array([m.row for m in g.members], dtype=np.int64)
-        g.cols = np.array([m.col for m in g.members], dtype=np.int64)
         functions = g.info.functions
         if functions & HOST_AWARE:
             return self.plan_each(g)
@@ -66,7 +64,7 @@ class Planner:
             self.stats["reused"] += 1
             return func, positions
         info = g.info
-        if rep is not g.members[0] or info.builder is None or info.keys is None:
+        if (rep.row, rep.col) != (g.rows[0], g.cols[0]) or info.builder is None or info.keys is None:
             info = tokenize_member(rep, g.sheet, self.stats)
         g.info = TokenInfo(info.spans, info.keys, info.functions, None)  # compile() consumes it
         func = compile_formula(info.builder, g.batch if g.mode == "vector" else None)
