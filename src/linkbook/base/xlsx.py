@@ -451,6 +451,11 @@ class _NotScanned(Exception):
 def _unescaped(text: str) -> str:
     """Character data (holding a '&') with XML's five entities and character references
     replaced."""
+    if "&#" not in text:
+        # '&amp;' last: only it makes a '&', so no entity is read twice ('&amp;lt;' is '&lt;')
+        return text.replace("&lt;", "<").replace("&gt;", ">").replace("&quot;", '"') \
+            .replace("&apos;", "'").replace("&amp;", "&")
+
     def one(m):
         name = m[1]
         if name[0] == "#":
@@ -526,8 +531,18 @@ def _scan_rows(text: str, ws: Worksheet, strings: list[str], date_styles: frozen
     cells = _CELL.findall(text)
     if len(cells) != text.count("<c") or "<!" in text or "<?" in text or "xmlns" in text:
         raise _NotScanned("a cell as the scan does not read it")
+    columns = ws.held_columns
     for (letters, digits, style, kind, f_open, f_attrs, f_text, v_open, v_text, is_open,
          is_text) in cells:
+        if f_open and not (kind or f_attrs or v_text) and len(f_text) <= FORMULA_NESTING_LIMIT:
+            # most cells: a formula storing no value, too short to reach Excel's limits
+            col = column_index(letters)
+            held = columns.get(col)
+            if held is None:
+                held = columns[col] = Column()
+            held.append(int(digits), "=" + (f_text if "&" not in f_text else _unescaped(f_text)),
+                        "f")
+            continue
         if "&" in f_attrs:
             raise _NotScanned("an entity in a formula's attributes")
         formula = None if not f_open else (
@@ -577,7 +592,8 @@ def _put(ws: Worksheet, row: int, col: int, address: str, kind: str, style,
         held = ws.held_columns[col] = Column()
     if formula is not None:
         text, shared = formula
-        if len(text) > FORMULA_LENGTH_LIMIT or text.count("(") > FORMULA_NESTING_LIMIT:
+        if len(text) > FORMULA_NESTING_LIMIT and (len(text) > FORMULA_LENGTH_LIMIT
+                                                  or text.count("(") > FORMULA_NESTING_LIMIT):
             _check_formula(text, part, ws.title, address)
         if shared in ("shared", "array", "dataTable"):
             unmodelled.append(f"{ws.title}!{address}: a {shared} formula")
