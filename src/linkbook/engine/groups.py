@@ -150,6 +150,7 @@ class Grouper:
         candidates: dict[tuple[str, str], tuple[list, list, list]] = {}
         for sheet, forms in formulas_by_sheet.items():
             above, left = {}, {}   # last (row, col, shape, template) per column / per row
+            by_shape: dict[str, tuple[list, list, list]] = {}
             for row, col, formula in zip(*forms):
                 copied = self.copied_shape(formula, row, col, above, left)
                 if copied is not None:
@@ -161,10 +162,13 @@ class Grouper:
                         above[col] = left[row] = (row, col, shape, template)
                     except UnsupportedFormulaError:
                         shape = "\0" + formula   # the tokenizer decides below
-                rows, cols, texts = candidates.setdefault((sheet, shape), ([], [], []))
-                rows.append(row)
-                cols.append(col)
-                texts.append(formula)
+                held = by_shape.get(shape)
+                if held is None:
+                    held = by_shape[shape] = ([], [], [])
+                held[0].append(row)
+                held[1].append(col)
+                held[2].append(formula)
+            candidates.update(((sheet, shape), held) for shape, held in by_shape.items())
         exact: dict[tuple[str, str], tuple[list, TokenInfo, list[RefDesc]]] = {}
         for (sheet, shape), held in candidates.items():
             members = Members(*held)
