@@ -455,10 +455,32 @@ def _plain(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
+# rows of one vector call: every node of the formula holds an object a row until the call
+# ends, and a long formula over a big grid would hold tens of MB at once
+CALL_ROWS = 4096
+
+
 def _per_row(func, batch: Batch, args: list, n: int, takes_inputs: bool) -> np.ndarray | None:
     """One call of a vector-compiled function over n rows: its n results (an object array), or
-    None where the call fails or does not give one value per row (a formula without inputs
-    gives one value, which every row shares)."""
+    None where a call fails or does not give one value per row (a formula without inputs
+    gives one value, which every row shares). Rows are called CALL_ROWS at a time: a vector
+    call gives each row what that row's own call gives, so the parts join to the whole."""
+    if n <= CALL_ROWS or not args:
+        return _rows_called(func, batch, args, n, takes_inputs)
+    values = np.empty(n, object)
+    for start in range(0, n, CALL_ROWS):
+        stop = min(start + CALL_ROWS, n)
+        part = _rows_called(func, batch, [a[start:stop] for a in args], stop - start,
+                            takes_inputs)
+        if part is None:
+            return None
+        values[start:stop] = part
+    return values
+
+
+def _rows_called(func, batch: Batch, args: list, n: int, takes_inputs: bool
+                 ) -> np.ndarray | None:
+    """_per_row's one call over n rows."""
     batch.n = n
     try:
         out = empty_as_zero(np.asarray(call(func, args), dtype=object))
