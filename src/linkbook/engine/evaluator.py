@@ -75,6 +75,7 @@ values in some constant cells: only what moves with them and is asked for), and 
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterator
 
 import numpy as np
@@ -490,7 +491,7 @@ def _rows_called(func, batch: Batch, args: list, n: int, takes_inputs: bool
         batch.n = 1
     flat = out.reshape(-1)
     if not (out.size == n or (out.size == 1 and not takes_inputs)) \
-            or any(isinstance(v, np.ndarray) for v in flat):
+            or any(map(isinstance, flat, itertools.repeat(np.ndarray))):
         return None
     values = np.empty(n, object)
     values[:] = list(flat) if out.size == n else [flat[0]] * n
