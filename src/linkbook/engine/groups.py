@@ -4,6 +4,7 @@ column of a sweep table is one group), each a Group of Members; and the grouping
 from __future__ import annotations
 
 from array import array
+from itertools import compress, repeat
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -125,15 +126,17 @@ class Grouper:
             rows, cols = array("q"), array("q")     # no int object a cell while reading
             # only cells that exist (ExcelModel too)
             for col, held_rows, values, kinds in column_entries(ws):
+                formula = [kind == "f" for kind in kinds]
+                found = len(texts)
+                texts += [formula_of(value) if type(value) is str else
+                          formula_text(ws.cell(row, col)) for row, value in
+                          zip(compress(held_rows, formula), compress(values, formula))]
+                rows.extend(compress(held_rows, formula))
+                cols.extend(repeat(col, len(texts) - found))
+                if len(texts) - found == len(kinds):
+                    continue                # a column of formulas only
                 for row, value, kind in zip(held_rows, values, kinds):
-                    if value is None:
-                        continue
-                    if kind == "f":
-                        rows.append(row)
-                        cols.append(col)
-                        texts.append(formula_text(ws.cell(row, col)) if type(value)
-                                     is not str else formula_of(value))
-                    else:
+                    if value is not None and kind != "f":
                         value = constant_of(value, kind, self.excel_model_constants)
                         if value is not None:
                             consts[(row, col)] = value
