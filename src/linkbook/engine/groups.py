@@ -3,8 +3,7 @@ column of a sweep table is one group), each a Group of Members; and the grouping
 (Grouper), of every sheet or only of what some cells need."""
 from __future__ import annotations
 
-from array import array
-from itertools import compress, repeat
+from itertools import compress
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -117,64 +116,42 @@ class Grouper:
         self.constants: dict[str, dict[tuple[int, int], object]] = {}
         self.groups: list[Group] = []
 
-    def read_cells(self, worksheets) -> dict[str, tuple[list[int], list[int], list[str]]]:
-        """The formulas of `worksheets` by sheet, as (rows, columns, texts) sorted by row and
-        column; their constants go to self.constants."""
+    def read_cells(self, worksheets) -> dict[str, list[tuple[int, list[int], list[str]]]]:
+        """The formulas of `worksheets` by sheet, a column at a time in column order: (column,
+        its rows in order, their texts); their constants go to self.constants."""
         formulas_by_sheet = {}
         for ws in worksheets:
-            consts, texts = {}, []
-            rows, cols = array("q"), array("q")     # no int object a cell while reading
+            consts, columns = {}, []
             # only cells that exist (ExcelModel too)
-            for col, held_rows, values, kinds in column_entries(ws):
+            for col, held_rows, values, kinds in sorted(column_entries(ws),
+                                                        key=lambda entry: entry[0]):
                 formula = [kind == "f" for kind in kinds]
-                found = len(texts)
-                texts += [formula_of(value) if type(value) is str else
-                          formula_text(ws.cell(row, col)) for row, value in
-                          zip(compress(held_rows, formula), compress(values, formula))]
-                rows.extend(compress(held_rows, formula))
-                cols.extend(repeat(col, len(texts) - found))
-                if len(texts) - found == len(kinds):
+                rows = list(compress(held_rows, formula))
+                if rows:
+                    columns.append((col, rows, [
+                        formula_of(value) if type(value) is str else
+                        formula_text(ws.cell(row, col))
+                        for row, value in zip(rows, compress(values, formula))]))
+                    self.stats["formula_cells"] += len(rows)
+                if len(rows) == len(kinds):
                     continue                # a column of formulas only
                 for row, value, kind in zip(held_rows, values, kinds):
                     if value is not None and kind != "f":
                         value = constant_of(value, kind, self.excel_model_constants)
                         if value is not None:
                             consts[(row, col)] = value
-            order = np.lexsort((np.frombuffer(cols, np.int64), np.frombuffer(rows, np.int64)))
             self.constants[ws.title] = consts
-            formulas_by_sheet[ws.title] = (np.frombuffer(rows, np.int64)[order].tolist(),
-                                           np.frombuffer(cols, np.int64)[order].tolist(),
-                                           [texts[i] for i in order.tolist()])
-            self.stats["formula_cells"] += len(texts)
+            formulas_by_sheet[ws.title] = columns
         return formulas_by_sheet
 
     def group(self, formulas_by_sheet) -> None:
         """Join the formulas of each sheet into groups of one shape (self.groups)."""
-        candidates: dict[tuple[str, str], tuple[list, list, list]] = {}
-        for sheet, forms in formulas_by_sheet.items():
-            above, left = {}, {}   # last (row, col, shape, template) per column / per row
-            by_shape: dict[str, tuple[list, list, list]] = {}
-            for row, col, formula in zip(*forms):
-                copied = self.copied_shape(formula, row, col, above, left)
-                if copied is not None:
-                    above[col] = left[row] = copied
-                    shape = copied[2]
-                else:
-                    try:
-                        shape, template = self.refs.fast_shape(formula, sheet, row, col)
-                        above[col] = left[row] = (row, col, shape, template)
-                    except UnsupportedFormulaError:
-                        shape = "\0" + formula   # the tokenizer decides below
-                held = by_shape.get(shape)
-                if held is None:
-                    held = by_shape[shape] = ([], [], [])
-                held[0].append(row)
-                held[1].append(col)
-                held[2].append(formula)
-            candidates.update(((sheet, shape), held) for shape, held in by_shape.items())
+        candidates: dict[tuple[str, str], Members] = {}
+        for sheet, columns in formulas_by_sheet.items():
+            candidates.update(((sheet, shape), members) for shape, members in
+                              self._shapes(sheet, columns).items())
         exact: dict[tuple[str, str], tuple[list, TokenInfo, list[RefDesc]]] = {}
-        for (sheet, shape), held in candidates.items():
-            members = Members(*held)
+        for (sheet, shape), members in candidates.items():
             rep = members[0]
             lexed = None if shape.startswith("\0") else lex_spans(rep.formula, self.refs)
             skeleton = None if lexed is None else skeleton_of(rep.formula, lexed)
@@ -200,6 +177,54 @@ class Grouper:
                 [text for p in parts for text in p.formulas])
             self.groups.append(Group(len(self.groups), sheet, shape, members, info, descs))
         self.stats["shapes"] = len(self.groups)
+
+    def _shapes(self, sheet: str, columns) -> dict[str, Members]:
+        """The formulas of one sheet (read_cells' columns) by shape, each shape's members in
+        row order and the shapes in the order a walk of the sheet row by row meets them.
+
+        A cell that is a copy of the nearest formula above it, or else of the nearest to its
+        left, has its shape (checking a copy is much cheaper than lexing); the entries keep the
+        cell the template was made from, so every copy is a shift of that one. The columns are
+        walked in turn, left to right: the nearest cells above and to the left are the same as
+        in a walk row by row, and a run of copies down a column is checked in one call."""
+        left = {}      # per row: the last (row, col, shape, template) to its left
+        found: dict[str, tuple[list, list, list]] = {}
+
+        def put(shape, col, rows, texts):
+            held = found.get(shape)
+            if held is None:
+                held = found[shape] = ([], [], [])
+            held[0].extend(rows)
+            held[1].extend([col] * len(rows))
+            held[2].extend(texts)
+
+        for col, rows, texts in columns:
+            above, i = None, 0
+            while i < len(rows):
+                row, formula = rows[i], texts[i]
+                entry = self.copied_shape(formula, row, col, above, left.get(row))
+                if entry is None:
+                    try:
+                        shape, template = self.refs.fast_shape(formula, sheet, row, col)
+                        entry = (row, col, shape, template)
+                    except UnsupportedFormulaError:
+                        put("\0" + formula, col, [row], [formula])  # the tokenizer decides
+                        i += 1
+                        continue
+                above = entry
+                origin, origin_col, shape, template = entry
+                end = i + 1 if origin_col != col else \
+                    template.copied_down(origin, rows, texts, i + 1)
+                left.update(zip(rows[i:end], [entry] * (end - i)))
+                put(shape, col, rows[i:end], texts[i:end])
+                i = end
+        shapes = {}
+        for shape, (rows, cols, texts) in found.items():
+            order = np.lexsort((cols, rows)).tolist()          # row by row
+            shapes[shape] = Members(np.array(rows)[order], np.array(cols)[order],
+                                    [texts[k] for k in order])
+        return dict(sorted(shapes.items(), key=lambda item: (int(item[1].rows[0]),
+                                                             int(item[1].cols[0]))))
 
     def group_needed(self, wb, cells) -> None:
         """Group only what the formula cells among `cells` need, directly or not, following
@@ -266,10 +291,9 @@ class Grouper:
 
     @staticmethod
     def copied_shape(formula, row, col, above, left):
-        """The shape of the cell above (or to the left) if this formula is its copy; a copy has
-        the same shape by definition, and checking it is much cheaper than lexing.  The entries
-        keep the cell the template was made from, so every copy is a shift of that one."""
-        for prev in (above.get(col), left.get(row)):
+        """The entry (row, col, shape, template) of the cell above, or else of the cell to the
+        left, if this formula is its copy; None if it is neither's."""
+        for prev in (above, left):
             if prev is None:
                 continue
             prow, pcol, shape, template = prev

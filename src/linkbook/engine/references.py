@@ -159,6 +159,21 @@ class Template:
         escaped = [t.replace("{", "{{").replace("}", "}}") for t in texts]
         return "{}".join(escaped), rows, min(rows, default=0), max(rows, default=0)
 
+    def copied_down(self, origin: int, rows: list[int], texts: list[str], start: int) -> int:
+        """How far from `start` the `texts` (of cells in this formula's column, at `rows`) are
+        this formula, written at row `origin`, copied down: the index of the first that is not
+        (shifted(row - origin, 0) != its text), or len(texts)."""
+        text, slots, lowest, highest = self._down_format
+        write = text.format
+        i, end = start, len(texts)
+        while i < end:
+            dr = rows[i] - origin
+            if slots and (lowest + dr < 1 or highest + dr > MAX_ROW) \
+                    or write(*[row + dr for row in slots]) != texts[i]:
+                break
+            i += 1
+        return i
+
     def shifted(self, dr: int, dc: int) -> str | None:
         """The text of this formula copied dr rows down and dc columns right (None if a
         reference would leave the sheet)."""
