@@ -54,3 +54,22 @@ def test_the_value_grid_reaches_the_furthest_empty_cell_a_copied_formula_reads(t
     model = engine.evaluate_formulas_model(path)
     assert {k: ours[k] for k in model} == model
     assert [ours[("Sheet", f"B{r}")] for r in range(1, 6)] == [r * 1.5 + 1 for r in range(1, 6)]
+
+
+def test_verify_reads_each_columns_places_once_and_lets_them_go(books, monkeypatch):
+    """The engine's values are read a column at a time at the book's own inputs and again at
+    the other input set: each short column's places (rows and columns of its addresses) are
+    read from its texts once, and forgotten when the verify ends."""
+    from linkbook.engine import rerun
+    read = []
+    real = rerun.coordinates_to_arrays
+
+    def counted(cells):
+        read.append(tuple(cells))
+        return real(cells)
+    monkeypatch.setattr(rerun, "coordinates_to_arrays", counted)
+    report = verifier.verify(books["fourbar"])
+    assert report.ok and [s.skipped for s in report.input_sets] == [None]
+    short = [cells for cells in read if len(cells) <= rerun.KEPT_CELLS]
+    assert short and len(short) == len(set(short))
+    assert rerun._kept_places.cache_info().currsize == 0

@@ -88,6 +88,9 @@ def verify(path: Path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Repo
         raise UnusableFile(record_mismatch(path, exc)) from None
     finally:
         forget_column_cells()
+        if evaluation is not None:
+            from ..engine.rerun import forget_places
+            forget_places()
 
 
 def _judge_other_sets(wb, record, evaluation, rules: Rules, params: dict, seed: int

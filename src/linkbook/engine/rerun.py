@@ -11,6 +11,7 @@ back into the engine, so it may rerun again with other inputs.
 """
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 
@@ -40,6 +41,34 @@ def rerun(engine, inputs: dict[tuple[str, str], object]) -> Iterator[Mapping]:
 
 
 _FLOATS = {float, np.float64}
+
+# A list of this many cells or fewer (a summary's cell, a check's few) is looked up cell by
+# cell: the arrays' fixed cost is more than the lookups'.
+FEW_CELLS = 4
+# The places of a list of up to this many cells (a bundled book's column) are kept for the
+# next lookup of the same cells; a longer column is read again (its reading is a small share
+# of its work, and what it kept would be a big book's memory).
+KEPT_CELLS = 256
+
+
+def places(cells: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """coordinates_to_arrays(cells); a short list's kept until forget_places(): verify reads
+    each column at the book's own inputs and again at each other input set."""
+    if len(cells) > KEPT_CELLS:
+        return coordinates_to_arrays(cells)
+    return _kept_places(tuple(cells))
+
+
+def forget_places() -> None:
+    """Let go of the kept places (at the end of a verify)."""
+    _kept_places.cache_clear()
+
+
+@functools.lru_cache(maxsize=512)
+def _kept_places(cells: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    rows, cols = coordinates_to_arrays(list(cells))
+    rows.flags.writeable = cols.flags.writeable = False
+    return rows, cols
 
 
 class Values(Mapping):
@@ -90,10 +119,10 @@ class Values(Mapping):
         table: one lookup of the groups that own them)."""
         grid = self.engine.grid.get(sheet)
         try:
-            rows, cols = coordinates_to_arrays(cells)
-        except (TypeError, ValueError):             # no cells, or one that is no address
+            rows, cols = (None, None) if len(cells) <= FEW_CELLS else places(cells)
+        except (TypeError, ValueError):             # one that is no address
             grid = None
-        if grid is None:
+        if grid is None or rows is None:
             return [self.get((sheet, cell)) for cell in cells]
         inside = (rows < grid.shape[0]) & (cols < grid.shape[1])   # beyond: no value, None
         rows, cols = np.where(inside, rows, 0), np.where(inside, cols, 0)
