@@ -73,3 +73,21 @@ def test_verify_reads_each_columns_places_once_and_lets_them_go(books, monkeypat
     short = [cells for cells in read if len(cells) <= rerun.KEPT_CELLS]
     assert short and len(short) == len(set(short))
     assert rerun._kept_places.cache_info().currsize == 0
+
+
+def test_verify_of_a_four_bar_imports_neither_synthesis_nor_the_applications(books):
+    """A process that verifies a bundled four-bar imports no module that only a synthesis book
+    or a recalculation by LibreOffice or Gnumeric uses (nor subprocess, which only they need)."""
+    import os
+    import subprocess
+    import sys
+    from conftest import HANG_GUARD_S, ROOT
+    code = ("import sys\n"
+            "from linkbook.apps.cli import main\n"
+            f"assert main(['verify', '--quiet', {str(books['fourbar'])!r}]) == 0\n"
+            "print(sorted(m for m in sys.modules if 'synthesis' in m or m in "
+            "('linkbook.engine.office', 'subprocess')))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=dict(os.environ, PYTHONPATH=str(ROOT / "src")),
+                          timeout=HANG_GUARD_S)
+    assert done.returncode == 0 and done.stdout.strip() == "[]", (done.stdout, done.stderr)
