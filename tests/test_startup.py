@@ -91,3 +91,47 @@ def test_verify_of_a_four_bar_imports_neither_synthesis_nor_the_applications(boo
                           env=dict(os.environ, PYTHONPATH=str(ROOT / "src")),
                           timeout=HANG_GUARD_S)
     assert done.returncode == 0 and done.stdout.strip() == "[]", (done.stdout, done.stderr)
+
+
+class _Cycle:
+    """An object that refers to itself: only the cyclic collector frees it."""
+
+    def __init__(self):
+        self.me = self
+
+
+def test_a_process_paused_until_exit_collects_between_books_only(monkeypatch):
+    """The command line's process keeps the collector off to its exit (pause_until_exit): a
+    paused call (a book's build or verify) collects the cycles the calls before it left when
+    it begins, the first call and a call inside another collect nothing, and the collector
+    stays off after each."""
+    import gc
+    import weakref
+    from linkbook.base import pause
+    monkeypatch.setattr(pause, "_until_exit", False)
+    monkeypatch.setattr(pause, "_begun", 0)
+    monkeypatch.setattr(pause, "_running", 0)
+    left, collected = [], []
+
+    def collections(phase, info):
+        if phase == "stop":
+            collected.append(info["generation"])
+
+    @pause.gc_paused
+    def book(inner=False):
+        seen = (gc.isenabled(), [ref() is None for ref in left], len(collected))
+        cycle = _Cycle()
+        left.append(weakref.ref(cycle))
+        return (seen, book()) if inner else seen
+
+    gc.callbacks.append(collections)
+    try:
+        pause.pause_until_exit()
+        first = book()
+        assert first == (False, [], 0) and not gc.isenabled()
+        outer, inner = book(inner=True)
+        assert outer == (False, [True], 1) and inner == (False, [True, False], 1)
+        assert book() == (False, [True, True, True], 2) and not gc.isenabled()
+    finally:
+        gc.callbacks.remove(collections)
+        gc.enable()
