@@ -135,3 +135,23 @@ def test_a_process_paused_until_exit_collects_between_books_only(monkeypatch):
     finally:
         gc.callbacks.remove(collections)
         gc.enable()
+
+
+def test_every_dataclass_has_a_docstring_of_its_own():
+    """A dataclass without a docstring gets one made from inspect.signature when its module is
+    imported, which costs more than making the rest of the class (a verify imports dozens)."""
+    import dataclasses
+    import importlib
+    import inspect
+    import pkgutil
+    import linkbook
+    made = []
+    for info in pkgutil.walk_packages(linkbook.__path__, "linkbook."):
+        if info.name.endswith("__main__"):
+            continue
+        module = importlib.import_module(info.name)
+        made += [f"{info.name}.{name}" for name, cls in vars(module).items()
+                 if inspect.isclass(cls) and cls.__module__ == info.name
+                 and dataclasses.is_dataclass(cls)
+                 and (cls.__doc__ or "").startswith(f"{cls.__name__}(")]
+    assert not made, ", ".join(made)

@@ -39,6 +39,7 @@ TOLERANCE_RULE = {
 
 @dataclass
 class Mismatch:
+    """A cell whose value differs from the reference's: what was expected, what it holds."""
     sheet: str
     cell: str
     expected: object
