@@ -155,3 +155,27 @@ def test_every_dataclass_has_a_docstring_of_its_own():
                  and dataclasses.is_dataclass(cls)
                  and (cls.__doc__ or "").startswith(f"{cls.__name__}(")]
     assert not made, ", ".join(made)
+
+
+def test_the_reference_reads_an_expression_once_and_evaluates_it_each_time(monkeypatch):
+    """The reference evaluates a mechanism's expressions at every solve: each text is read
+    into its tree once, each evaluation takes its own values, and a malformed text is refused
+    every time it is asked for."""
+    from linkbook.check.reference import expressions
+    parsed = []
+    real = expressions._Parser.parse
+
+    def counted(self):
+        parsed.append(self.text)
+        return real(self)
+    expressions._parsed.cache_clear()
+    monkeypatch.setattr(expressions._Parser, "parse", counted)
+    assert expressions.evaluate("a*2+1", {"a": 3.0}) == 7.0
+    assert expressions.evaluate("a*2+1", {"a": 4.0}) == 9.0
+    assert expressions.evaluate("SQRT(b)-1", {"b": 16.0}) == 3.0
+    assert expressions.evaluate("a*2+1", {"a": -0.5}) == 0.0
+    assert len(parsed) == 2
+    for _ in range(2):
+        with pytest.raises(ValueError):
+            expressions.evaluate("a*", {"a": 1.0})
+    assert len(parsed) == 4
