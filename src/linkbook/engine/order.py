@@ -177,12 +177,14 @@ def cell_order(groups: list[Group], gids: set[int], owner, member,
     return order
 
 
-def closure(start: set[int], edges: dict[int, set[int]]) -> set[int]:
-    """Every node reached from `start` along `edges` (start included)."""
+def closure(start: set[int], edges: dict[int, set[int]], within: set[int] | None = None
+            ) -> set[int]:
+    """Every node reached from `start` along `edges` (start included); with `within`, only
+    through nodes of it (the others neither reached nor passed through)."""
     reached, todo = set(start), list(start)
     while todo:
         for nxt in edges.get(todo.pop(), ()):
-            if nxt not in reached:
+            if nxt not in reached and (within is None or nxt in within):
                 reached.add(nxt)
                 todo.append(nxt)
     return reached

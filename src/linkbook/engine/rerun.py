@@ -160,6 +160,8 @@ class Rerun(Values):
         self.deps = {g.gid: group_deps(g, engine.owner) for g in engine.groups}
         self.moved = downstream(engine.groups, engine.grid, places, self.deps)
         self.done: set[int] = set()
+        # each group's component's place in the engine's order
+        self.place = {gid: k for k, component in enumerate(engine.order) for gid in component}
 
     def _ready(self, gids) -> None:
         waiting = (set(gids) & self.moved) - self.done
@@ -167,10 +169,13 @@ class Rerun(Values):
             self._evaluate(waiting)
 
     def _evaluate(self, gids: set[int]) -> None:
-        """Groups `gids` and what they need of the groups that moved, in the engine's order."""
-        need = (closure(gids, self.deps) & self.moved) - self.done
+        """Groups `gids` (moved, not yet evaluated) and what they need of the groups that
+        moved, in the engine's order. What they need is found through the groups still to be
+        evaluated only: a group that did not move reads none that did, and one evaluated
+        already had what it needs evaluated with it."""
+        need = closure(gids, self.deps, within=self.moved - self.done)
+        order = self.engine.order
         with np.errstate(all="ignore"):
-            for component in self.engine.order:
-                if need.intersection(component):
-                    self.engine._evaluate_component(component)
-                    self.done.update(component)
+            for k in sorted({self.place[gid] for gid in need}):
+                self.engine._evaluate_component(order[k])
+                self.done.update(order[k])
