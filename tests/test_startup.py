@@ -179,3 +179,22 @@ def test_the_reference_reads_an_expression_once_and_evaluates_it_each_time(monke
         with pytest.raises(ValueError):
             expressions.evaluate("a*", {"a": 1.0})
     assert len(parsed) == 4
+
+
+def test_a_rerun_finds_what_reads_which_group_and_what_moves_in_one_look(books):
+    """deps_and_downstream gives what group_deps and downstream give, looking at each group's
+    reads once: for every input of the book alone and for all of them together."""
+    from linkbook.check.input_sets import input_cell
+    from linkbook.check.reading import read_book
+    from linkbook.engine import evaluator, order
+    for path in books.values():
+        wb, record = read_book(path)
+        engine = evaluator.Engine(wb)
+        engine.run_view()
+        places = [engine._input_place(*input_cell(record, key)) for key in record.inputs
+                  if not record.inputs[key].designed]
+        deps = {g.gid: order.group_deps(g, engine.owner) for g in engine.groups}
+        for chosen in [[p] for p in places] + [places]:
+            moved = order.downstream(engine.groups, engine.grid, chosen, deps)
+            assert order.deps_and_downstream(engine.groups, engine.owner, chosen) == (deps, moved)
+        assert any(order.downstream(engine.groups, engine.grid, [p], deps) for p in places)

@@ -19,7 +19,7 @@ import numpy as np
 
 from .adapter import public_value
 from .errors import EngineError
-from .order import closure, downstream, group_deps
+from .order import closure, deps_and_downstream
 from .references import cell_name
 from ..base.xlsx import coordinate_to_tuple, coordinates_to_arrays
 
@@ -157,8 +157,7 @@ class Rerun(Values):
 
     def __init__(self, engine, places: list[tuple[str, int, int]]):
         super().__init__(engine)
-        self.deps = {g.gid: group_deps(g, engine.owner) for g in engine.groups}
-        self.moved = downstream(engine.groups, engine.grid, places, self.deps)
+        self.deps, self.moved = deps_and_downstream(engine.groups, engine.owner, places)
         self.done: set[int] = set()
         # each group's component's place in the engine's order
         self.place = {gid: k for k, component in enumerate(engine.order) for gid in component}
