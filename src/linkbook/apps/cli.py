@@ -14,7 +14,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 # Nothing heavy at the top: what the module imports runs before main() has the signals in hand
 # (a Ctrl-C there ends in Python's traceback); each function imports what it needs.
-from ..base import pause, stopping  # noqa: E402 (after the setting above)
+from ..base import stopping  # noqa: E402 (after the setting above)
 from ..base.errors import InputError  # noqa: E402
 
 
@@ -43,6 +43,7 @@ def run() -> None:
     after we return, the exit is Python's own. Callers of main() (the tests, the API) keep a
     normal return."""
     with stopping.handled():      # first: from here to the exit a signal ends in one line
+        from ..base import pause
         pause.pause_until_exit()  # the collector: off to the exit, on between books (pause.py)
         status = main()
         if sys.getprofile() is not None or sys.gettrace() is not None:
