@@ -54,3 +54,147 @@ def test_the_value_grid_reaches_the_furthest_empty_cell_a_copied_formula_reads(t
     model = engine.evaluate_formulas_model(path)
     assert {k: ours[k] for k in model} == model
     assert [ours[("Sheet", f"B{r}")] for r in range(1, 6)] == [r * 1.5 + 1 for r in range(1, 6)]
+
+
+def test_verify_reads_each_columns_places_once_and_lets_them_go(books, monkeypatch):
+    """The engine's values are read a column at a time at the book's own inputs and again at
+    the other input set: each short column's places (rows and columns of its addresses) are
+    read from its texts once, and forgotten when the verify ends."""
+    from linkbook.engine import rerun
+    read = []
+    real = rerun.coordinates_to_arrays
+
+    def counted(cells):
+        read.append(tuple(cells))
+        return real(cells)
+    monkeypatch.setattr(rerun, "coordinates_to_arrays", counted)
+    report = verifier.verify(books["fourbar"])
+    assert report.ok and [s.skipped for s in report.input_sets] == [None]
+    short = [cells for cells in read if len(cells) <= rerun.KEPT_CELLS]
+    assert short and len(short) == len(set(short))
+    assert rerun._kept_places.cache_info().currsize == 0
+
+
+def test_verify_of_a_four_bar_imports_neither_synthesis_nor_the_applications(books):
+    """A process that verifies a bundled four-bar imports no module that only a synthesis book
+    or a recalculation by LibreOffice or Gnumeric uses (nor subprocess, which only they need)."""
+    import os
+    import subprocess
+    import sys
+    from conftest import HANG_GUARD_S, ROOT
+    code = ("import sys\n"
+            "from linkbook.apps.cli import main\n"
+            f"assert main(['verify', '--quiet', {str(books['fourbar'])!r}]) == 0\n"
+            "print(sorted(m for m in sys.modules if 'synthesis' in m or m in "
+            "('linkbook.engine.office', 'subprocess')))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=dict(os.environ, PYTHONPATH=str(ROOT / "src")),
+                          timeout=HANG_GUARD_S)
+    assert done.returncode == 0 and done.stdout.strip() == "[]", (done.stdout, done.stderr)
+
+
+class _Cycle:
+    """An object that refers to itself: only the cyclic collector frees it."""
+
+    def __init__(self):
+        self.me = self
+
+
+def test_a_process_paused_until_exit_collects_between_books_only(monkeypatch):
+    """The command line's process keeps the collector off to its exit (pause_until_exit): a
+    paused call (a book's build or verify) collects the cycles the calls before it left when
+    it begins, the first call and a call inside another collect nothing, and the collector
+    stays off after each."""
+    import gc
+    import weakref
+    from linkbook.base import pause
+    monkeypatch.setattr(pause, "_until_exit", False)
+    monkeypatch.setattr(pause, "_begun", 0)
+    monkeypatch.setattr(pause, "_running", 0)
+    left, collected = [], []
+
+    def collections(phase, info):
+        if phase == "stop":
+            collected.append(info["generation"])
+
+    @pause.gc_paused
+    def book(inner=False):
+        seen = (gc.isenabled(), [ref() is None for ref in left], len(collected))
+        cycle = _Cycle()
+        left.append(weakref.ref(cycle))
+        return (seen, book()) if inner else seen
+
+    gc.callbacks.append(collections)
+    try:
+        pause.pause_until_exit()
+        first = book()
+        assert first == (False, [], 0) and not gc.isenabled()
+        outer, inner = book(inner=True)
+        assert outer == (False, [True], 1) and inner == (False, [True, False], 1)
+        assert book() == (False, [True, True, True], 2) and not gc.isenabled()
+    finally:
+        gc.callbacks.remove(collections)
+        gc.enable()
+
+
+def test_every_dataclass_has_a_docstring_of_its_own():
+    """A dataclass without a docstring gets one made from inspect.signature when its module is
+    imported, which costs more than making the rest of the class (a verify imports dozens)."""
+    import dataclasses
+    import importlib
+    import inspect
+    import pkgutil
+    import linkbook
+    made = []
+    for info in pkgutil.walk_packages(linkbook.__path__, "linkbook."):
+        if info.name.endswith("__main__"):
+            continue
+        module = importlib.import_module(info.name)
+        made += [f"{info.name}.{name}" for name, cls in vars(module).items()
+                 if inspect.isclass(cls) and cls.__module__ == info.name
+                 and dataclasses.is_dataclass(cls)
+                 and (cls.__doc__ or "").startswith(f"{cls.__name__}(")]
+    assert not made, ", ".join(made)
+
+
+def test_the_reference_reads_an_expression_once_and_evaluates_it_each_time(monkeypatch):
+    """The reference evaluates a mechanism's expressions at every solve: each text is read
+    into its tree once, each evaluation takes its own values, and a malformed text is refused
+    every time it is asked for."""
+    from linkbook.check.reference import expressions
+    parsed = []
+    real = expressions._Parser.parse
+
+    def counted(self):
+        parsed.append(self.text)
+        return real(self)
+    expressions._parsed.cache_clear()
+    monkeypatch.setattr(expressions._Parser, "parse", counted)
+    assert expressions.evaluate("a*2+1", {"a": 3.0}) == 7.0
+    assert expressions.evaluate("a*2+1", {"a": 4.0}) == 9.0
+    assert expressions.evaluate("SQRT(b)-1", {"b": 16.0}) == 3.0
+    assert expressions.evaluate("a*2+1", {"a": -0.5}) == 0.0
+    assert len(parsed) == 2
+    for _ in range(2):
+        with pytest.raises(ValueError):
+            expressions.evaluate("a*", {"a": 1.0})
+    assert len(parsed) == 4
+
+
+def test_a_rerun_finds_what_reads_which_group_and_what_moves_in_one_look(books):
+    """deps_and_downstream gives what group_deps and downstream give, looking at each group's
+    reads once: for every input of the book alone and for all of them together."""
+    from linkbook.check.input_sets import input_cell
+    from linkbook.check.reading import read_book
+    from linkbook.engine import evaluator, order
+    for path in books.values():
+        wb, record = read_book(path)
+        engine = evaluator.Engine(wb)
+        engine.run_view()
+        places = [engine._input_place(*input_cell(record, key)) for key in record.inputs
+                  if not record.inputs[key].designed]
+        deps = {g.gid: order.group_deps(g, engine.owner) for g in engine.groups}
+        for chosen in [[p] for p in places] + [places]:
+            moved = order.downstream(engine.groups, engine.grid, chosen, deps)
+            assert order.deps_and_downstream(engine.groups, engine.owner, chosen) == (deps, moved)
+        assert any(order.downstream(engine.groups, engine.grid, [p], deps) for p in places)

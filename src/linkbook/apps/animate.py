@@ -33,6 +33,7 @@ class AnimationError(Exception):
 
 @dataclass
 class Frame:
+    """One frame of the animation: the input's value and the links drawn there."""
     value: float                                       # the input (degrees or length)
     links: list[list[tuple[float, float]]] | None      # None: the loop cannot close here
     points: dict[str, tuple[float, float]] = field(default_factory=dict)
@@ -40,6 +41,7 @@ class Frame:
 
 @dataclass
 class Animation:
+    """What the animation draws: its frames, the links' names and colours, the traced point."""
     title: str
     symbol: str                   # θ12, s
     unit: str                     # deg or the length unit

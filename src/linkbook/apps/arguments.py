@@ -58,7 +58,7 @@ VERIFY_OUTPUT = """output:
 
 
 def parser():
-    from .preview import PREVIEW_DPI     # standard library only: cheap to import
+    from .preview import PREVIEW_DPI     # the standard library and the engine's errors only
     from ..language.domain import LENGTH_UNITS
     ap = argparse.ArgumentParser(
         prog="linkbook",

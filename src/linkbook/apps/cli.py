@@ -43,6 +43,8 @@ def run() -> None:
     after we return, the exit is Python's own. Callers of main() (the tests, the API) keep a
     normal return."""
     with stopping.handled():      # first: from here to the exit a signal ends in one line
+        from ..base import pause
+        pause.pause_until_exit()  # the collector: off to the exit, on between books (pause.py)
         status = main()
         if sys.getprofile() is not None or sys.gettrace() is not None:
             raise SystemExit(status)

@@ -121,7 +121,7 @@ def _picture(args, book: Path) -> int:
 
 def preview_pages(args) -> int:
     from ..base.files import ensure_folder
-    from ..engine.office import OfficeUnavailable
+    from ..engine.errors import OfficeUnavailable
     from .preview import preview, visible_sheets
     from ..base.safety import UnsafeFile, check_zip
     book = Path(args.book)

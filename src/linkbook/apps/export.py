@@ -21,6 +21,7 @@ FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
 
 @dataclass
 class Table:
+    """One table sheet as export writes it: its header rows, then its data rows."""
     sheet: str
     rows: list[int]     # the header rows as in the book, then the data rows
     width: int | None = None    # its last column, where a block beside it is no part of it

@@ -8,7 +8,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from ..engine.office import OfficeFailed, OfficeUnavailable, _run, to_pdf_all
+from ..engine.errors import OfficeFailed, OfficeUnavailable
 
 PREVIEW_DPI = 110          # a table's small print stays readable
 
@@ -22,6 +22,8 @@ def preview(path, outdir, dpi: int = PREVIEW_DPI, sheets: list[str] | None = Non
     STEM.pdf (those sheets, in order) and STEM-SHEET-1.png, STEM-SHEET-2.png, ... per sheet
     (SHEET with anything but letters, digits, - and _ as _; pdftoppm pads the number with zeros
     when a sheet prints ten or more pages). Returns the pictures in print order."""
+    # here, not at the top: the argument parser imports this module for PREVIEW_DPI
+    from ..engine.office import _run, to_pdf_all
     pdftoppm = shutil.which("pdftoppm")
     if pdftoppm is None:
         raise OfficeUnavailable("pdftoppm (Debian package poppler-utils) is needed for PNG "

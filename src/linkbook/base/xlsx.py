@@ -238,6 +238,7 @@ def column_entries(ws):
 
 @dataclass(frozen=True)
 class DefinedName:
+    """A defined name of the book, as its workbook part writes it."""
     name: str
     attr_text: str
     hidden: bool = False

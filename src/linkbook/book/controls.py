@@ -40,6 +40,7 @@ SHAPES_PER_BLOCK = 1024  # VML shape ids come in blocks of 1,024 per drawing (o:
 
 @dataclass(frozen=True)
 class Control:
+    """A spin button or scroll bar (a form control) and the cell it sets."""
     kind: str                 # "Spin" or "Scroll"
     cell: str                 # the linked cell on the same sheet, "I7"
     min: int

@@ -285,6 +285,7 @@ ROWS_PER_CHUNK = 2000
 
 @dataclass
 class _SheetCells:
+    """One worksheet's cells written as XML, held back from openpyxl's save."""
     dimension: str                       # openpyxl's calculate_dimension() of the real cells
     rows: list[bytes]                    # the `<row>` elements, in chunks
 
@@ -308,6 +309,7 @@ _DIMENSION = re.compile(rb'<dimension ref="[^"]*"\s*/>')
 
 @dataclass
 class HeldCells:
+    """Every worksheet's cells held back from openpyxl's save, and their shared strings."""
     sheets: dict[str, _SheetCells] = field(default_factory=dict)
     strings: _SharedStrings = field(default_factory=_SharedStrings)
 

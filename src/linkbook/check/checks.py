@@ -39,6 +39,7 @@ TOLERANCE_RULE = {
 
 @dataclass
 class Mismatch:
+    """A cell whose value differs from the reference's: what was expected, what it holds."""
     sheet: str
     cell: str
     expected: object
@@ -234,7 +235,9 @@ def compare(check: Check, sheet: str, cells: list[str], got: list, expected, uni
     is_error, error_code, tol, relative = rules.is_error, rules.error_code, rules.tol, \
         rules.relative
     period = ANGLE_UNITS.get(unit)
-    expected = np.broadcast_to(np.asarray(expected, dtype=float), (len(cells),))
+    expected = np.asarray(expected, dtype=float)
+    if expected.shape != (len(cells),):     # a column already (most): no view made of it
+        expected = np.broadcast_to(expected, (len(cells),))
     rest = _agreeing(check, sheet, cells, got, expected, period, rules)
     for i in rest:
         cell, value, exp = cells[i], got[i], expected[i]

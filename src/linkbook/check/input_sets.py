@@ -27,12 +27,10 @@ import numpy as np
 from ..base import sheets as layout
 from ..base.record import BuildRecord
 from ..language.domain import LENGTH_UNITS, InputError, check_lengths_together, check_value
-from ..language.synthesis import task_of
 from ..language.mechanisms import (ANGLE_KIND, BRANCH_KIND, LENGTH_KIND, MOTION_SYMBOLS,
                                    OFFSET_KIND, RATE_KIND)
 from .checks import Check, differing, judged_count, undetermined
 from .reading import mechanism_size, written_in
-from .synthesis import task_table, why_no_design, with_design
 
 DEFAULT_SEED = 1
 OTHER_SETS = 1          # input sets judged besides the book's own
@@ -121,6 +119,7 @@ def _why_none(record: BuildRecord, input_kind: str, params: dict[str, float], se
     values = draw(record, input_kind, params, seed, number, 0.5 ** SHRINKS, task)
     if record.synthesis is None or values is None:
         return "no inputs drawn near the book's are within the domain (domain.py)"
+    from .synthesis import why_no_design     # a synthesis book's (as below): here, on use
     moved = {key: values[TASK + key] for key in task}
     why = why_no_design(record, moved, values)
     return ("no task drawn near the book's has a design like the book's (" +
@@ -159,6 +158,7 @@ def draw(record: BuildRecord, input_kind: str, params: dict[str, float], seed: i
     if record.synthesis is not None:
         if task is None:
             raise ValueError("a synthesis book's input set moves its task: give its inputs")
+        from .synthesis import with_design
         moved = _moved_task(task, rng, shrink)
         if not _task_in_domain(record, moved):
             return None
@@ -193,6 +193,8 @@ def _task_in_domain(record: BuildRecord, moved: dict[str, float]) -> bool:
     """Whether the task with these inputs is one the language accepts (function generation:
     x0 < x1, the spans within ±360°, the given x ascending, f(x0) ≠ f(x1) both numbers;
     motion and path generation: the angles within ±360°)."""
+    from ..language.synthesis import task_of
+    from .synthesis import task_table
     try:
         task_of({"synthesis": task_table(record, moved)}, record.kinds(), "")
     except InputError:

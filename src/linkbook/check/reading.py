@@ -199,10 +199,9 @@ def stored_values(wb, path, cells: FormulaCells) -> dict[tuple[str, str], object
     """(sheet, cell) -> the value each of `cells` (formula cells) stores with its formula (the
     `<v>`): what LibreOffice with default settings, openpyxl's data_only and pandas show. Numbers
     as float, errors as office.CellError, text as str; a cell that stores none is left out."""
-    from ..base.xlsx import CellError
-    from ..engine.office import read_values
-    from ..base.xlsx import column_letter
+    from ..base.xlsx import CellError, column_letter
     if not all(hasattr(ws, "stored_items") for ws in wb.worksheets):   # openpyxl read it
+        from ..engine.office import read_values
         return {k: v for k, v in read_values(path).items() if k in cells}
     out = {}
     for ws in wb.worksheets:

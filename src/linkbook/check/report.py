@@ -9,6 +9,7 @@ from .checks import STORED, Check, differing, judged_count, undetermined
 
 @dataclass
 class Report:
+    """The verdict on one book: its checks, at its own inputs and at the other input sets."""
     path: str
     mechanism: str
     engine: str

@@ -24,7 +24,6 @@ from .reading import (RECORD_ERRORS, FormulaCells, UnusableFile, input_column, i
                       mechanism_size, read_book, record_mismatch, stored_values)
 from .report import Report, cell_ranges, cell_runs, likely_causes
 from .stored import check_replaced, check_stored, not_formulas
-from .synthesis import task_inputs
 
 # what the command, the package's face and the tests take from here
 __all__ = ["ABS_TOL", "DEFAULT_SEED", "PER", "TOLERANCE_RULE", "Check", "Mismatch", "Reference",
@@ -88,6 +87,9 @@ def verify(path: Path, engine: str = "vector", seed: int = DEFAULT_SEED) -> Repo
         raise UnusableFile(record_mismatch(path, exc)) from None
     finally:
         forget_column_cells()
+        if evaluation is not None:
+            from ..engine.rerun import forget_places
+            forget_places()
 
 
 def _judge_other_sets(wb, record, evaluation, rules: Rules, params: dict, seed: int
@@ -100,7 +102,10 @@ def _judge_other_sets(wb, record, evaluation, rules: Rules, params: dict, seed: 
     solver = Reference(record)
     sweep = record.sweep
     angles = input_column(wb[sweep.sheet], "A", sweep.rows, solver.mechanism.input_is_angle)
-    task = None if record.synthesis is None else task_inputs(wb, record)
+    task = None
+    if record.synthesis is not None:
+        from .synthesis import task_inputs      # a synthesis book's: imported for those only
+        task = task_inputs(wb, record)
     sets = other_sets(solver, record, params, angles, seed, task=task)
     for input_set in (s for s in sets if s.skipped is None):
         changed = {k: input_set.inputs[k] for k in input_set.changed}
@@ -123,7 +128,7 @@ def report_of(path, engine: str = "vector", seed: int | None = None) -> Report:
     `error` is the one line that says why (the command prints it; the API returns it), so
     that a status is always there to act on. `seed` None: DEFAULT_SEED."""
     from ..base.safety import UnsafeFile
-    from ..engine.office import OfficeFailed, OfficeUnavailable
+    from ..engine.errors import OfficeFailed, OfficeUnavailable
     try:
         return verify(Path(path), engine, DEFAULT_SEED if seed is None else seed)
     except (UnusableFile, UnsafeFile, OfficeUnavailable, OfficeFailed) as exc:

@@ -1,4 +1,5 @@
-"""The engine's errors: a workbook it cannot evaluate, and why."""
+"""The engine's errors: a workbook it cannot evaluate, and why; and an application that cannot
+recalculate one (office.py raises these; here so that catching them imports no subprocess)."""
 
 
 class EngineError(Exception):
@@ -11,3 +12,11 @@ class UnsupportedFormulaError(EngineError):
 
 class CircularReferenceError(EngineError):
     """Formula cells read each other in a cycle."""
+
+
+class OfficeUnavailable(Exception):
+    """soffice (or pdftoppm, for previews) is not installed."""
+
+
+class OfficeFailed(Exception):
+    """soffice ran but did not produce the file it was asked for (or timed out)."""

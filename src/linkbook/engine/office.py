@@ -28,6 +28,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..base.xlsx import CellError, error_code, is_error  # noqa: F401  (a recalculation is read with these)
+from .errors import OfficeFailed, OfficeUnavailable  # noqa: F401  (raised here; callers take them)
 
 TIMEOUT_S = 300
 XLSX_FILTER = "xlsx:Calc MS Excel 2007 XML"
@@ -52,14 +53,6 @@ xmlns:xs="http://www.w3.org/2001/XMLSchema" xmlns:xsi="http://www.w3.org/2001/XM
 <prop oor:name="ODFRecalcMode" oor:op="fuse"><value>0</value></prop></item>
 </oor:items>
 """
-
-
-class OfficeUnavailable(Exception):
-    """soffice (or pdftoppm, for previews) is not installed."""
-
-
-class OfficeFailed(Exception):
-    """soffice ran but did not produce the file it was asked for (or timed out)."""
 
 
 # ---------------------------------------------------------------- running soffice

@@ -176,12 +176,14 @@ def cell_order(groups: list[Group], gids: set[int], owner, member,
     return order
 
 
-def closure(start: set[int], edges: dict[int, set[int]]) -> set[int]:
-    """Every node reached from `start` along `edges` (start included)."""
+def closure(start: set[int], edges: dict[int, set[int]], within: set[int] | None = None
+            ) -> set[int]:
+    """Every node reached from `start` along `edges` (start included); with `within`, only
+    through nodes of it (the others neither reached nor passed through)."""
     reached, todo = set(start), list(start)
     while todo:
         for nxt in edges.get(todo.pop(), ()):
-            if nxt not in reached:
+            if nxt not in reached and (within is None or nxt in within):
                 reached.add(nxt)
                 todo.append(nxt)
     return reached
@@ -192,11 +194,40 @@ def downstream(groups: list[Group], grid: dict[str, np.ndarray], places, deps: d
     """The groups that read a cell of `places` ((sheet, row, col) each), directly or through
     other groups (`deps`: the groups each group reads; `grid`: a value grid per sheet, for its
     shape)."""
+    marks = {s: np.zeros(g.shape, dtype=np.int8) for s, g in grid.items()}
+    for sheet, row, col in places:
+        marks[sheet][row, col] = 1
+    return closure({g.gid for g in groups if 1 in found_in(g, marks)}, _readers(deps))
+
+
+CHANGED = -2        # a changed place in a copy of the owner grids (no group has this id)
+
+
+def deps_and_downstream(groups: list[Group], owner: dict[str, np.ndarray], places
+                        ) -> tuple[dict[int, set[int]], set[int]]:
+    """{gid: group_deps(g, owner)} and downstream() of `places` ((sheet, row, col) of constant
+    cells: no group owns them), found in one look at what each group reads: the places
+    marked CHANGED in a copy of the owner grids of their sheets."""
+    marked = dict(owner)
+    for sheet in {sheet for sheet, _, _ in places}:
+        marked[sheet] = owner[sheet].copy()
+    for sheet, row, col in places:
+        if marked[sheet][row, col] >= 0:
+            raise ValueError(f"{sheet} row {row} column {col} holds a formula, not a constant")
+        marked[sheet][row, col] = CHANGED
+    deps, first = {}, set()
+    for g in groups:
+        found = found_in(g, marked)
+        if CHANGED in found:
+            first.add(g.gid)
+        deps[g.gid] = found - {-1, CHANGED}
+    return deps, closure(first, _readers(deps))
+
+
+def _readers(deps: dict[int, set[int]]) -> dict[int, set[int]]:
+    """The groups that read each group (`deps` turned round)."""
     readers: dict[int, set[int]] = {}
     for gid, ds in deps.items():
         for d in ds:
             readers.setdefault(d, set()).add(gid)
-    marks = {s: np.zeros(g.shape, dtype=np.int8) for s, g in grid.items()}
-    for sheet, row, col in places:
-        marks[sheet][row, col] = 1
-    return closure({g.gid for g in groups if 1 in found_in(g, marks)}, readers)
+    return readers

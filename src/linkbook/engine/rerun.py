@@ -11,6 +11,7 @@ back into the engine, so it may rerun again with other inputs.
 """
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 
@@ -18,7 +19,7 @@ import numpy as np
 
 from .adapter import public_value
 from .errors import EngineError
-from .order import closure, downstream, group_deps
+from .order import closure, deps_and_downstream
 from .references import cell_name
 from ..base.xlsx import coordinate_to_tuple, coordinates_to_arrays
 
@@ -40,6 +41,34 @@ def rerun(engine, inputs: dict[tuple[str, str], object]) -> Iterator[Mapping]:
 
 
 _FLOATS = {float, np.float64}
+
+# A list of this many cells or fewer (a summary's cell, a check's few) is looked up cell by
+# cell: the arrays' fixed cost is more than the lookups'.
+FEW_CELLS = 4
+# The places of a list of up to this many cells (a bundled book's column) are kept for the
+# next lookup of the same cells; a longer column is read again (its reading is a small share
+# of its work, and what it kept would be a big book's memory).
+KEPT_CELLS = 256
+
+
+def places(cells: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """coordinates_to_arrays(cells); a short list's kept until forget_places(): verify reads
+    each column at the book's own inputs and again at each other input set."""
+    if len(cells) > KEPT_CELLS:
+        return coordinates_to_arrays(cells)
+    return _kept_places(tuple(cells))
+
+
+def forget_places() -> None:
+    """Let go of the kept places (at the end of a verify)."""
+    _kept_places.cache_clear()
+
+
+@functools.lru_cache(maxsize=512)
+def _kept_places(cells: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    rows, cols = coordinates_to_arrays(list(cells))
+    rows.flags.writeable = cols.flags.writeable = False
+    return rows, cols
 
 
 class Values(Mapping):
@@ -90,10 +119,10 @@ class Values(Mapping):
         table: one lookup of the groups that own them)."""
         grid = self.engine.grid.get(sheet)
         try:
-            rows, cols = coordinates_to_arrays(cells)
-        except (TypeError, ValueError):             # no cells, or one that is no address
+            rows, cols = (None, None) if len(cells) <= FEW_CELLS else places(cells)
+        except (TypeError, ValueError):             # one that is no address
             grid = None
-        if grid is None:
+        if grid is None or rows is None:
             return [self.get((sheet, cell)) for cell in cells]
         inside = (rows < grid.shape[0]) & (cols < grid.shape[1])   # beyond: no value, None
         rows, cols = np.where(inside, rows, 0), np.where(inside, cols, 0)
@@ -128,9 +157,10 @@ class Rerun(Values):
 
     def __init__(self, engine, places: list[tuple[str, int, int]]):
         super().__init__(engine)
-        self.deps = {g.gid: group_deps(g, engine.owner) for g in engine.groups}
-        self.moved = downstream(engine.groups, engine.grid, places, self.deps)
+        self.deps, self.moved = deps_and_downstream(engine.groups, engine.owner, places)
         self.done: set[int] = set()
+        # each group's component's place in the engine's order
+        self.place = {gid: k for k, component in enumerate(engine.order) for gid in component}
 
     def _ready(self, gids) -> None:
         waiting = (set(gids) & self.moved) - self.done
@@ -138,10 +168,13 @@ class Rerun(Values):
             self._evaluate(waiting)
 
     def _evaluate(self, gids: set[int]) -> None:
-        """Groups `gids` and what they need of the groups that moved, in the engine's order."""
-        need = (closure(gids, self.deps) & self.moved) - self.done
+        """Groups `gids` (moved, not yet evaluated) and what they need of the groups that
+        moved, in the engine's order. What they need is found through the groups still to be
+        evaluated only: a group that did not move reads none that did, and one evaluated
+        already had what it needs evaluated with it."""
+        need = closure(gids, self.deps, within=self.moved - self.done)
+        order = self.engine.order
         with np.errstate(all="ignore"):
-            for component in self.engine.order:
-                if need.intersection(component):
-                    self.engine._evaluate_component(component)
-                    self.done.update(component)
+            for k in sorted({self.place[gid] for gid in need}):
+                self.engine._evaluate_component(order[k])
+                self.done.update(order[k])

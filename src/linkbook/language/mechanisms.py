@@ -56,6 +56,7 @@ def constant_name(key: str) -> str:
 
 @dataclass(frozen=True)
 class Mechanism:
+    """A compiled mechanism: its parameters, its input and the model its steps build."""
     name: str
     parameters: dict[str, str]      # symbol -> kind, in the order the inputs block shows them
     input_key: str                  # "theta12"

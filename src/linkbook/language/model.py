@@ -32,6 +32,7 @@ NEWTON, NEWTON_METRE = "N", "N·m"                # a force, a moment (sheet For
 
 @dataclass(frozen=True)
 class Quantity:
+    """One quantity of the model: a column of the tables, or an alias written into them."""
     key: str            # ASCII id shared with the reference solver: "theta13"
     symbol: str         # what a reader sees: "θ13"
     unit: str           # LENGTH, RAD, DEG or RATIO

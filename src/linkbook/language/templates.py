@@ -34,6 +34,7 @@ ARGUMENTS = {"set": "sets", "step": "step", "branch": "branch", "unit": "unit",
 
 @dataclass(frozen=True)
 class Parameter:
+    """One input of a template: its symbol, kind, unit, named cell and value."""
     symbol: str
     kind: str
     label: str
@@ -47,6 +48,7 @@ class Parameter:
 
 @dataclass(frozen=True)
 class Sweep:
+    """The input's sweep: from start to stop by step."""
     start: float
     stop: float
     step: float
@@ -63,6 +65,7 @@ class Sweep:
 
 @dataclass(frozen=True)
 class Template:
+    """A template read and checked: its mechanism, parameters, sweep and layout."""
     name: str
     title: str
     source: str

@@ -20,6 +20,7 @@ Steps = Sequence[tuple[int, Mapping, StepTopology]]
 
 @dataclass
 class Body:
+    """A moving body of the force analysis: its joints, its mass's entry, its number."""
     joints: list[str]
     rank: int                       # the order in which the description names it
     block: bool = False
@@ -57,6 +58,7 @@ class Pair:
 
 @dataclass
 class Topology:
+    """The bodies of a mechanism, its ground, its driver and its sliding pairs."""
     bodies: list[Body]
     fixed: set[str]                             # the ground's points
     crank: Body | None                         # the body the motor turns

@@ -310,8 +310,15 @@ def evaluate(expr: object, env: Mapping[str, object]):
     if not isinstance(expr, str) or not expr.strip():
         raise ValueError(f"expected a number or an expression, got {expr!r}")
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        value = _run(_Parser(expr).parse(), env, expr)
+        value = _run(_parsed(expr), env, expr)
     return float(value) if value.ndim == 0 else value
+
+
+@functools.lru_cache(maxsize=1024)
+def _parsed(expr: str) -> tuple:
+    """The tree of an expression, read once: the reference evaluates each of a mechanism's
+    expressions at every solve (a malformed one raises each time: nothing is kept of it)."""
+    return _Parser(expr).parse()
 
 
 def scalar(expr: object, params: Mapping[str, float]) -> float:

@@ -55,8 +55,7 @@ class Rates:
             x, y = self.points[trace]
             self.out[f"vmag_{trace}"] = np.hypot(x.b, y.b)
             self.out[f"amag_{trace}"] = np.hypot(x.c, y.c)
-        out = {k: np.broadcast_to(np.asarray(v, dtype=float), (self.s.n,)).copy()
-               for k, v in self.out.items()}
+        out = {k: _column(v, self.s.n) for k, v in self.out.items()}
         out["dead_centre"] = self.dead
         out["sine"] = self.sine
         return out
@@ -114,3 +113,9 @@ class Rates:
         self.dead |= dead & np.isfinite(x0) & np.isfinite(y0)
         self.note_sine(sine)
         return x, y
+
+
+def _column(value, n: int) -> np.ndarray:
+    """A copy of `value` as a column of n floats (a constant repeated down it)."""
+    value = np.asarray(value, dtype=float)
+    return value.copy() if value.shape == (n,) else np.broadcast_to(value, (n,)).copy()
