@@ -3,8 +3,9 @@ wrapped to run on (n, 1) arrays, giving, row for row, what a per-cell call gives
 
 Element-wise nodes (ELEMENTWISE) run on the whole arrays; arithmetic, comparisons and the common
 math functions first as float-array operations on the rows of finite numbers (NUMERIC_FORMS),
-with formulas' own bits; IF on arrays where its condition is a boolean or a number; MIN, MAX and
-COUNT on arrays (AGGREGATES), per row here and over whole ranges outside vector calls; any other node, and an element-wise node whose output collapsed,
+with formulas' own bits; IF on arrays where its condition is a boolean (a boolean array too,
+ISNUMBER's) or a number; MIN, MAX and COUNT on arrays (AGGREGATES), per row here and over whole
+ranges outside vector calls; any other node, and an element-wise node whose output collapsed,
 runs row by row on (1, 1) slices, which is exactly what a per-cell call does. A group of one
 cell is a call of one row: its numeric forms on its numbers, formulas' own functions on the
 rest.
@@ -268,18 +269,16 @@ def _if_call(func, args, n: int):
     if len(args) not in (2, 3):
         return None
     cols = []
-    for a in args:
+    for k, a in enumerate(args):
         if isinstance(a, np.ndarray):
-            if a.size not in (1, n) or a.dtype != object:
+            if a.size not in (1, n) or not (a.dtype == object or k == 0 and a.dtype == bool):
                 return None
             a = a.reshape(-1)
         else:
             a = np.array([a], object)
         cols.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
     branches = cols[1:] if len(cols) == 3 else [cols[1], np.full(n, False, object)]
-    conditions = cols[0].tolist()
-    plain = np.fromiter((type(c) in _CONDITION_TYPES for c in conditions), bool, n)
-    truth = np.fromiter((p and bool(c) for c, p in zip(conditions, plain.tolist())), bool, n)
+    plain, truth = _truth_of(cols[0], n)
     out = np.empty(n, object)
     out[:] = [0 if v is sh.EMPTY else v for v in np.where(truth, *branches).tolist()]
     if not plain.all():
@@ -290,6 +289,18 @@ def _if_call(func, args, n: int):
             return None
         out[rest] = sub.reshape(-1)
     return out.reshape(n, 1).view(Array)
+
+
+def _truth_of(condition: np.ndarray, n: int):
+    """(the rows whose condition IF takes as a boolean, what it reads there) for a condition
+    over n rows: every row of a boolean array (ISNUMBER's, which formulas' IF reads element by
+    element as Python booleans), else the rows of _CONDITION_TYPES."""
+    if condition.dtype == bool:
+        return np.ones(n, bool), condition
+    conditions = condition.tolist()
+    plain = np.fromiter((type(c) in _CONDITION_TYPES for c in conditions), bool, n)
+    truth = np.fromiter((p and bool(c) for c, p in zip(conditions, plain.tolist())), bool, n)
+    return plain, truth
 
 
 def _ranges_node(func, name: str):
