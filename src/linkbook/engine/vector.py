@@ -8,7 +8,8 @@ ISNUMBER's) or a number; MIN, MAX and COUNT on arrays (AGGREGATES), per row here
 ranges outside vector calls; any other node, and an element-wise node whose output collapsed,
 runs row by row on (1, 1) slices, which is exactly what a per-cell call does. A group of one
 cell is a call of one row: its numeric forms on its numbers, formulas' own functions on the
-rest.
+rest. Outside vector calls the numeric forms also run over whole ranges of one shape (a power
+balance's SUMPRODUCT of two columns' products), element by element as formulas would.
 """
 from __future__ import annotations
 
@@ -100,7 +101,31 @@ _NUMBER_TYPES = frozenset({float, int, np.float64, np.int64})
 # ints formulas makes (counts, lengths, sums of booleans) are far smaller.
 COMPARISONS = {"=": np.equal, "<>": np.not_equal, "<": np.less, ">": np.greater,
                "<=": np.less_equal, ">=": np.greater_equal}
-NUMERIC_FORMS.update({name: _typed(op, bool) for name, op in COMPARISONS.items()})
+# formulas orders (type, value) tuples: where the values differ their own comparison decides,
+# which gives numpy's boolean when either is a numpy number (a SIN's result, which formulas
+# gives as np.float64); where they are equal the tuples' lengths do, a Python bool. = and <>
+# give a Python bool always.
+_ORDERED = "ordered"
+NUMERIC_FORMS.update({name: _typed(op, bool if name in ("=", "<>") else _ORDERED)
+                      for name, op in COMPARISONS.items()})
+_NUMPY_NUMBERS = frozenset({np.float64, np.int64})
+
+
+def _objects(result: np.ndarray, kind, operands, xs) -> list:
+    """A numeric form's result as the objects formulas' per-element call gives: of `kind`
+    (float and bool: Python's; an ordering: _ORDERED's rule over the operands' objects, arrays
+    of the result's length, and their values `xs`)."""
+    if kind is _ORDERED:
+        values = result.tolist()
+        numpy_operand = np.zeros(len(values), bool)
+        for a in operands:
+            if not _NUMPY_NUMBERS.isdisjoint(map(type, a.tolist())):
+                numpy_operand |= np.fromiter((type(v) in _NUMPY_NUMBERS for v in a), bool,
+                                             len(values))
+        for i in np.flatnonzero(numpy_operand & (xs[0] != xs[1])).tolist():
+            values[i] = np.bool_(values[i])
+        return values
+    return result.tolist() if kind in (float, bool) else list(result)
 
 
 def _columns_of(args, n: int, types: frozenset):
@@ -121,7 +146,7 @@ def _columns_of(args, n: int, types: frozenset):
 def _rows_of(args, n: int, types: frozenset):
     """The arguments of a node over n rows as (object arrays of n, the rows where every
     argument is of `types`, float arrays of n with those rows filled); None when an argument is
-    not a plain array or scalar."""
+    not a plain array or scalar, or holds an int beyond any float."""
     flat = _columns_of(args, n, types)
     if flat is None:
         return None
@@ -132,50 +157,64 @@ def _rows_of(args, n: int, types: frozenset):
     xs = []
     for a in flat:
         x = np.zeros(n)
-        x[plain] = a[plain].astype(float)
+        try:
+            x[plain] = a[plain].astype(float)
+        except OverflowError:       # an int beyond any float: formulas' call decides
+            return None
         xs.append(x)
     return flat, plain, xs
 
 
-def _numeric_call(form, func, args, n: int):
+def _numeric_call(form, func, args, n: int, whole: bool = False):
     """`func` (formulas' node) over n rows: `form` on the rows where it applies, `func` on the
-    rest.  None when an argument is not a plain array or scalar (the caller uses `func`)."""
+    rest.  None when an argument is not a plain array or scalar (the caller uses `func`), and
+    for a `whole` call (not row by row) when `func` raised on the rest: formulas' call on the
+    whole arrays then gives one #VALUE! (an overflowing ^), which the caller's call gives."""
     rows = _rows_of(args, n, _NUMBER_TYPES)
     if rows is None:
         return None
     flat, plain, xs = rows
     with np.errstate(all="ignore"):
         result, kind = form(*xs)
-    plain &= np.isfinite(result)
+    for x in (result, *xs):     # a NaN operand: formulas' comparison of it reads its identity
+        plain &= np.isfinite(x)
     out = np.empty(n, object)
-    out[:] = result.tolist() if kind in (float, bool) else list(result)   # Python's types
+    out[:] = _objects(result, kind, flat, xs)
     if not plain.all():
         rest = ~plain
         sub = func(*[a[rest].reshape(-1, 1) if a.size == n and not _is_broadcast(a) else
                      np.asarray(a[:1], object).reshape(1, 1) for a in flat])
         k = int(rest.sum())
-        if not isinstance(sub, np.ndarray) or sub.size != k:    # an exception collapsed it
-            return None
+        if not isinstance(sub, np.ndarray) or sub.size != k or whole and not _elementwise(sub):
+            return None                                         # an exception collapsed it
+
         out[rest] = sub.reshape(-1)
     return out.reshape(n, 1).view(Array)
+
+
+def _elementwise(out: np.ndarray) -> bool:
+    """Whether formulas' element-wise function gave its result element by element (an Array)
+    rather than the one error of an exception it caught (a plain array, even of one row)."""
+    return isinstance(out, Array)
 
 
 def _one_number_call(form, args):
     """`form` on the one row of a group of one cell, where every argument is a number and the
     result is finite: the (1, 1) array _numeric_call gives that row, without its machinery for
     many rows; None otherwise (formulas' own call decides)."""
-    xs = []
+    operands, xs = [], []
     for a in args:
         v = a.reshape(-1)[0] if isinstance(a, np.ndarray) and a.size == 1 else a
-        if type(v) not in _NUMBER_TYPES:
-            return None
+        if type(v) not in _NUMBER_TYPES or type(v) is int and abs(v) > _EXACT_INTEGER:
+            return None         # (an int beyond any float: formulas' call decides)
+        operands.append(np.array([v], object))
         xs.append(np.array([v], dtype=float))
     with np.errstate(all="ignore"):
         result, kind = form(*xs)
-    if not np.isfinite(result[0]):
+    if not all(np.isfinite(x[0]) for x in (result, *xs)):
         return None
     out = np.empty((1, 1), object)
-    out[0, 0] = result.tolist()[0] if kind in (float, bool) else result[0]
+    out[0, 0] = _objects(result, kind, operands, xs)[0]
     return out.view(Array)
 
 
@@ -303,6 +342,55 @@ def _truth_of(condition: np.ndarray, n: int):
     return plain, truth
 
 
+def _range_values(args):
+    """The arguments' values as formulas' functions read them (a range's as its array); None
+    where formulas' own call must decide (a range it cannot read)."""
+    try:
+        return parse_ranges(*args)[0]
+    except Exception:
+        return None
+
+
+def _array_shape(values):
+    """The one shape of the arrays among `values` that hold more than one element, where every
+    other value is a scalar or an array of one element that broadcasts to it (of no more
+    dimensions); None otherwise (no such array, two shapes)."""
+    shape = None
+    for a in values:
+        if isinstance(a, np.ndarray) and a.size > 1:
+            if shape is not None and a.shape != shape:
+                return None
+            shape = a.shape
+    if shape is None or any(isinstance(a, np.ndarray) and a.size == 1 and a.ndim > len(shape)
+                            for a in values):
+        return None
+    return shape
+
+
+def _whole_array_call(form, func, args):
+    """An element-wise node with a numeric form over whole ranges in one cell (a power
+    balance's SUMPRODUCT of two columns' product): `form` on the elements that are finite
+    numbers, `func` on the rest (_numeric_call over the arrays' elements in order), the result
+    in the arrays' shape as formulas' call gives it; None where formulas' call decides (a
+    range it cannot read, arrays of different shapes, no array of more than one element)."""
+    values = _range_values(args)
+    shape = None if values is None else _array_shape(values)
+    if shape is None:
+        return None
+    out = _numeric_call(form, func, values, int(np.prod(shape)), whole=True)
+    return None if out is None else out.reshape(shape)
+
+
+def _cell_numeric_node(func, form):
+    """Wrap a node that has a numeric form for calls outside vector calls: over whole ranges
+    by _whole_array_call, else (one value, or what it does not take) by `func`."""
+    def node(*args, **kw):
+        out = None if kw else _whole_array_call(form, func, args)
+        return func(*args, **kw) if out is None else out
+    node.formulas_function = func       # what the node stands for (tests compare graphs by it)
+    return node
+
+
 def _ranges_node(func, name: str):
     """Wrap a MIN, MAX or COUNT node for calls outside vector calls: one result over every value
     of its arguments (the ranges' values in order, row by row), computed on arrays where
@@ -310,9 +398,8 @@ def _ranges_node(func, name: str):
     def node(*args, **kw):
         if kw:
             return func(*args, **kw)
-        try:
-            values = parse_ranges(*args)[0]
-        except Exception:       # formulas' own call decides (a range it cannot read)
+        values = _range_values(args)
+        if values is None:
             return func(*args)
         if not any(isinstance(a, np.ndarray) and a.size > 1 for a in values):
             return func(*args)
@@ -399,8 +486,11 @@ def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=
 
 def wrap(func, name: str, batch: Batch | None):
     """A node's function as the graph runs it: for vector calls, wrapped by its name; outside
-    them, MIN, MAX and COUNT wrapped to read their ranges on arrays."""
+    them, MIN, MAX and COUNT wrapped to read their ranges on arrays, and the nodes with a
+    numeric form to run it over whole ranges."""
     if batch is None:
-        return _ranges_node(func, name) if name in AGGREGATES else func
+        if name in AGGREGATES:
+            return _ranges_node(func, name)
+        return _cell_numeric_node(func, NUMERIC_FORMS[name]) if name in NUMERIC_FORMS else func
     return _vector_node(func, batch, name in ELEMENTWISE, NUMERIC_FORMS.get(name),
                         name if name in AGGREGATES else None, name == "IF")
