@@ -1,5 +1,5 @@
 """Nodes that run on whole arrays instead of formulas' per-element calls (engine/vector.py): IF on
-a boolean array (ISNUMBER's), and the numeric forms over whole ranges in one cell (a power
+a boolean array (ISNUMBER's), IFERROR, and the numeric forms over whole ranges in one cell (a power
 balance's SUMPRODUCT of two columns). Each must give what formulas' own function gives for the
 same arguments, value for value and type for type, over numbers, NaN, infinities, errors, empty
 cells, text, booleans and ints; and must have run on the arrays (not handed everything back)."""
@@ -86,9 +86,32 @@ def test_if_on_a_boolean_condition_gives_what_formulas_gives():
         assert batch.numeric == before + 1, args             # IF ran on the arrays
 
 
+def test_iferror_on_arrays_gives_what_formulas_gives():
+    """IFERROR(x, alternative) in a vector call picks on the arrays, exactly formulas' element:
+    the value itself (a blank as 0) or, for any error, the alternative's object (a blank as
+    0); values and alternatives of every kind, columns, single cells and scalars."""
+    func = formulas_function("IFERROR")
+    batch = vectorized.Batch()
+    node = vectorized.wrap(func, "IFERROR", batch)
+    rng = np.random.default_rng(20261129)
+    for _ in range(examples(300, at_least=40)):
+        n = int(rng.integers(2, 30))
+        args = [_objects(rng, (n, 1), RANGE_VALUES), _branch(rng, n)]
+        if rng.random() < 0.3:
+            args.reverse()                  # an error or a blank shared by every row
+            if not isinstance(args[0], np.ndarray):
+                args[0] = _objects(rng, (1, 1), RANGE_VALUES)
+        batch.n = n
+        before = batch.numeric
+        got = node(*args)
+        batch.n = 1
+        assert _same_result(got, func(*args)), (args, got)
+        assert batch.numeric == before + 1, args          # IFERROR ran on the arrays
+
+
 # ---------------------------------------------------------------- numeric forms over ranges
 
-TWO_OPERANDS = {"+", "-", "*", "/", "^", "ATAN2", *vectorized.COMPARISONS}
+TWO_OPERANDS = {"+", "-", "*", "/", "^", "ATAN2", "MOD", *vectorized.COMPARISONS}
 FINITE = [0.0, -0.0, 1.0, -1.0, 0.5, 2.0, 3, -2, 7, 1e308, -1e308, 1e-300, 700.0, 710.0,
           0.9999999999999999, np.float64(1.25), np.int64(-3), 2 ** 40]
 # Everything else a range can hold: NaN, infinities, errors, blanks, text (some of which

@@ -4,12 +4,13 @@ wrapped to run on (n, 1) arrays, giving, row for row, what a per-cell call gives
 Element-wise nodes (ELEMENTWISE) run on the whole arrays; arithmetic, comparisons and the common
 math functions first as float-array operations on the rows of finite numbers (NUMERIC_FORMS),
 with formulas' own bits; IF on arrays where its condition is a boolean (a boolean array too,
-ISNUMBER's) or a number; MIN, MAX and COUNT on arrays (AGGREGATES), per row here and over whole
-ranges outside vector calls; any other node, and an element-wise node whose output collapsed,
-runs row by row on (1, 1) slices, which is exactly what a per-cell call does. A group of one
-cell is a call of one row: its numeric forms on its numbers, formulas' own functions on the
-rest. Outside vector calls the numeric forms also run over whole ranges of one shape (a power
-balance's SUMPRODUCT of two columns' products), element by element as formulas would.
+ISNUMBER's) or a number, and IFERROR; MIN, MAX and COUNT on arrays (AGGREGATES), per row here
+and over whole ranges outside vector calls; any other node, and an element-wise node whose
+output collapsed, runs row by row on (1, 1) slices, which is exactly what a per-cell call does.
+A group of one cell is a call of one row: its numeric forms on its numbers, formulas' own
+functions on the rest. Outside vector calls the numeric forms also run over whole ranges of one
+shape (a power balance's SUMPRODUCT of two columns' products), element by element as formulas
+would.
 """
 from __future__ import annotations
 
@@ -85,14 +86,20 @@ def _atan2(x, y):
     return np.where((x == 0) & (y == 0), np.nan, np.arctan2(y, x)), np.float64
 
 
+def _mod(x, y):
+    # formulas' MOD: #DIV/0! for a zero divisor (NaN here: formulas decides), else np.mod
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(y == 0, np.nan, np.mod(x, np.where(y == 0, 1.0, y))), np.float64
+
+
 NUMERIC_FORMS = {
     "+": _typed(np.add, float), "-": _typed(np.subtract, float),
     "*": _typed(np.multiply, float), "u-": _typed(np.negative, float),
-    "/": _divide, "^": _power, "ATAN2": _atan2,
+    "/": _divide, "^": _power, "ATAN2": _atan2, "MOD": _mod,
     **{name: _typed(fn, np.float64) for name, fn in {
         "SIN": np.sin, "COS": np.cos, "TAN": np.tan, "ACOS": np.arccos, "ASIN": np.arcsin,
         "ATAN": np.arctan, "SQRT": np.sqrt, "RADIANS": np.radians, "DEGREES": np.degrees,
-        "ABS": np.abs, "EXP": np.exp}.items()},
+        "ABS": np.abs, "EXP": np.exp, "SIGN": np.sign}.items()},
 }
 _NUMBER_TYPES = frozenset({float, int, np.float64, np.int64})
 
@@ -305,21 +312,12 @@ def _if_call(func, args, n: int):
     branch it picks (a blank read as 0, as formulas' IF reads its arguments; FALSE for a
     missing third argument), `func` on the rest. None when an argument is not an object array
     of one value or of n, or a scalar (the caller runs `func`)."""
-    if len(args) not in (2, 3):
+    cols = _choice_columns(args, n, (2, 3), first=bool)
+    if cols is None:
         return None
-    cols = []
-    for k, a in enumerate(args):
-        if isinstance(a, np.ndarray):
-            if a.size not in (1, n) or not (a.dtype == object or k == 0 and a.dtype == bool):
-                return None
-            a = a.reshape(-1)
-        else:
-            a = np.array([a], object)
-        cols.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
     branches = cols[1:] if len(cols) == 3 else [cols[1], np.full(n, False, object)]
     plain, truth = _truth_of(cols[0], n)
-    out = np.empty(n, object)
-    out[:] = [0 if v is sh.EMPTY else v for v in np.where(truth, *branches).tolist()]
+    out = _picked(truth, *branches)
     if not plain.all():
         rest = ~plain
         sub = func(*[a[rest].reshape(-1, 1) if a.size == n and not _is_broadcast(a) else
@@ -328,6 +326,46 @@ def _if_call(func, args, n: int):
             return None
         out[rest] = sub.reshape(-1)
     return out.reshape(n, 1).view(Array)
+
+
+def _iferror_call(args, n: int):
+    """IFERROR over n rows: each row's value, or its alternative where the value is an error,
+    as formulas' IFERROR picks them (the objects themselves, a blank read as 0). None when an
+    argument is not an object array of one value or of n, or a scalar (the caller runs
+    formulas' call)."""
+    cols = _choice_columns(args, n, (2,))
+    if cols is None:
+        return None
+    value, alternative = cols
+    errors = np.fromiter((isinstance(v, XlError) for v in value.tolist()), bool, n)
+    return _picked(errors, alternative, value).reshape(n, 1).view(Array)
+
+
+def _choice_columns(args, n: int, counts: tuple, first=None):
+    """The arguments of IF or IFERROR over n rows as object arrays of n (an array of one value
+    or a scalar repeated); the first may also be an array of dtype `first`. None when their
+    number is not among `counts` or an argument is not such an array or scalar."""
+    if len(args) not in counts:
+        return None
+    cols = []
+    for k, a in enumerate(args):
+        if isinstance(a, np.ndarray):
+            if a.size not in (1, n) or not (a.dtype == object or k == 0 and first is not None
+                                            and a.dtype == first):
+                return None
+            a = a.reshape(-1)
+        else:
+            a = np.array([a], object)
+        cols.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
+    return cols
+
+
+def _picked(which: np.ndarray, if_true: np.ndarray, if_false: np.ndarray) -> np.ndarray:
+    """Row by row the object of `if_true` or `if_false`, a blank as 0 (formulas' IF and IFERROR
+    read their arguments with blanks replaced)."""
+    out = np.empty(len(which), object)
+    out[:] = [0 if v is sh.EMPTY else v for v in np.where(which, if_true, if_false).tolist()]
+    return out
 
 
 def _truth_of(condition: np.ndarray, n: int):
@@ -439,13 +477,13 @@ class _NotScalar(Exception):
 
 
 def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=None,
-                 choice: bool = False):
+                 choice: str | None = None):
     """Wrap a node of the compiled graph for (n, 1) calls.  A node with a numeric form runs it
     on the rows of finite numbers, MIN, MAX and COUNT (`aggregate`, their name) on the rows of
-    plain numbers (AGGREGATES), IF (`choice`) on the rows of a boolean or numeric condition
-    (_if_call).  Element-wise nodes run once; if their output is not (n, 1)
-    (an exception collapsed it), or the node is not element-wise, it runs row by row on (1, 1)
-    slices, exactly as in a per-cell call."""
+    plain numbers (AGGREGATES), IF (`choice`, its name) on the rows of a boolean or numeric
+    condition (_if_call) and IFERROR on every row (_iferror_call).  Element-wise nodes run
+    once; if their output is not (n, 1) (an exception collapsed it), or the node is not
+    element-wise, it runs row by row on (1, 1) slices, exactly as in a per-cell call."""
     def node(*args, **kw):
         n = batch.n
         if n == 1 and numeric is not None and not kw:
@@ -465,8 +503,8 @@ def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=
             if out is not None:
                 batch.numeric += 1
                 return out
-        if choice and not kw:
-            out = _if_call(func, args, n)
+        if choice is not None and not kw:
+            out = _if_call(func, args, n) if choice == "IF" else _iferror_call(args, n)
             if out is not None:
                 batch.numeric += 1
                 return out
@@ -493,4 +531,5 @@ def wrap(func, name: str, batch: Batch | None):
             return _ranges_node(func, name)
         return _cell_numeric_node(func, NUMERIC_FORMS[name]) if name in NUMERIC_FORMS else func
     return _vector_node(func, batch, name in ELEMENTWISE, NUMERIC_FORMS.get(name),
-                        name if name in AGGREGATES else None, name == "IF")
+                        name if name in AGGREGATES else None,
+                        name if name in ("IF", "IFERROR") else None)
