@@ -45,13 +45,20 @@ def _objects(rng, shape, pool) -> np.ndarray:
 
 # ---------------------------------------------------------------- IF on a boolean array
 
-def _boolean_condition(rng, n: int):
-    """A condition over n rows as a vector call meets it: ISNUMBER's boolean array of (n, 1)
-    (or of one row, shared), or a plain boolean array."""
+TRUTHS = [True, False, 0.0, -0.0, 2.5, -1e-300, float("nan"), float("inf")]
+
+
+def _condition(rng, n: int):
+    """A condition over n rows as a vector call meets it (of n rows, or of one, shared):
+    ISNUMBER's boolean array, a plain boolean array, a comparison's or a number's objects
+    (booleans and floats), or values of any kind."""
     rows = n if rng.random() < 0.8 else 1
-    if rng.random() < 0.5:
+    draw = rng.random()
+    if draw < 0.4:
         return get_functions()["ISNUMBER"](_objects(rng, (rows, 1), RANGE_VALUES))
-    return rng.random((rows, 1)) < 0.5
+    if draw < 0.6:
+        return rng.random((rows, 1)) < 0.5
+    return _objects(rng, (rows, 1), TRUTHS if draw < 0.8 else RANGE_VALUES)
 
 
 def _branch(rng, n: int):
@@ -65,16 +72,17 @@ def _branch(rng, n: int):
 
 
 def test_if_on_a_boolean_condition_gives_what_formulas_gives():
-    """IF(ISNUMBER(x), a, b) in a vector call: with the condition a boolean array, IF picks
-    each row's branch on the arrays, exactly formulas' element: the branch's own object, a
-    blank picked as 0, FALSE for a missing third argument."""
+    """IF(ISNUMBER(x), a, b) in a vector call: with the condition a boolean array (or booleans
+    and numbers, and formulas' call for the rows of anything else), IF picks each row's branch
+    on the arrays, exactly formulas' element: the branch's own object, a blank picked as 0,
+    FALSE for a missing third argument."""
     func = formulas_function("IF")
     batch = vectorized.Batch()
     node = vectorized.wrap(func, "IF", batch)
     rng = np.random.default_rng(20261128)
     for _ in range(examples(300, at_least=40)):
         n = int(rng.integers(2, 30))
-        condition = _boolean_condition(rng, n)
+        condition = _condition(rng, n)
         args = [condition, _branch(rng, n)] + ([_branch(rng, n)] if rng.random() < 0.7 else [])
         if condition.size == 1 and not any(vectorized._size(a) == n for a in args[1:]):
             args[1] = _objects(rng, (n, 1), RANGE_VALUES)     # the call is over n rows
@@ -252,3 +260,20 @@ def test_ordering_a_numpy_number_gives_formulas_numpy_boolean(tmp_path):
     got = engine.evaluate_file(path)
     assert_as_per_cell(got, engine.evaluate_formulas_model(path))
     assert got[("Sheet", "C1")] == "TrueTRUEFALSE" and got[("Sheet", "E1")] == "True"
+
+
+def test_a_blank_a_column_gives_is_zero_to_the_next_column():
+    """A vector call's blank (a formula that reads an empty cell) is stored as 0, as a per-cell
+    call's is (adapter.empty_as_zero), so the next column joins "0" to text, not nothing."""
+    wb = openpyxl.Workbook()
+    ws = wb.active
+    for r in range(1, 7):
+        if r % 2:
+            ws[f"A{r}"] = 2.5
+        ws[f"B{r}"] = f"=A{r}"
+        ws[f"C{r}"] = f'=B{r}&"x"'
+    vector = engine.Engine(wb)
+    got = vector.run()
+    assert vector.stats["vector_groups"] >= 2
+    assert_as_per_cell(got, engine.Engine(wb, vectorize=False).run())
+    assert [got[("Sheet", f"C{r}")] for r in (1, 2)] == ["2.5x", "0x"]

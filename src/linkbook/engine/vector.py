@@ -371,10 +371,13 @@ def _picked(which: np.ndarray, if_true: np.ndarray, if_false: np.ndarray) -> np.
 def _truth_of(condition: np.ndarray, n: int):
     """(the rows whose condition IF takes as a boolean, what it reads there) for a condition
     over n rows: every row of a boolean array (ISNUMBER's, which formulas' IF reads element by
-    element as Python booleans), else the rows of _CONDITION_TYPES."""
+    element as Python booleans) or of Python booleans and floats (a float's truth is bool()'s,
+    a NaN's too), else the rows of _CONDITION_TYPES."""
     if condition.dtype == bool:
         return np.ones(n, bool), condition
     conditions = condition.tolist()
+    if set(map(type, conditions)) <= {bool, float}:     # a comparison's, mostly
+        return np.ones(n, bool), np.array(conditions, bool)
     plain = np.fromiter((type(c) in _CONDITION_TYPES for c in conditions), bool, n)
     truth = np.fromiter((p and bool(c) for c, p in zip(conditions, plain.tolist())), bool, n)
     return plain, truth
