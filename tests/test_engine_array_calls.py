@@ -129,9 +129,11 @@ OTHER = [float("nan"), float("inf"), -float("inf"), sh.EMPTY, "abc", "2.5", "", 
 
 
 def _finite(rng, size: int) -> list:
-    """Random finite numbers over many scales, and now and then an edge of FINITE."""
+    """Random finite numbers over many scales, now and then an edge of FINITE or a boolean (a
+    comparison's, which arithmetic reads as 1 or 0)."""
     x = rng.uniform(-3, 3, size) * rng.choice([1.0, 1e-6, 1e3, 1e150, 1e-300], size)
-    return [FINITE[rng.integers(len(FINITE))] if rng.random() < 0.2 else v for v in x.tolist()]
+    edges = FINITE + [True, False, np.True_]
+    return [edges[rng.integers(len(edges))] if rng.random() < 0.2 else v for v in x.tolist()]
 
 
 def _operand(rng, shape, other: float):

@@ -116,6 +116,16 @@ _ORDERED = "ordered"
 NUMERIC_FORMS.update({name: _typed(op, bool if name in ("=", "<>") else _ORDERED)
                       for name, op in COMPARISONS.items()})
 _NUMPY_NUMBERS = frozenset({np.float64, np.int64})
+# The other forms' functions read each operand with float() (formulas' wrap_ufunc), a boolean
+# as 1.0 or 0.0 (a product of comparisons counts the rows where both hold); a comparison
+# orders a boolean after every number.
+_COMPARISON_FORMS = frozenset(NUMERIC_FORMS[name] for name in COMPARISONS)
+_READ_AS_FLOATS = _NUMBER_TYPES | {bool, np.bool_}
+
+
+def _operand_types(form) -> frozenset:
+    """The operands' types a numeric form takes as formulas' function reads them."""
+    return _NUMBER_TYPES if form in _COMPARISON_FORMS else _READ_AS_FLOATS
 
 
 def _objects(result: np.ndarray, kind, operands, xs) -> list:
@@ -177,7 +187,7 @@ def _numeric_call(form, func, args, n: int, whole: bool = False):
     rest.  None when an argument is not a plain array or scalar (the caller uses `func`), and
     for a `whole` call (not row by row) when `func` raised on the rest: formulas' call on the
     whole arrays then gives one #VALUE! (an overflowing ^), which the caller's call gives."""
-    rows = _rows_of(args, n, _NUMBER_TYPES)
+    rows = _rows_of(args, n, _operand_types(form))
     if rows is None:
         return None
     flat, plain, xs = rows
@@ -194,7 +204,6 @@ def _numeric_call(form, func, args, n: int, whole: bool = False):
         k = int(rest.sum())
         if not isinstance(sub, np.ndarray) or sub.size != k or whole and not _elementwise(sub):
             return None                                         # an exception collapsed it
-
         out[rest] = sub.reshape(-1)
     return out.reshape(n, 1).view(Array)
 
