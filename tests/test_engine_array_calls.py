@@ -1,8 +1,9 @@
 """Nodes that run on whole arrays instead of formulas' per-element calls (engine/vector.py): IF on
-a boolean array (ISNUMBER's), IFERROR, and the numeric forms over whole ranges in one cell (a power
-balance's SUMPRODUCT of two columns). Each must give what formulas' own function gives for the
-same arguments, value for value and type for type, over numbers, NaN, infinities, errors, empty
-cells, text, booleans and ints; and must have run on the arrays (not handed everything back)."""
+a boolean array (ISNUMBER's), IFERROR, ISNUMBER, and the numeric forms over whole ranges in one
+cell (a power balance's SUMPRODUCT of two columns). Each must give what formulas' own function
+gives for the same arguments, value for value and type for type, over numbers, NaN, infinities,
+errors, empty cells, text, booleans and ints; and must have run on the arrays (not handed
+everything back)."""
 from __future__ import annotations
 
 import sys
@@ -115,6 +116,33 @@ def test_iferror_on_arrays_gives_what_formulas_gives():
         batch.n = 1
         assert _same_result(got, func(*args)), (args, got)
         assert batch.numeric == before + 1, args          # IFERROR ran on the arrays
+
+
+def test_isnumber_of_arrays_gives_what_formulas_gives():
+    """ISNUMBER of a column (a vector call's, or a range's in one cell) judged by the values'
+    types gives formulas' own FalseArray, element for element: numbers of each type (NaN too)
+    are numbers; booleans, errors and blanks are not; text (which formulas reads as a number
+    where float() can: "2.5") is left to formulas' call."""
+    func = formulas_function("ISNUMBER")
+    reached = []
+
+    def spy(*args):
+        reached.append(args)
+        return func(*args)
+    node = vectorized.wrap(spy, "ISNUMBER", None)
+    plain = [v for v in RANGE_VALUES if not isinstance(v, str) or isinstance(v, Error)]
+    rng = np.random.default_rng(20261130)
+    by_type = 0
+    for trial in range(examples(200, at_least=40)):
+        pool = plain if trial % 2 else RANGE_VALUES + [sh.Token("2")]     # a blank's type
+        a = _objects(rng, (int(rng.integers(1, 40)), int(rng.integers(1, 3))), pool)
+        arg = a if rng.random() < 0.5 else adapter.ranges_of(
+            f"B2:{get_column_letter(1 + a.shape[1])}{1 + a.shape[0]}", a)
+        reached.clear()
+        got = node(arg)
+        assert _same_result(got, func(arg)), (a, got)
+        by_type += not reached
+    assert by_type >= examples(200, at_least=40) // 3
 
 
 # ---------------------------------------------------------------- numeric forms over ranges

@@ -19,6 +19,7 @@ import itertools
 import numpy as np
 import schedula as sh
 from formulas.functions import Array, is_number, parse_ranges
+from formulas.functions.info import FalseArray
 from formulas.tokens.operand import XlError
 
 # Functions whose compiled node maps (n, 1) arrays element by element exactly as it maps (1, 1)
@@ -441,6 +442,33 @@ def _cell_numeric_node(func, form):
     return node
 
 
+# ISNUMBER of a value of these types, as formulas' is_number judges it (a number, not a boolean,
+# an error or a blank); a value of any other type (text, which it reads as a number where
+# float() does) is left to formulas' call.
+_IS_NUMBER = {float: True, int: True, np.float64: True, np.int64: True, bool: False,
+              np.bool_: False, XlError: False, type(sh.EMPTY): False}
+
+
+def _isnumber_node(func):
+    """Wrap ISNUMBER to judge an array of more than one value on the array where each value's
+    type decides (_IS_NUMBER; of blanks' type, only the blank itself): formulas' result, a
+    FalseArray of booleans in the value's shape; else `func` (formulas' call)."""
+    def node(*args, **kw):
+        values = None if kw or len(args) != 1 else _range_values(args)
+        a = None if values is None else values[0]
+        if not isinstance(a, np.ndarray) or a.dtype != object or a.size < 2:
+            return func(*args, **kw)
+        flat = a.reshape(-1).tolist()
+        kinds = set(map(type, flat))
+        if not kinds <= _IS_NUMBER.keys() or type(sh.EMPTY) in kinds and any(
+                type(v) is type(sh.EMPTY) and v is not sh.EMPTY for v in flat):
+            return func(*args, **kw)
+        judged = np.fromiter(map(_IS_NUMBER.__getitem__, map(type, flat)), bool, len(flat))
+        return judged.reshape(a.shape).view(FalseArray)
+    node.formulas_function = func       # what the node stands for (tests compare graphs by it)
+    return node
+
+
 def _ranges_node(func, name: str):
     """Wrap a MIN, MAX or COUNT node for calls outside vector calls: one result over every value
     of its arguments (the ranges' values in order, row by row), computed on arrays where
@@ -537,7 +565,9 @@ def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=
 def wrap(func, name: str, batch: Batch | None):
     """A node's function as the graph runs it: for vector calls, wrapped by its name; outside
     them, MIN, MAX and COUNT wrapped to read their ranges on arrays, and the nodes with a
-    numeric form to run it over whole ranges."""
+    numeric form to run it over whole ranges; ISNUMBER judges arrays by type in both."""
+    if name == "ISNUMBER":
+        func = _isnumber_node(func)
     if batch is None:
         if name in AGGREGATES:
             return _ranges_node(func, name)
