@@ -502,7 +502,7 @@ def numeric_book(rows: int = 600) -> openpyxl.Workbook:
             elif name in "+-*/^" or name in vectorized.COMPARISONS:
                 text = f"=A{r}{name}B{r}"
             else:
-                text = f"={name}(A{r},B{r})" if name == "ATAN2" else f"={name}(A{r})"
+                text = f"={name}(A{r},B{r})" if name in ("ATAN2", "MOD") else f"={name}(A{r})"
             ws.cell(row=r, column=3 + j, value=text)
     return wb
 

@@ -8,7 +8,9 @@ import contextlib
 import functools
 import graphlib
 import io
+import itertools
 import math
+import operator
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -363,8 +365,9 @@ _ONE_CELL = Ranges.get_range("A1")
 
 
 def empty_as_zero(out: np.ndarray) -> np.ndarray:
-    """replace_empty (EMPTY -> 0), skipping its element-wise == scan when nothing is EMPTY."""
-    if any(v is sh.EMPTY for v in out.reshape(-1)):
+    """replace_empty (EMPTY -> 0), skipping its element-wise == scan when nothing is EMPTY (an
+    identity test of each element, in C: a vector call's result is thousands of them)."""
+    if any(map(operator.is_, out.reshape(-1).tolist(), itertools.repeat(sh.EMPTY))):
         return np.asarray(replace_empty(out), dtype=object)
     return out
 

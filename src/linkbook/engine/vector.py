@@ -3,11 +3,14 @@ wrapped to run on (n, 1) arrays, giving, row for row, what a per-cell call gives
 
 Element-wise nodes (ELEMENTWISE) run on the whole arrays; arithmetic, comparisons and the common
 math functions first as float-array operations on the rows of finite numbers (NUMERIC_FORMS),
-with formulas' own bits; IF on arrays where its condition is a boolean or a number; MIN, MAX and
-COUNT on arrays (AGGREGATES), per row here and over whole ranges outside vector calls; any other node, and an element-wise node whose output collapsed,
-runs row by row on (1, 1) slices, which is exactly what a per-cell call does. A group of one
-cell is a call of one row: its numeric forms on its numbers, formulas' own functions on the
-rest.
+with formulas' own bits; IF on arrays where its condition is a boolean (a boolean array too,
+ISNUMBER's) or a number, and IFERROR; MIN, MAX and COUNT on arrays (AGGREGATES), per row here
+and over whole ranges outside vector calls; any other node, and an element-wise node whose
+output collapsed, runs row by row on (1, 1) slices, which is exactly what a per-cell call does.
+A group of one cell is a call of one row: its numeric forms on its numbers, formulas' own
+functions on the rest. Outside vector calls the numeric forms also run over whole ranges of one
+shape (a power balance's SUMPRODUCT of two columns' products), element by element as formulas
+would.
 """
 from __future__ import annotations
 
@@ -16,6 +19,7 @@ import itertools
 import numpy as np
 import schedula as sh
 from formulas.functions import Array, is_number, parse_ranges
+from formulas.functions.info import FalseArray
 from formulas.tokens.operand import XlError
 
 # Functions whose compiled node maps (n, 1) arrays element by element exactly as it maps (1, 1)
@@ -83,14 +87,20 @@ def _atan2(x, y):
     return np.where((x == 0) & (y == 0), np.nan, np.arctan2(y, x)), np.float64
 
 
+def _mod(x, y):
+    # formulas' MOD: #DIV/0! for a zero divisor (NaN here: formulas decides), else np.mod
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(y == 0, np.nan, np.mod(x, np.where(y == 0, 1.0, y))), np.float64
+
+
 NUMERIC_FORMS = {
     "+": _typed(np.add, float), "-": _typed(np.subtract, float),
     "*": _typed(np.multiply, float), "u-": _typed(np.negative, float),
-    "/": _divide, "^": _power, "ATAN2": _atan2,
+    "/": _divide, "^": _power, "ATAN2": _atan2, "MOD": _mod,
     **{name: _typed(fn, np.float64) for name, fn in {
         "SIN": np.sin, "COS": np.cos, "TAN": np.tan, "ACOS": np.arccos, "ASIN": np.arcsin,
         "ATAN": np.arctan, "SQRT": np.sqrt, "RADIANS": np.radians, "DEGREES": np.degrees,
-        "ABS": np.abs, "EXP": np.exp}.items()},
+        "ABS": np.abs, "EXP": np.exp, "SIGN": np.sign}.items()},
 }
 _NUMBER_TYPES = frozenset({float, int, np.float64, np.int64})
 
@@ -99,7 +109,41 @@ _NUMBER_TYPES = frozenset({float, int, np.float64, np.int64})
 # ints formulas makes (counts, lengths, sums of booleans) are far smaller.
 COMPARISONS = {"=": np.equal, "<>": np.not_equal, "<": np.less, ">": np.greater,
                "<=": np.less_equal, ">=": np.greater_equal}
-NUMERIC_FORMS.update({name: _typed(op, bool) for name, op in COMPARISONS.items()})
+# formulas orders (type, value) tuples: where the values differ their own comparison decides,
+# which gives numpy's boolean when either is a numpy number (a SIN's result, which formulas
+# gives as np.float64); where they are equal the tuples' lengths do, a Python bool. = and <>
+# give a Python bool always.
+_ORDERED = "ordered"
+NUMERIC_FORMS.update({name: _typed(op, bool if name in ("=", "<>") else _ORDERED)
+                      for name, op in COMPARISONS.items()})
+_NUMPY_NUMBERS = frozenset({np.float64, np.int64})
+# The other forms' functions read each operand with float() (formulas' wrap_ufunc), a boolean
+# as 1.0 or 0.0 (a product of comparisons counts the rows where both hold); a comparison
+# orders a boolean after every number.
+_COMPARISON_FORMS = frozenset(NUMERIC_FORMS[name] for name in COMPARISONS)
+_READ_AS_FLOATS = _NUMBER_TYPES | {bool, np.bool_}
+
+
+def _operand_types(form) -> frozenset:
+    """The operands' types a numeric form takes as formulas' function reads them."""
+    return _NUMBER_TYPES if form in _COMPARISON_FORMS else _READ_AS_FLOATS
+
+
+def _objects(result: np.ndarray, kind, operands, xs) -> list:
+    """A numeric form's result as the objects formulas' per-element call gives: of `kind`
+    (float and bool: Python's; an ordering: _ORDERED's rule over the operands' objects, arrays
+    of the result's length, and their values `xs`)."""
+    if kind is _ORDERED:
+        values = result.tolist()
+        numpy_operand = np.zeros(len(values), bool)
+        for a in operands:
+            if not _NUMPY_NUMBERS.isdisjoint(map(type, a.tolist())):
+                numpy_operand |= np.fromiter((type(v) in _NUMPY_NUMBERS for v in a), bool,
+                                             len(values))
+        for i in np.flatnonzero(numpy_operand & (xs[0] != xs[1])).tolist():
+            values[i] = np.bool_(values[i])
+        return values
+    return result.tolist() if kind in (float, bool) else list(result)
 
 
 def _columns_of(args, n: int, types: frozenset):
@@ -120,7 +164,7 @@ def _columns_of(args, n: int, types: frozenset):
 def _rows_of(args, n: int, types: frozenset):
     """The arguments of a node over n rows as (object arrays of n, the rows where every
     argument is of `types`, float arrays of n with those rows filled); None when an argument is
-    not a plain array or scalar."""
+    not a plain array or scalar, or holds an int beyond any float."""
     flat = _columns_of(args, n, types)
     if flat is None:
         return None
@@ -131,50 +175,63 @@ def _rows_of(args, n: int, types: frozenset):
     xs = []
     for a in flat:
         x = np.zeros(n)
-        x[plain] = a[plain].astype(float)
+        try:
+            x[plain] = a[plain].astype(float)
+        except OverflowError:       # an int beyond any float: formulas' call decides
+            return None
         xs.append(x)
     return flat, plain, xs
 
 
-def _numeric_call(form, func, args, n: int):
+def _numeric_call(form, func, args, n: int, whole: bool = False):
     """`func` (formulas' node) over n rows: `form` on the rows where it applies, `func` on the
-    rest.  None when an argument is not a plain array or scalar (the caller uses `func`)."""
-    rows = _rows_of(args, n, _NUMBER_TYPES)
+    rest.  None when an argument is not a plain array or scalar (the caller uses `func`), and
+    for a `whole` call (not row by row) when `func` raised on the rest: formulas' call on the
+    whole arrays then gives one #VALUE! (an overflowing ^), which the caller's call gives."""
+    rows = _rows_of(args, n, _operand_types(form))
     if rows is None:
         return None
     flat, plain, xs = rows
     with np.errstate(all="ignore"):
         result, kind = form(*xs)
-    plain &= np.isfinite(result)
+    for x in (result, *xs):     # a NaN operand: formulas' comparison of it reads its identity
+        plain &= np.isfinite(x)
     out = np.empty(n, object)
-    out[:] = result.tolist() if kind in (float, bool) else list(result)   # Python's types
+    out[:] = _objects(result, kind, flat, xs)
     if not plain.all():
         rest = ~plain
         sub = func(*[a[rest].reshape(-1, 1) if a.size == n and not _is_broadcast(a) else
                      np.asarray(a[:1], object).reshape(1, 1) for a in flat])
         k = int(rest.sum())
-        if not isinstance(sub, np.ndarray) or sub.size != k:    # an exception collapsed it
-            return None
+        if not isinstance(sub, np.ndarray) or sub.size != k or whole and not _elementwise(sub):
+            return None                                         # an exception collapsed it
         out[rest] = sub.reshape(-1)
     return out.reshape(n, 1).view(Array)
+
+
+def _elementwise(out: np.ndarray) -> bool:
+    """Whether formulas' element-wise function gave its result element by element (an Array)
+    rather than the one error of an exception it caught (a plain array, even of one row)."""
+    return isinstance(out, Array)
 
 
 def _one_number_call(form, args):
     """`form` on the one row of a group of one cell, where every argument is a number and the
     result is finite: the (1, 1) array _numeric_call gives that row, without its machinery for
     many rows; None otherwise (formulas' own call decides)."""
-    xs = []
+    operands, xs = [], []
     for a in args:
         v = a.reshape(-1)[0] if isinstance(a, np.ndarray) and a.size == 1 else a
-        if type(v) not in _NUMBER_TYPES:
-            return None
+        if type(v) not in _NUMBER_TYPES or type(v) is int and abs(v) > _EXACT_INTEGER:
+            return None         # (an int beyond any float: formulas' call decides)
+        operands.append(np.array([v], object))
         xs.append(np.array([v], dtype=float))
     with np.errstate(all="ignore"):
         result, kind = form(*xs)
-    if not np.isfinite(result[0]):
+    if not all(np.isfinite(x[0]) for x in (result, *xs)):
         return None
     out = np.empty((1, 1), object)
-    out[0, 0] = result.tolist()[0] if kind in (float, bool) else result[0]
+    out[0, 0] = _objects(result, kind, operands, xs)[0]
     return out.view(Array)
 
 
@@ -265,23 +322,12 @@ def _if_call(func, args, n: int):
     branch it picks (a blank read as 0, as formulas' IF reads its arguments; FALSE for a
     missing third argument), `func` on the rest. None when an argument is not an object array
     of one value or of n, or a scalar (the caller runs `func`)."""
-    if len(args) not in (2, 3):
+    cols = _choice_columns(args, n, (2, 3), first=bool)
+    if cols is None:
         return None
-    cols = []
-    for a in args:
-        if isinstance(a, np.ndarray):
-            if a.size not in (1, n) or a.dtype != object:
-                return None
-            a = a.reshape(-1)
-        else:
-            a = np.array([a], object)
-        cols.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
     branches = cols[1:] if len(cols) == 3 else [cols[1], np.full(n, False, object)]
-    conditions = cols[0].tolist()
-    plain = np.fromiter((type(c) in _CONDITION_TYPES for c in conditions), bool, n)
-    truth = np.fromiter((p and bool(c) for c, p in zip(conditions, plain.tolist())), bool, n)
-    out = np.empty(n, object)
-    out[:] = [0 if v is sh.EMPTY else v for v in np.where(truth, *branches).tolist()]
+    plain, truth = _truth_of(cols[0], n)
+    out = _picked(truth, *branches)
     if not plain.all():
         rest = ~plain
         sub = func(*[a[rest].reshape(-1, 1) if a.size == n and not _is_broadcast(a) else
@@ -292,6 +338,137 @@ def _if_call(func, args, n: int):
     return out.reshape(n, 1).view(Array)
 
 
+def _iferror_call(args, n: int):
+    """IFERROR over n rows: each row's value, or its alternative where the value is an error,
+    as formulas' IFERROR picks them (the objects themselves, a blank read as 0). None when an
+    argument is not an object array of one value or of n, or a scalar (the caller runs
+    formulas' call)."""
+    cols = _choice_columns(args, n, (2,))
+    if cols is None:
+        return None
+    value, alternative = cols
+    errors = np.fromiter((isinstance(v, XlError) for v in value.tolist()), bool, n)
+    return _picked(errors, alternative, value).reshape(n, 1).view(Array)
+
+
+def _choice_columns(args, n: int, counts: tuple, first=None):
+    """The arguments of IF or IFERROR over n rows as object arrays of n (an array of one value
+    or a scalar repeated); the first may also be an array of dtype `first`. None when their
+    number is not among `counts` or an argument is not such an array or scalar."""
+    if len(args) not in counts:
+        return None
+    cols = []
+    for k, a in enumerate(args):
+        if isinstance(a, np.ndarray):
+            if a.size not in (1, n) or not (a.dtype == object or k == 0 and first is not None
+                                            and a.dtype == first):
+                return None
+            a = a.reshape(-1)
+        else:
+            a = np.array([a], object)
+        cols.append(np.broadcast_to(a, (n,)) if a.size == 1 else a)
+    return cols
+
+
+def _picked(which: np.ndarray, if_true: np.ndarray, if_false: np.ndarray) -> np.ndarray:
+    """Row by row the object of `if_true` or `if_false`, a blank as 0 (formulas' IF and IFERROR
+    read their arguments with blanks replaced)."""
+    out = np.empty(len(which), object)
+    out[:] = [0 if v is sh.EMPTY else v for v in np.where(which, if_true, if_false).tolist()]
+    return out
+
+
+def _truth_of(condition: np.ndarray, n: int):
+    """(the rows whose condition IF takes as a boolean, what it reads there) for a condition
+    over n rows: every row of a boolean array (ISNUMBER's, which formulas' IF reads element by
+    element as Python booleans) or of Python booleans and floats (a float's truth is bool()'s,
+    a NaN's too), else the rows of _CONDITION_TYPES."""
+    if condition.dtype == bool:
+        return np.ones(n, bool), condition
+    conditions = condition.tolist()
+    if set(map(type, conditions)) <= {bool, float}:     # a comparison's, mostly
+        return np.ones(n, bool), np.array(conditions, bool)
+    plain = np.fromiter((type(c) in _CONDITION_TYPES for c in conditions), bool, n)
+    truth = np.fromiter((p and bool(c) for c, p in zip(conditions, plain.tolist())), bool, n)
+    return plain, truth
+
+
+def _range_values(args):
+    """The arguments' values as formulas' functions read them (a range's as its array); None
+    where formulas' own call must decide (a range it cannot read)."""
+    try:
+        return parse_ranges(*args)[0]
+    except Exception:
+        return None
+
+
+def _array_shape(values):
+    """The one shape of the arrays among `values` that hold more than one element, where every
+    other value is a scalar or an array of one element that broadcasts to it (of no more
+    dimensions); None otherwise (no such array, two shapes)."""
+    shape = None
+    for a in values:
+        if isinstance(a, np.ndarray) and a.size > 1:
+            if shape is not None and a.shape != shape:
+                return None
+            shape = a.shape
+    if shape is None or any(isinstance(a, np.ndarray) and a.size == 1 and a.ndim > len(shape)
+                            for a in values):
+        return None
+    return shape
+
+
+def _whole_array_call(form, func, args):
+    """An element-wise node with a numeric form over whole ranges in one cell (a power
+    balance's SUMPRODUCT of two columns' product): `form` on the elements that are finite
+    numbers, `func` on the rest (_numeric_call over the arrays' elements in order), the result
+    in the arrays' shape as formulas' call gives it; None where formulas' call decides (a
+    range it cannot read, arrays of different shapes, no array of more than one element)."""
+    values = _range_values(args)
+    shape = None if values is None else _array_shape(values)
+    if shape is None:
+        return None
+    out = _numeric_call(form, func, values, int(np.prod(shape)), whole=True)
+    return None if out is None else out.reshape(shape)
+
+
+def _cell_numeric_node(func, form):
+    """Wrap a node that has a numeric form for calls outside vector calls: over whole ranges
+    by _whole_array_call, else (one value, or what it does not take) by `func`."""
+    def node(*args, **kw):
+        out = None if kw else _whole_array_call(form, func, args)
+        return func(*args, **kw) if out is None else out
+    node.formulas_function = func       # what the node stands for (tests compare graphs by it)
+    return node
+
+
+# ISNUMBER of a value of these types, as formulas' is_number judges it (a number, not a boolean,
+# an error or a blank); a value of any other type (text, which it reads as a number where
+# float() does) is left to formulas' call.
+_IS_NUMBER = {float: True, int: True, np.float64: True, np.int64: True, bool: False,
+              np.bool_: False, XlError: False, type(sh.EMPTY): False}
+
+
+def _isnumber_node(func):
+    """Wrap ISNUMBER to judge an array of more than one value on the array where each value's
+    type decides (_IS_NUMBER; of blanks' type, only the blank itself): formulas' result, a
+    FalseArray of booleans in the value's shape; else `func` (formulas' call)."""
+    def node(*args, **kw):
+        values = None if kw or len(args) != 1 else _range_values(args)
+        a = None if values is None else values[0]
+        if not isinstance(a, np.ndarray) or a.dtype != object or a.size < 2:
+            return func(*args, **kw)
+        flat = a.reshape(-1).tolist()
+        kinds = set(map(type, flat))
+        if not kinds <= _IS_NUMBER.keys() or type(sh.EMPTY) in kinds and any(
+                type(v) is type(sh.EMPTY) and v is not sh.EMPTY for v in flat):
+            return func(*args, **kw)
+        judged = np.fromiter(map(_IS_NUMBER.__getitem__, map(type, flat)), bool, len(flat))
+        return judged.reshape(a.shape).view(FalseArray)
+    node.formulas_function = func       # what the node stands for (tests compare graphs by it)
+    return node
+
+
 def _ranges_node(func, name: str):
     """Wrap a MIN, MAX or COUNT node for calls outside vector calls: one result over every value
     of its arguments (the ranges' values in order, row by row), computed on arrays where
@@ -299,9 +476,8 @@ def _ranges_node(func, name: str):
     def node(*args, **kw):
         if kw:
             return func(*args, **kw)
-        try:
-            values = parse_ranges(*args)[0]
-        except Exception:       # formulas' own call decides (a range it cannot read)
+        values = _range_values(args)
+        if values is None:
             return func(*args)
         if not any(isinstance(a, np.ndarray) and a.size > 1 for a in values):
             return func(*args)
@@ -341,13 +517,13 @@ class _NotScalar(Exception):
 
 
 def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=None,
-                 choice: bool = False):
+                 choice: str | None = None):
     """Wrap a node of the compiled graph for (n, 1) calls.  A node with a numeric form runs it
     on the rows of finite numbers, MIN, MAX and COUNT (`aggregate`, their name) on the rows of
-    plain numbers (AGGREGATES), IF (`choice`) on the rows of a boolean or numeric condition
-    (_if_call).  Element-wise nodes run once; if their output is not (n, 1)
-    (an exception collapsed it), or the node is not element-wise, it runs row by row on (1, 1)
-    slices, exactly as in a per-cell call."""
+    plain numbers (AGGREGATES), IF (`choice`, its name) on the rows of a boolean or numeric
+    condition (_if_call) and IFERROR on every row (_iferror_call).  Element-wise nodes run
+    once; if their output is not (n, 1) (an exception collapsed it), or the node is not
+    element-wise, it runs row by row on (1, 1) slices, exactly as in a per-cell call."""
     def node(*args, **kw):
         n = batch.n
         if n == 1 and numeric is not None and not kw:
@@ -367,8 +543,8 @@ def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=
             if out is not None:
                 batch.numeric += 1
                 return out
-        if choice and not kw:
-            out = _if_call(func, args, n)
+        if choice is not None and not kw:
+            out = _if_call(func, args, n) if choice == "IF" else _iferror_call(args, n)
             if out is not None:
                 batch.numeric += 1
                 return out
@@ -388,8 +564,14 @@ def _vector_node(func, batch: Batch, elementwise: bool, numeric=None, aggregate=
 
 def wrap(func, name: str, batch: Batch | None):
     """A node's function as the graph runs it: for vector calls, wrapped by its name; outside
-    them, MIN, MAX and COUNT wrapped to read their ranges on arrays."""
+    them, MIN, MAX and COUNT wrapped to read their ranges on arrays, and the nodes with a
+    numeric form to run it over whole ranges; ISNUMBER judges arrays by type in both."""
+    if name == "ISNUMBER":
+        func = _isnumber_node(func)
     if batch is None:
-        return _ranges_node(func, name) if name in AGGREGATES else func
+        if name in AGGREGATES:
+            return _ranges_node(func, name)
+        return _cell_numeric_node(func, NUMERIC_FORMS[name]) if name in NUMERIC_FORMS else func
     return _vector_node(func, batch, name in ELEMENTWISE, NUMERIC_FORMS.get(name),
-                        name if name in AGGREGATES else None, name == "IF")
+                        name if name in AGGREGATES else None,
+                        name if name in ("IF", "IFERROR") else None)
