@@ -58,21 +58,39 @@ def test_the_value_grid_reaches_the_furthest_empty_cell_a_copied_formula_reads(t
 
 def test_verify_reads_each_columns_places_once_and_lets_them_go(books, monkeypatch):
     """The engine's values are read a column at a time at the book's own inputs and again at
-    the other input set: each short column's places (rows and columns of its addresses) are
-    read from its texts once, and forgotten when the verify ends."""
+    the other input set: each short list of addresses has its places (rows and columns) read
+    from its texts once, a column's list from column_cells not at all (it knows them), and
+    what was kept is forgotten when the verify ends."""
+    from linkbook.base.xlsx import ColumnCells
     from linkbook.engine import rerun
     read = []
     real = rerun.coordinates_to_arrays
 
     def counted(cells):
-        read.append(tuple(cells))
+        read.append((type(cells) is ColumnCells, tuple(cells)))
         return real(cells)
     monkeypatch.setattr(rerun, "coordinates_to_arrays", counted)
     report = verifier.verify(books["fourbar"])
     assert report.ok and [s.skipped for s in report.input_sets] == [None]
-    short = [cells for cells in read if len(cells) <= rerun.KEPT_CELLS]
-    assert short and len(short) == len(set(short))
+    texts = [cells for known, cells in read if not known and len(cells) <= rerun.KEPT_CELLS]
+    assert texts and len(texts) == len(set(texts))
+    assert any(known for known, _ in read)
     assert rerun._kept_places.cache_info().currsize == 0
+
+
+@pytest.mark.parametrize("letter, first, last", [("A", 1, 1), ("B", 5, 77), ("AB", 9, 3609),
+                                                 ("XFD", 1048570, 1048576)])
+def test_a_columns_addresses_know_their_places(letter, first, last):
+    """column_cells' list gives the places coordinate_to_tuple reads from each address, and
+    once changed is read from its texts again."""
+    from linkbook.base import xlsx
+    cells = xlsx.column_cells(letter, first, last)
+    rows, cols = xlsx.coordinates_to_arrays(cells)
+    assert list(zip(rows.tolist(), cols.tolist())) == [xlsx.coordinate_to_tuple(c)
+                                                       for c in cells]
+    cells[-1] = "C2"
+    rows, cols = xlsx.coordinates_to_arrays(cells)
+    assert (rows[-1], cols[-1]) == (2, 3)
 
 
 def test_verify_of_a_four_bar_imports_neither_synthesis_nor_the_applications(books):

@@ -795,6 +795,10 @@ def coordinates_to_arrays(coordinates: list[str]):
     cell. ValueError for an empty list or one that is no cell address, TypeError for one that
     is no text, as coordinate_to_tuple would raise."""
     import numpy as np
+    if type(coordinates) is ColumnCells:
+        found = coordinates.places()
+        if found is not None:
+            return found
     text = np.array(coordinates)
     if text.dtype.kind == "U" and 2 <= text.dtype.itemsize // 4 <= 12:
         codes = text.view(np.uint32).reshape(len(text), -1)
@@ -840,11 +844,30 @@ def column_letter(col: int) -> str:
     return found
 
 
+class ColumnCells(list):
+    """column_cells' list of addresses, knowing the column and the first row it names: the
+    places of its cells are not read back from their texts (coordinates_to_arrays)."""
+    __slots__ = ("col", "first")
+
+    def places(self):
+        """(rows, columns) as coordinates_to_arrays gives them; None where the list no longer
+        holds what column_cells made (changed since)."""
+        import numpy as np
+        n = len(self)
+        if not n or self[0] != f"{column_letter(self.col)}{self.first}" \
+                or self[-1] != f"{column_letter(self.col)}{self.first + n - 1}":
+            return None
+        return np.arange(self.first, self.first + n, dtype=np.int64), np.full(n, self.col,
+                                                                             np.int64)
+
+
 def column_cells(letter: str, first: int, last: int) -> list[str]:
     """The addresses down column `letter` from row `first` to `last` ('B5', 'B6', …); every
     list of one column's rows shares its texts (verify names each cell in several checks, and
     again at each input set: one text a cell, not one a naming)."""
-    return list(_column_cells(letter, first, last))
+    cells = ColumnCells(_column_cells(letter, first, last))
+    cells.col, cells.first = column_index(letter), first
+    return cells
 
 
 @functools.lru_cache(maxsize=1024)

@@ -21,7 +21,7 @@ from .adapter import public_value
 from .errors import EngineError
 from .order import closure, deps_and_downstream
 from .references import cell_name
-from ..base.xlsx import coordinate_to_tuple, coordinates_to_arrays
+from ..base.xlsx import ColumnCells, coordinate_to_tuple, coordinates_to_arrays
 
 
 @contextmanager
@@ -54,7 +54,7 @@ KEPT_CELLS = 256
 def places(cells: list[str]) -> tuple[np.ndarray, np.ndarray]:
     """coordinates_to_arrays(cells); a short list's kept until forget_places(): verify reads
     each column at the book's own inputs and again at each other input set."""
-    if len(cells) > KEPT_CELLS:
+    if len(cells) > KEPT_CELLS or type(cells) is ColumnCells:    # the latter read no text
         return coordinates_to_arrays(cells)
     return _kept_places(tuple(cells))
 
