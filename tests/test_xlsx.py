@@ -362,6 +362,45 @@ def test_a_dtd_anywhere_in_any_part_is_refused(tmp_path, fourbar_bytes, capsys, 
     assert f"part {part} declares a DTD or XML entities; refusing" in last, last
 
 
+def test_a_dtd_in_a_worksheet_part_no_sheet_names_is_refused(tmp_path, fourbar_bytes, capsys):
+    """verify scans the worksheet parts as it reads them; a worksheet part the workbook does
+    not list is read by no one, and is still scanned whole."""
+    path = tmp_path / "fourbar.xlsx"
+    path.write_bytes(fourbar_bytes)
+    with zipfile.ZipFile(path, "a") as zf:
+        zf.writestr("xl/worksheets/sheet99.xml", '<?xml version="1.0"?>' + DTD + "<worksheet/>")
+    code, last = _verify(path, capsys)
+    assert code == 2
+    assert "part xl/worksheets/sheet99.xml declares a DTD or XML entities; refusing" in last, last
+
+
+def test_no_worksheet_part_is_parsed_before_it_is_scanned_whole(tmp_path, fourbar_bytes,
+                                                                monkeypatch):
+    """A worksheet part the view reads element by element (here: a carriage return stops the
+    scan at its first chunk, before a long comment) has been scanned for a DTD to its end
+    before ElementTree parses any of it."""
+    path = tmp_path / "fourbar.xlsx"
+    path.write_bytes(fourbar_bytes)
+    part = "xl/worksheets/sheet2.xml"
+    long = "<!-- " + "x" * (2 * xlsx.SCAN_CHUNK) + " -->"
+    _rewrite(path, part, "<worksheet ", "\r\n" + long + "<worksheet ")
+    guards, parsed = {}, []
+
+    class Recorded(safety.PartGuard):
+        def __init__(self, name, where):
+            super().__init__(name, where)
+            guards.setdefault(name, []).append(self)
+    real = xlsx._read_cells
+
+    def read_cells(f, ws, strings, date_styles, name, unmodelled):
+        parsed.append((name, any(g.whole for g in guards.get(name, []))))
+        return real(f, ws, strings, date_styles, name, unmodelled)
+    monkeypatch.setattr(safety, "PartGuard", Recorded)
+    monkeypatch.setattr(xlsx, "_read_cells", read_cells)
+    safety.read_workbook_safely(path)
+    assert (part, True) in parsed and all(whole for _, whole in parsed), parsed
+
+
 @pytest.mark.parametrize("encoding", ["utf-16-le", "utf-16-be"])
 def test_a_dtd_in_a_utf16_part_is_refused(tmp_path, fourbar_bytes, encoding):
     path = tmp_path / "fourbar.xlsx"

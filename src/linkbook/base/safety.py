@@ -27,6 +27,15 @@ class UnsafeFile(Exception):
 
 
 def check_zip(path: Path) -> None:
+    """Refuse a file that is no workbook we are willing to open (see the module's docstring):
+    every part is scanned."""
+    _check_zip(path)
+
+
+def _check_zip(path: Path, defer=None) -> tuple[list[str], dict[str, bool]]:
+    """check_zip, but for the parts `defer` (a test on a part's name) names, which are left
+    to the caller to scan as it reads them (PartGuard), the external references with them: the
+    names of the parts deferred, and whether each part scanned holds a '['."""
     path = Path(path)
     if path.is_dir():
         raise UnsafeFile(f"{path}: a folder, not a workbook")
@@ -46,10 +55,45 @@ def check_zip(path: Path) -> None:
                                  "possible zip bomb")
             if "[Content_Types].xml" not in zf.namelist():
                 raise UnsafeFile(f"{path}: not an .xlsx workbook (no [Content_Types].xml)")
-            bracketed = [info.filename for info in infos if _check_part(zf, info, path)]
-            _check_external(zf, bracketed, path)
+            deferred = [i.filename for i in infos if defer is not None and defer(i.filename)]
+            bracketed = {info.filename: _check_part(zf, info, path) for info in infos
+                         if info.filename not in deferred}
+            if defer is None:
+                _check_external(zf, [name for name, bracket in bracketed.items() if bracket],
+                                path)
+            return deferred, bracketed
     except zipfile.BadZipFile as exc:
         raise UnsafeFile(f"{path}: damaged or truncated workbook ({exc})") from None
+    except UnsafeFile:
+        if defer is None:
+            raise
+        check_zip(path)     # a deferred part before it may be unsafe too: the first one's answer
+        raise
+
+
+class PartGuard:
+    """check_zip's scan of one part, fed the part's bytes as they are read (each chunk before
+    anything parses it): a DTD or entity declaration anywhere refused, and whether the part
+    holds a '[' (which a formula naming another workbook has). `whole`: fed to its end;
+    `refused`: it raised UnsafeFile."""
+
+    def __init__(self, part: str, path: Path):
+        self.part, self.path = part, path
+        self.tail, self.bracket, self.whole, self.refused = b"", False, False, False
+
+    def __call__(self, chunk: bytes) -> None:
+        if not chunk:
+            self.whole = True
+            return
+        self.bracket = self.bracket or b"[" in chunk
+        window = self.tail + chunk
+        # every marker starts '<!' (UTF-8) or '<\0!' (UTF-16): two fast finds rule most
+        # chunks out before the regex, which is four times slower
+        if (b"<!" in window or b"<\x00!" in window) and _DTD.search(window):
+            self.refused = True
+            raise UnsafeFile(f"{self.path}: part {self.part} declares a DTD or XML "
+                             "entities; refusing")
+        self.tail = chunk[-_LONGEST_MARKER:]
 
 
 def _check_part(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> bool:
@@ -57,19 +101,14 @@ def _check_part(zf: zipfile.ZipFile, info: zipfile.ZipInfo, path: Path) -> bool:
     the root element, but a reader may meet one after any length of comments, and a part is
     XML by its content type, not its name: every part is scanned whole, a chunk at a time (a
     chunk keeps the tail of the one before, so a marker split between two is found). Whether
-    the part holds a '[' (which a formula naming another workbook has): the scan tells."""
-    tail, bracket = b"", False
+    the part holds a '[': the scan tells."""
+    guard = PartGuard(info.filename, path)
     with zf.open(info) as f:
-        while chunk := f.read(_CHUNK):
-            bracket = bracket or b"[" in chunk
-            window = tail + chunk
-            # every marker starts '<!' (UTF-8) or '<\0!' (UTF-16): two fast finds rule most
-            # chunks out before the regex, which is four times slower
-            if (b"<!" in window or b"<\x00!" in window) and _DTD.search(window):
-                raise UnsafeFile(f"{path}: part {info.filename} declares a DTD or XML "
-                                 "entities; refusing")
-            tail = chunk[-_LONGEST_MARKER:]
-    return bracket
+        while True:
+            chunk = f.read(_CHUNK)
+            guard(chunk)
+            if not chunk:
+                return guard.bracket
 
 
 def _check_external(zf: zipfile.ZipFile, bracketed: list[str], path: Path) -> None:
@@ -97,12 +136,30 @@ def load_workbook_safely(path: Path, data_only: bool = False):
 def read_workbook_safely(path: Path):
     """The book's cells and names for reading only: the fast view (linkbook.base.xlsx) where it
     models the file, else openpyxl's full load (which also words the error of a damaged
-    file)."""
+    file). The worksheet parts the view reads are scanned as it reads them (PartGuard), not
+    inflated once more before: any refusal is still check_zip's, in check_zip's order."""
     from . import xlsx
-    check_zip(path)
+    deferred, bracketed = _check_zip(path, defer=_is_worksheet)
+    guards = {part: PartGuard(part, path) for part in deferred}
     try:
-        return xlsx.read(path)
+        wb = xlsx.read(path, guards)
+    except UnsafeFile:
+        check_zip(path)     # what check_zip says first (another part may be unsafe too)
+        raise
     except xlsx.Refused as exc:
+        check_zip(path)     # a part the view did not reach is refused first
         raise UnsafeFile(f"{path}: {exc}") from None
     except Exception:   # xlsx.Unsupported, or a part openpyxl will judge
         return load_workbook_safely(path)
+    with zipfile.ZipFile(path) as zf:
+        for part in deferred:
+            if not guards[part].whole:          # a part the view did not read to its end
+                guards[part].bracket = _check_part(zf, zf.getinfo(part), path)
+            bracketed[part] = guards[part].bracket
+        order = [info.filename for info in zf.infolist()]
+        _check_external(zf, [n for n in order if bracketed.get(n)], path)
+    return wb
+
+
+def _is_worksheet(part: str) -> bool:
+    return part.startswith("xl/worksheets/") and part.endswith(".xml")

@@ -268,10 +268,11 @@ class Workbook:
         return title in self._by_title
 
 
-def read(path) -> Workbook:
-    """The view of the workbook at `path` (already checked by safety.check_zip). Refused is
-    raised before Unsupported: every part is read, so a book openpyxl will load has been
-    checked whole."""
+def read(path, guards: dict | None = None) -> Workbook:
+    """The view of the workbook at `path` (already checked by safety.check_zip, but for the
+    parts in `guards`: each is fed to its guard as it is read, before anything parses it).
+    Refused is raised before Unsupported: every part is read, so a book openpyxl will load has
+    been checked whole."""
     with zipfile.ZipFile(path) as zf:
         names = set(zf.namelist())
         strings = _shared_strings(zf, "xl/sharedStrings.xml") if "xl/sharedStrings.xml" in \
@@ -283,7 +284,8 @@ def read(path) -> Workbook:
         worksheets = []
         for title, part in sheets:
             ws = Worksheet(title)
-            _read_part(zf, part, ws, strings, date_styles, unmodelled)
+            _read_part(zf, part, ws, strings, date_styles, unmodelled,
+                       (guards or {}).get(part))
             worksheets.append(ws)
     if unmodelled:
         raise Unsupported(unmodelled[0])
@@ -393,21 +395,45 @@ def _date_styles(zf: zipfile.ZipFile) -> frozenset[int]:
 
 
 def _read_part(zf: zipfile.ZipFile, part: str, ws: Worksheet, strings: list[str],
-               date_styles: frozenset[int], unmodelled: list[str]) -> None:
+               date_styles: frozenset[int], unmodelled: list[str], guard=None) -> None:
     """The cells of one sheet part into `ws`: scanned (_scan_cells) where the part is written
-    as the scan reads it, else read element by element (_read_cells) from the start again."""
+    as the scan reads it, else read element by element (_read_cells) from the start again.
+    `guard` (safety.PartGuard) is fed each chunk the scan reads before expat sees it, and the
+    whole part before ElementTree reads it (the scan may stop before the root element: a
+    carriage return in the declaration)."""
     noted = len(unmodelled)
     try:
         with zf.open(part) as f:
-            _scan_cells(f, ws, strings, date_styles, part, unmodelled)
+            _scan_cells(f if guard is None else _Guarded(f, guard), ws, strings, date_styles,
+                        part, unmodelled)
         return
     except Refused:     # the part is well-formed up to the cell refused: the elements say so too
         raise
     except Exception:   # not as the scan reads it (or damaged): the elements say what it holds
+        if guard is not None and guard.refused:     # a DTD: nothing parses the part
+            raise
         ws.held_columns.clear()
         del unmodelled[noted:]
+    if guard is not None and not guard.whole:
+        with zf.open(part) as f:        # all of it scanned before ElementTree reads any of it
+            whole = _Guarded(f, type(guard)(guard.part, guard.path))
+            while whole.read(SCAN_CHUNK):
+                pass
+            guard.bracket, guard.whole = whole.guard.bracket, True
     with zf.open(part) as f:
         _read_cells(f, ws, strings, date_styles, part, unmodelled)
+
+
+class _Guarded:
+    """A part's file whose every chunk read goes to `guard` first (safety.PartGuard)."""
+
+    def __init__(self, f, guard):
+        self.f, self.guard = f, guard
+
+    def read(self, size: int = -1) -> bytes:
+        chunk = self.f.read(size)
+        self.guard(chunk)
+        return chunk
 
 
 # The scan: a sheet part as the writers of .xlsx write it (openpyxl, LibreOffice, Gnumeric,
