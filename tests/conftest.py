@@ -81,6 +81,16 @@ def bundled_books(tmp_path_factory) -> dict[str, Path]:
 
 
 @pytest.fixture(scope="session")
+def coarse_fourbar(tmp_path_factory) -> Path:
+    """The four-bar at a 30° step (13 sweep rows) as `linkbook build fourbar --step 30` writes
+    it, built once for the run: for tests whose point is a book's parts and formula shapes, not
+    its row count. Read it; a test that changes it copies it first."""
+    path = tmp_path_factory.mktemp("coarse") / "fourbar.xlsx"
+    builder.build_file(template("fourbar", step=30.0), path)
+    return path
+
+
+@pytest.fixture(scope="session")
 def recalculated_by_libreoffice(needs, bundled_books, tmp_path_factory) -> dict[str, Path]:
     """name -> the bundled book as LibreOffice recalculated and saved it (office.recalculate),
     every book in one run of soffice."""

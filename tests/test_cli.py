@@ -1,7 +1,10 @@
 """The command line: list, build, and bad input that exits 2 with one line and writes nothing."""
 from __future__ import annotations
 
+import contextlib
+import io
 import json
+import os
 import subprocess
 import sys
 
@@ -9,16 +12,33 @@ import openpyxl
 import pytest
 
 from conftest import HANG_GUARD_S, ROOT
+from linkbook.apps.cli import main
 
 ENV_PATH = str(ROOT / "src")
 
 
-def run(*args, cwd=None):
-    import os
+def run(*args, cwd=None) -> subprocess.CompletedProcess:
+    """`python -m linkbook ARGS` in a process of its own: for what the process shell (cli.run:
+    the exit status, the streams flushed, signals) does."""
     env = dict(os.environ, PYTHONPATH=ENV_PATH)
     env.pop("PYTHONUNBUFFERED", None)   # stdout block-buffered into a pipe, as users have it
     return subprocess.run([sys.executable, "-m", "linkbook", *args], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=HANG_GUARD_S)
+
+
+def run_in_process(*args, cwd=None) -> subprocess.CompletedProcess:
+    """`linkbook ARGS` as `run` gives it (status, stdout, stderr), by cli.main in this process:
+    for what a command prints and writes, without a Python start-up and its imports per call.
+    The tests of the process shell above and below use `run`."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.chdir(cwd or os.getcwd()), contextlib.redirect_stdout(out), \
+            contextlib.redirect_stderr(err):
+        try:
+            status = main(list(args))
+        except SystemExit as exc:       # argparse's own exit: a usage error, --help
+            status = exc.code
+    return subprocess.CompletedProcess(["linkbook", *args], status, out.getvalue(),
+                                       err.getvalue())
 
 
 def test_list_shows_every_bundled_template():
@@ -58,7 +78,6 @@ def test_the_process_ends_with_mains_status_and_all_its_output(bundled_books, tm
 
 
 def test_the_process_ends_cleanly_without_stdout_and_under_a_profiler():
-    import os
     env = dict(os.environ, PYTHONPATH=ENV_PATH)
     closed = subprocess.run(f'"{sys.executable}" -m linkbook list >&-', shell=True, env=env,
                             capture_output=True, text=True, timeout=HANG_GUARD_S)
@@ -100,7 +119,7 @@ BAD = [
 @pytest.mark.parametrize("args,field", BAD, ids=[" ".join(a) for a, _ in BAD])
 def test_bad_input_exits_2_with_one_line_and_no_file(tmp_path, args, field):
     target = tmp_path / "out.xlsx"
-    out = run("build", "fourbar", *args, "-o", str(target))
+    out = run_in_process("build", "fourbar", *args, "-o", str(target))
     assert out.returncode == 2
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and field in lines[0] and "Traceback" not in out.stderr, out.stderr

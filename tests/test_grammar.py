@@ -77,13 +77,14 @@ def skeleton_representatives(books) -> list[str]:
     import openpyxl
     seen = {}
     for path in books:
-        wb = openpyxl.load_workbook(path)
+        wb = openpyxl.load_workbook(path, read_only=True)     # read only: the same cells, sooner
         for ws in wb.worksheets:
             for row in ws.iter_rows():
                 for cell in row:
                     if cell.data_type == "f":
                         text = references.formula_text(cell)
                         seen.setdefault(re.sub(r"[0-9]+", "9", text), text)
+        wb.close()
     return list(seen.values())
 
 

@@ -11,7 +11,7 @@ import openpyxl
 import pytest
 
 from conftest import template
-from test_cli import run
+from test_cli import run_in_process
 
 from linkbook.check import reference as generic
 
@@ -20,13 +20,14 @@ DEG_TOL = 1e-9      # verify's bound for an angle
 
 def _book(tmp_path, *sets) -> tuple:
     out = tmp_path / "fourbar.xlsx"
-    done = run("build", "fourbar", *(a for s in sets for a in ("--set", s)), "-o", str(out))
+    done = run_in_process("build", "fourbar", *(a for s in sets for a in ("--set", s)),
+                          "-o", str(out))
     assert done.returncode == 0, done.stderr
     return out, template("fourbar", sets)
 
 
 def _info(target, cwd=None) -> dict:
-    done = run("info", str(target), "--json", cwd=cwd)
+    done = run_in_process("info", str(target), "--json", cwd=cwd)
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout)
 
@@ -62,7 +63,7 @@ def test_fourbar_numbers_are_the_reference_numbers(bundled_books):
     assert abs(mu["max"] - np.degrees(np.nanmax(ref["mu"]))) <= DEG_TOL
     assert data["gaps"] == []
 
-    printed = run("info", str(book)).stdout.splitlines()
+    printed = run_in_process("info", str(book)).stdout.splitlines()
     line = next(x for x in printed if x.split()[:1] == ["θ14"])
     assert line.split()[1:] == [f"{shown['min']:.6g}", "…", f"{shown['max']:.6g}", "deg"]
     line = next(x for x in printed if x.strip().startswith("transmission angle μ"))
@@ -121,7 +122,7 @@ def test_a_template_is_summarised_in_memory_as_its_book_is(bundled_books, tmp_pa
 
 def test_the_text_fits_80_columns_and_names_units(tmp_path):
     book, _ = _book(tmp_path, "a2=60")
-    done = run("info", str(book))
+    done = run_in_process("info", str(book))
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert max(map(len, lines)) < 80
@@ -132,7 +133,7 @@ def test_the_text_fits_80_columns_and_names_units(tmp_path):
 
 def test_a_long_label_is_wrapped_not_cut(tmp_path):
     """The slider-crank's branch label is longer than the line has room for: all of it shows."""
-    done = run("info", "slider-crank", cwd=tmp_path)
+    done = run_in_process("info", "slider-crank", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert max(map(len, done.stdout.splitlines())) < 80
     label = next(p.label for p in template("slider-crank").parameters if p.symbol == "branch")
@@ -142,7 +143,7 @@ def test_a_long_label_is_wrapped_not_cut(tmp_path):
 @pytest.mark.parametrize("target, says", [("missing.xlsx", "no such file"),
                                           ("no-such-template", "no-such-template")])
 def test_bad_input_is_one_line(tmp_path, target, says):
-    done = run("info", target, cwd=tmp_path)
+    done = run_in_process("info", target, cwd=tmp_path)
     assert done.returncode == 2
     assert done.stdout == ""
     assert len(done.stderr.splitlines()) == 1 and says in done.stderr
@@ -182,7 +183,7 @@ def test_the_force_summary_is_the_forces_sheets(bundled_books, name, pins):
         assert isinstance(value, float) and shown[key]["value"] == value, key
         assert shown[key]["unit"] == expected_units[key], key
     assert shown["flywheel"]["what"] == "flywheel inertia ΔE / (Cs·ω²)"
-    text = run("info", str(book)).stdout.splitlines()
+    text = run_in_process("info", str(book)).stdout.splitlines()
     block = text[text.index("Forces: summary over the θ12 sweep") + 1:]
     assert len(block) == len(cells)
     for line, r in zip(block, summary):
@@ -216,7 +217,8 @@ def _info_of_toml(tmp_path, name: str, edit) -> tuple[dict, str]:
     edited = edit(text)
     assert edited != text
     (tmp_path / "mine.toml").write_text(edited, encoding="utf-8")
-    return _info("mine.toml", cwd=tmp_path), run("info", "mine.toml", cwd=tmp_path).stdout
+    return (_info("mine.toml", cwd=tmp_path),
+            run_in_process("info", "mine.toml", cwd=tmp_path).stdout)
 
 
 def test_the_rate_of_a_symbol_in_bars_is_written_d_dt(tmp_path):

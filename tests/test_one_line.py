@@ -21,8 +21,7 @@ from pathlib import Path
 import openpyxl
 import pytest
 
-from conftest import HANG_GUARD_S, ROOT, gone, said_pids, template, wait_until
-from linkbook.book import builder
+from conftest import HANG_GUARD_S, ROOT, gone, said_pids, wait_until
 from linkbook.apps import cli
 from linkbook.base import sheets as layout
 
@@ -30,11 +29,9 @@ FOURBAR_TOML = (ROOT / "templates" / "fourbar.toml").read_text(encoding="utf-8")
 
 
 @pytest.fixture(scope="module")
-def book(tmp_path_factory) -> bytes:
+def book(coarse_fourbar) -> bytes:
     """A small four-bar book (30° steps), as file bytes."""
-    path = tmp_path_factory.mktemp("book") / "fourbar.xlsx"
-    builder.build_file(template("fourbar", step=30.0), path)
-    return path.read_bytes()
+    return coarse_fourbar.read_bytes()
 
 
 def _run(argv, capsys) -> tuple[int, list[str]]:

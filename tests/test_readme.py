@@ -15,9 +15,8 @@ import json
 import openpyxl
 import pytest
 
-from conftest import HANG_GUARD_S, ROOT, template
+from conftest import HANG_GUARD_S, ROOT
 from linkbook.base.sheets import read_meta
-from linkbook.book import builder
 from linkbook.engine import evaluator as engine
 
 README = (ROOT / "README.md").read_text(encoding="utf-8")
@@ -81,10 +80,8 @@ def test_the_api_example_runs_as_written(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def good_book(tmp_path_factory) -> bytes:
-    path = tmp_path_factory.mktemp("good") / "fourbar.xlsx"
-    builder.build_file(template("fourbar", step=30.0), path)
-    return path.read_bytes()
+def good_book(coarse_fourbar) -> bytes:
+    return coarse_fourbar.read_bytes()
 
 
 @pytest.mark.parametrize("others,status", [((), 0), (("disagrees",), 1),

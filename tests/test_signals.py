@@ -18,8 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import HANG_GUARD_S, ROOT, template
-from linkbook.book import builder
+from conftest import HANG_GUARD_S, ROOT
 
 # The console script pip writes, with one line said before the entry point is called.
 ENTRY = """import sys
@@ -44,10 +43,8 @@ NAMES = {signal.SIGINT: "Ctrl-C (SIGINT)", signal.SIGTERM: "SIGTERM"}
 
 
 @pytest.fixture(scope="module")
-def book(tmp_path_factory) -> bytes:
-    path = tmp_path_factory.mktemp("book") / "fourbar.xlsx"
-    builder.build_file(template("fourbar", step=30.0), path)
-    return path.read_bytes()
+def book(coarse_fourbar) -> bytes:
+    return coarse_fourbar.read_bytes()
 
 
 def _deliver(folder: Path, argv: list[str], signum: int, delay: float):

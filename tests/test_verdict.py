@@ -130,11 +130,11 @@ def test_a_degree_view_outside_its_window_disagrees(fourbar, tmp_path, capsys, w
     assert code == 1 and "theta13_deg window" in out, out[-2000:]
 
 
-def test_a_stroke_sampled_more_coarsely_than_the_template_asks_disagrees(tmp_path, capsys):
+def test_a_stroke_sampled_more_coarsely_than_the_template_asks_disagrees(bundled_books, tmp_path,
+                                                                         capsys):
     """The pump's stroke row is max − min of a 1° sweep. Recorded as if the template asked for
     0.1°, the 1° sampling falls short of the true stroke by more than a 0.1° one may: named."""
-    path = tmp_path / "pump.xlsx"
-    builder.build_file(template("pump"), path)
+    path = bundled_books["pump"]
     assert cli.main(["verify", str(path)]) == 0
     capsys.readouterr()
 

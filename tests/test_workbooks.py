@@ -3,6 +3,8 @@ every formula cell within 1e-9 (mm or deg; rad for radian columns) or #N/A exact
 reference finds that the loop cannot close."""
 from __future__ import annotations
 
+from functools import lru_cache
+
 import pytest
 
 from conftest import ROOT, built, checks_of, formula_cells
@@ -39,11 +41,17 @@ CASES = [
 ]
 
 
+@lru_cache(maxsize=None)
+def checked(name: str, sets: tuple, branch):
+    """(Built, verify's checks) of a case, judged once for both tests of it (read only)."""
+    b, values = built(name, sets, None, branch)
+    return b, checks_of(b, values)
+
+
 @pytest.mark.parametrize("name,sets,branch", CASES,
                          ids=[f"{n}-{'-'.join(s) or 'default'}-{b or 'tpl'}" for n, s, b in CASES])
 def test_every_formula_cell_matches_the_reference(name, sets, branch):
-    b, values = built(name, sets, None, branch)
-    checks = checks_of(b, values)
+    b, checks = checked(name, sets, branch)
     bad = [(c.block, c.name, m) for c in checks for m in c.mismatches[:3]]
     assert not bad, bad[:10]
     # Every formula cell of the workbook was compared: no column is left unchecked.
@@ -72,8 +80,7 @@ def test_every_formula_cell_matches_the_reference(name, sets, branch):
 ])
 def test_cases_that_cannot_close_really_have_na_rows(name, sets, branch):
     """The cases above meant to exercise #N/A do: both assembled and unassembled rows."""
-    b, values = built(name, sets, None, branch)
-    checks = checks_of(b, values)
+    _, checks = checked(name, sets, branch)
     na = sum(c.na_expected for c in checks)
     assert na > 0 and all(c.na_agree == c.na_expected for c in checks)
     assert sum(c.cells for c in checks) > na

@@ -161,14 +161,10 @@ FIRST_NAME = "<definedName name=\"a_1\">'Mechanism'!$C$7</definedName>"
 
 
 @pytest.fixture(scope="module")
-def fourbar_bytes(tmp_path_factory) -> bytes:
+def fourbar_bytes(coarse_fourbar) -> bytes:
     """The four-bar at a 30° step: every part and formula shape the reading tests edit, in
     fewer rows."""
-    from conftest import template
-    from linkbook.book import builder
-    path = tmp_path_factory.mktemp("fourbar") / "fourbar.xlsx"
-    builder.build_file(template("fourbar", step=30), path)
-    return path.read_bytes()
+    return coarse_fourbar.read_bytes()
 
 
 def _damaged(tmp_path: Path, raw: bytes, part: str, old: str, new: str) -> Path:
