@@ -77,45 +77,45 @@ def test_if_on_a_boolean_condition_gives_what_formulas_gives():
     and numbers, and formulas' call for the rows of anything else), IF picks each row's branch
     on the arrays, exactly formulas' element: the branch's own object, a blank picked as 0,
     FALSE for a missing third argument."""
-    func = formulas_function("IF")
-    batch = vectorized.Batch()
-    node = vectorized.wrap(func, "IF", batch)
-    rng = np.random.default_rng(20261128)
-    for _ in range(examples(300, at_least=40)):
-        n = int(rng.integers(2, 30))
+    def draw(rng, n):
         condition = _condition(rng, n)
         args = [condition, _branch(rng, n)] + ([_branch(rng, n)] if rng.random() < 0.7 else [])
         if condition.size == 1 and not any(vectorized._size(a) == n for a in args[1:]):
             args[1] = _objects(rng, (n, 1), RANGE_VALUES)     # the call is over n rows
+        return args
+    _on_arrays_as_formulas("IF", 20261128, draw)
+
+
+def _on_arrays_as_formulas(name: str, seed: int, draw) -> None:
+    """`name`'s node, wrapped for vector calls, gives formulas' own result on each set of
+    arguments `draw(rng, n)` draws for n rows, and runs on the arrays every time."""
+    func = formulas_function(name)
+    batch = vectorized.Batch()
+    node = vectorized.wrap(func, name, batch)
+    rng = np.random.default_rng(seed)
+    for _ in range(examples(300, at_least=40)):
+        n = int(rng.integers(2, 30))
+        args = draw(rng, n)
         batch.n = n
         before = batch.numeric
         got = node(*args)
         batch.n = 1
         assert _same_result(got, func(*args)), (args, got)
-        assert batch.numeric == before + 1, args             # IF ran on the arrays
+        assert batch.numeric == before + 1, args             # it ran on the arrays
 
 
 def test_iferror_on_arrays_gives_what_formulas_gives():
     """IFERROR(x, alternative) in a vector call picks on the arrays, exactly formulas' element:
     the value itself (a blank as 0) or, for any error, the alternative's object (a blank as
     0); values and alternatives of every kind, columns, single cells and scalars."""
-    func = formulas_function("IFERROR")
-    batch = vectorized.Batch()
-    node = vectorized.wrap(func, "IFERROR", batch)
-    rng = np.random.default_rng(20261129)
-    for _ in range(examples(300, at_least=40)):
-        n = int(rng.integers(2, 30))
+    def draw(rng, n):
         args = [_objects(rng, (n, 1), RANGE_VALUES), _branch(rng, n)]
         if rng.random() < 0.3:
             args.reverse()                  # an error or a blank shared by every row
             if not isinstance(args[0], np.ndarray):
                 args[0] = _objects(rng, (1, 1), RANGE_VALUES)
-        batch.n = n
-        before = batch.numeric
-        got = node(*args)
-        batch.n = 1
-        assert _same_result(got, func(*args)), (args, got)
-        assert batch.numeric == before + 1, args          # IFERROR ran on the arrays
+        return args
+    _on_arrays_as_formulas("IFERROR", 20261129, draw)
 
 
 def test_isnumber_of_arrays_gives_what_formulas_gives():
