@@ -43,9 +43,7 @@ def run() -> None:
     after we return, the exit is Python's own. Callers of main() (the tests, the API) keep a
     normal return."""
     with stopping.handled():      # first: from here to the exit a signal ends in one line
-        from ..base import pause
-        pause.pause_until_exit()  # the collector: off to the exit, on between books (pause.py)
-        status = main()
+        status = main(exiting=True)
         if sys.getprofile() is not None or sys.gettrace() is not None:
             raise SystemExit(status)
         with stopping.held():     # one that comes now is looked at once, just before the exit
@@ -84,11 +82,17 @@ def _to_devnull(stream) -> None:
     os.dup2(os.open(os.devnull, os.O_WRONLY), stream.fileno())
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, exiting: bool = False) -> int:
+    """The command `argv` (the process's own arguments: None) run, its exit status returned.
+    `exiting`: the process ends when this returns (run()), so Python's cyclic collector is off
+    to the exit, and on between books (base/pause.py)."""
     # Everything inside the try, from the first line on: a Ctrl-C that lands while the command
     # is still being imported ends in the same one line as one that lands mid-work.
     try:
         import warnings
+        if exiting:
+            from ..base import pause
+            pause.pause_until_exit()
         with stopping.handled(), warnings.catch_warnings():
             # numpy's overflow warnings on extreme inputs would only repeat what the answer
             # says, and no user should see a line of our source code
