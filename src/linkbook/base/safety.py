@@ -56,8 +56,9 @@ def _check_zip(path: Path, defer=None) -> tuple[list[str], dict[str, bool]]:
             if "[Content_Types].xml" not in zf.namelist():
                 raise UnsafeFile(f"{path}: not an .xlsx workbook (no [Content_Types].xml)")
             deferred = [i.filename for i in infos if defer is not None and defer(i.filename)]
+            left = set(deferred)
             bracketed = {info.filename: _check_part(zf, info, path) for info in infos
-                         if info.filename not in deferred}
+                         if info.filename not in left}
             if defer is None:
                 _check_external(zf, [name for name, bracket in bracketed.items() if bracket],
                                 path)

@@ -3,8 +3,8 @@ column of a sweep table is one group), each a Group of Members; and the grouping
 (Grouper), of every sheet or only of what some cells need."""
 from __future__ import annotations
 
-from itertools import compress
 from dataclasses import dataclass, field
+from itertools import compress
 
 import numpy as np
 
