@@ -91,6 +91,10 @@ def test_a_columns_addresses_know_their_places(letter, first, last):
     cells[-1] = "C2"
     rows, cols = xlsx.coordinates_to_arrays(cells)
     assert (rows[-1], cols[-1]) == (2, 3)
+    if len(cells) > 2:
+        cells[-1], cells[1] = xlsx.column_cells(letter, first, last)[-1], "D4"  # the middle
+        rows, cols = xlsx.coordinates_to_arrays(cells)
+        assert (rows[1], cols[1]) == (4, 4)
 
 
 def test_verify_of_a_four_bar_imports_neither_synthesis_nor_the_applications(books):

@@ -873,18 +873,18 @@ def column_letter(col: int) -> str:
 class ColumnCells(list):
     """column_cells' list of addresses, knowing the column and the first row it names: the
     places of its cells are not read back from their texts (coordinates_to_arrays)."""
-    __slots__ = ("col", "first")
+    __slots__ = ("letter", "first")
 
     def places(self):
         """(rows, columns) as coordinates_to_arrays gives them; None where the list no longer
-        holds what column_cells made (changed since)."""
+        holds what column_cells made (changed since: its texts are compared, most by
+        identity)."""
         import numpy as np
         n = len(self)
-        if not n or self[0] != f"{column_letter(self.col)}{self.first}" \
-                or self[-1] != f"{column_letter(self.col)}{self.first + n - 1}":
+        if not n or tuple(self) != _column_cells(self.letter, self.first, self.first + n - 1):
             return None
-        return np.arange(self.first, self.first + n, dtype=np.int64), np.full(n, self.col,
-                                                                             np.int64)
+        return np.arange(self.first, self.first + n, dtype=np.int64), \
+            np.full(n, column_index(self.letter), np.int64)
 
 
 def column_cells(letter: str, first: int, last: int) -> list[str]:
@@ -892,7 +892,7 @@ def column_cells(letter: str, first: int, last: int) -> list[str]:
     list of one column's rows shares its texts (verify names each cell in several checks, and
     again at each input set: one text a cell, not one a naming)."""
     cells = ColumnCells(_column_cells(letter, first, last))
-    cells.col, cells.first = column_index(letter), first
+    cells.letter, cells.first = letter, first
     return cells
 
 
