@@ -64,7 +64,8 @@ class Planner:
             self.stats["reused"] += 1
             return func, positions
         info = g.info
-        if (rep.row, rep.col) != (g.rows[0], g.cols[0]) or info.builder is None or info.keys is None:
+        first = (rep.row, rep.col) == (g.rows[0], g.cols[0])
+        if not first or info.builder is None or info.keys is None:
             info = tokenize_member(rep, g.sheet, self.stats)
         g.info = TokenInfo(info.spans, info.keys, info.functions, None)  # compile() consumes it
         func = compile_formula(info.builder, g.batch if g.mode == "vector" else None)

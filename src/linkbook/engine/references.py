@@ -162,7 +162,8 @@ class Template:
     def copied_down(self, origin: int, rows: list[int], texts: list[str], start: int) -> int:
         """How far from `start` the `texts` (of cells in this formula's column, at `rows`) are
         this formula, written at row `origin`, copied down: the index of the first that is not
-        (shifted(row - origin, 0) != its text), or len(texts)."""
+        (shifted(row - origin, 0) != its text), or len(texts). shifted's copy down is written out
+        here, not called: this is the grouping's innermost loop, a turn per formula cell."""
         text, slots, lowest, highest = self._down_format
         write = text.format
         i, end = start, len(texts)
